@@ -1,0 +1,32 @@
+#pragma once
+// Reads YAML presets into the engine's option structs (DESIGN.md §6: only
+// app/ reads files). Every problem is reported with the file, the key and
+// the reason; unknown keys are errors so that typos never pass silently.
+// Angles are written in degrees (`tilt_deg`) or radians (`tilt_rad`) and
+// converted here, at the edge.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "engine/sim/simulator.h"
+
+namespace plantscale::app {
+
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(const std::string& file, const std::string& key, const std::string& reason);
+};
+
+// Where presets live: $PLANTSCALE_CONFIG_DIR, else the source tree's config/.
+std::filesystem::path DefaultConfigDir();
+
+// `name_or_path` is a preset name (config/presets/<name>.yaml) or a path to
+// a YAML file. Throws ConfigError for an unknown preset, unreadable or
+// malformed YAML, unknown keys, wrong types and invalid values.
+sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
+                                          const std::filesystem::path& config_dir);
+geometry::CameraOptions LoadCamera(const std::string& name_or_path,
+                                   const std::filesystem::path& config_dir);
+
+}  // namespace plantscale::app
