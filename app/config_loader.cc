@@ -235,6 +235,7 @@ void ReadRender(MapReader& r, sim::RenderOptions& o) {
   r.Get("sensor_noise", o.sensor_noise);
   r.Get("max_range_m", o.max_range_m);
   r.Get("ray_samples", o.ray_samples);
+  r.Get("threads", o.threads);
   r.Finish();
 }
 

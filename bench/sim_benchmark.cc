@@ -43,8 +43,8 @@ void RunFrames(benchmark::State& state, ImageKind kind) {
 
 void BM_SimulatorNirFrame640x480(benchmark::State& state) { RunFrames(state, ImageKind::kNir); }
 void BM_SimulatorRgbFrame640x480(benchmark::State& state) { RunFrames(state, ImageKind::kRgb); }
-BENCHMARK(BM_SimulatorNirFrame640x480)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SimulatorRgbFrame640x480)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SimulatorNirFrame640x480)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SimulatorRgbFrame640x480)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace plantscale::sim

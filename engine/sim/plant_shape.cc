@@ -114,9 +114,9 @@ PlantHit PlantShape::Intersect(const Eigen::Vector3d& origin, const Eigen::Vecto
     const double radial = rho / (radius_ * OutlineFactor(dx, dy, rho));
     if (radial > 1.0) continue;
     const double z = height_ * f;
-    const double surface = height_ * (1.0 - std::sqrt(1.0 - radial * radial));
-    if (z + 1e-12 < surface) continue;
-    if (InFractureGap(dx, dy, radial)) continue;
+    // At the rim height (i = 0) every point inside the outline is in the solid.
+    if (i > 0 && z + 1e-12 < height_ * (1.0 - std::sqrt(1.0 - radial * radial))) continue;
+    if (plant_->fractured_lobe >= 0 && InFractureGap(dx, dy, radial)) continue;
     result.hit = true;
     result.radial = radial;
     result.z_m = z;

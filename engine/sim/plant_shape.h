@@ -33,7 +33,7 @@ class PlantShape {
   bool InFractureGap(double dx, double dy, double radial) const;
 
   const Plant* plant_;
-  double cx_, cy_;        // root
+  double cx_, cy_;  // root
   double lean_x_, lean_y_;
   double radius_, height_;
   double lobe_cos_, lobe_sin_;

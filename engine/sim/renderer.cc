@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "engine/common/rng.h"
 #include "engine/sim/plant_shape.h"
@@ -12,8 +13,8 @@
 namespace plantscale::sim {
 namespace {
 
-constexpr int kTexture = 512;          // texels per side (power of two)
-constexpr double kTexelM = 0.004;      // 4 mm texels: a 2.048 m tile
+constexpr int kTexture = 512;               // texels per side (power of two)
+constexpr double kTexelM = 0.004;           // 4 mm texels: a 2.048 m tile
 constexpr double kTextureOffsetM = 4096.0;  // keeps texel indices positive
 constexpr int kNoiseTable = 1 << 20;
 
@@ -67,6 +68,25 @@ inline float Texel(const std::vector<float>& tex, double x_m, double y_m, double
   return tex[j * kTexture + i];
 }
 
+// Runs f(first_row, end_row) on `threads` bands of rows; results do not
+// depend on the number of threads because every row is computed alone.
+template <typename F>
+void ForRowBands(int rows, int threads, F&& f) {
+  threads = std::clamp(threads, 1, std::max(1, rows));
+  if (threads == 1) {
+    f(0, rows);
+    return;
+  }
+  std::vector<std::thread> workers;
+  workers.reserve(static_cast<size_t>(threads - 1));
+  const auto band = [&](int k) {
+    return static_cast<int>(static_cast<int64_t>(rows) * k / threads);
+  };
+  for (int k = 1; k < threads; ++k) workers.emplace_back([&, k] { f(band(k), band(k + 1)); });
+  f(0, band(1));
+  for (std::thread& w : workers) w.join();
+}
+
 // Value of the standard normal exceeded with probability `fraction`.
 float UpperQuantile(std::vector<float> values, double fraction) {
   if (fraction <= 0.0) return 1e9F;
@@ -109,9 +129,10 @@ struct Renderer::View {
 OptionErrors RenderOptions::Validate() const {
   OptionErrors e;
   RequirePositive(e, "exposure", exposure);
-  for (const auto& [key, value] :
-       {std::pair{"soil_reflectance", soil_reflectance}, {"crop_reflectance", crop_reflectance},
-        {"weed_reflectance", weed_reflectance}, {"stone_reflectance", stone_reflectance}}) {
+  for (const auto& [key, value] : {std::pair{"soil_reflectance", soil_reflectance},
+                                   {"crop_reflectance", crop_reflectance},
+                                   {"weed_reflectance", weed_reflectance},
+                                   {"stone_reflectance", stone_reflectance}}) {
     RequireInRange(e, key, value, 0.0, 1.0);
   }
   RequireInRange(e, "soil_texture_contrast", soil_texture_contrast, 0.0, 1.0);
@@ -128,11 +149,16 @@ OptionErrors RenderOptions::Validate() const {
   RequireInRange(e, "sensor_noise", sensor_noise, 0.0, 0.5);
   RequirePositive(e, "max_range_m", max_range_m);
   if (ray_samples < 1 || ray_samples > 64) e.push_back({"ray_samples", "must be in [1, 64]"});
+  if (threads < 0 || threads > 64)
+    e.push_back({"threads", "must be in [0, 64] (0: one per core, at most 4)"});
   return e;
 }
 
 Renderer::Renderer(const RenderOptions& options, uint64_t seed) : options_(options) {
   ThrowIfInvalid("render", options.Validate());
+  threads_ = options.threads > 0
+                 ? options.threads
+                 : std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, 4);
   Rng rng = Rng::Derived(seed, 0x7e27);
   soil_texture_ = ValueNoise(rng, 64, 6);
   leaf_texture_ = ValueNoise(rng, 8, 3);
@@ -188,36 +214,38 @@ void Renderer::RenderGround(View& view) {
   const auto contrast = static_cast<float>(options_.soil_texture_contrast);
   const auto glint = static_cast<float>(options_.specular_gain);
   const double shadow_on = options_.vehicle_shadow_depth > 0.0 ? 1.0 : 0.0;
-  for (int v = 0; v < view.height; ++v) {
-    auto* shade = shade_.ptr<float>(v);
-    auto* material = material_.ptr<uint8_t>(v);
-    auto* shadow = shadow_.ptr<uint8_t>(v);
-    for (int u = 0; u < view.width; ++u) {
-      const Eigen::Vector3d d = view.RayAt(u + 0.5, v);
-      const double s = d.z() < 0.0 ? -h / d.z() : -1.0;
-      const double gx = s * d.x();
-      const double gy = s * d.y();
-      if (s <= 0.0 || gx * gx + gy * gy > range2) {
-        material[u] = kBeyond;
-        shade[u] = 1.0F;
-        continue;
-      }
-      const double x = view.centre.x() + gx;
-      const double y = view.centre.y() + gy;
-      const float t1 = Texel(soil_texture_, x, y, fine);
-      const float t2 = Texel(soil_texture_, y + 17.3, x - 5.1, coarse);
-      material[u] = kSoil;
-      shade[u] = 1.0F + contrast * (0.65F * t1 + 0.35F * t2);
-      if (t2 > view.specular_threshold && t1 > 0.0F) shade[u] += glint;
-      if (shadow_on > 0.0) {
-        const double vy = -view.sin_h * gx + view.cos_h * gy;
-        const double vx = view.cos_h * gx + view.sin_h * gy;
-        if (vy < options_.vehicle_shadow_edge_m + options_.vehicle_shadow_slope * vx) {
-          shadow[u] |= kVehicleShadow;
+  ForRowBands(view.height, threads_, [&](int first_row, int end_row) {
+    for (int v = first_row; v < end_row; ++v) {
+      auto* shade = shade_.ptr<float>(v);
+      auto* material = material_.ptr<uint8_t>(v);
+      auto* shadow = shadow_.ptr<uint8_t>(v);
+      for (int u = 0; u < view.width; ++u) {
+        const Eigen::Vector3d d = view.RayAt(u + 0.5, v);
+        const double s = d.z() < 0.0 ? -h / d.z() : -1.0;
+        const double gx = s * d.x();
+        const double gy = s * d.y();
+        if (s <= 0.0 || gx * gx + gy * gy > range2) {
+          material[u] = kBeyond;
+          shade[u] = 1.0F;
+          continue;
+        }
+        const double x = view.centre.x() + gx;
+        const double y = view.centre.y() + gy;
+        const float t1 = Texel(soil_texture_, x, y, fine);
+        const float t2 = Texel(soil_texture_, y + 17.3, x - 5.1, coarse);
+        material[u] = kSoil;
+        shade[u] = 1.0F + contrast * (0.65F * t1 + 0.35F * t2);
+        if (t2 > view.specular_threshold && t1 > 0.0F) shade[u] += glint;
+        if (shadow_on > 0.0) {
+          const double vy = -view.sin_h * gx + view.cos_h * gy;
+          const double vx = view.cos_h * gx + view.sin_h * gy;
+          if (vy < options_.vehicle_shadow_edge_m + options_.vehicle_shadow_slope * vx) {
+            shadow[u] |= kVehicleShadow;
+          }
         }
       }
     }
-  }
+  });
   SetGroundBounds(view);
 }
 
@@ -231,7 +259,8 @@ void Renderer::SetGroundBounds(View& view) const {
     // Rays that miss the ground are clipped at the rendering range.
     const double horizontal = std::hypot(d.x(), d.y());
     double s = d.z() < 0.0 ? -h / d.z() : 1e18;
-    if (s * horizontal > options_.max_range_m) s = options_.max_range_m / std::max(horizontal, 1e-12);
+    if (s * horizontal > options_.max_range_m)
+      s = options_.max_range_m / std::max(horizontal, 1e-12);
     const double x = view.centre.x() + s * d.x();
     const double y = view.centre.y() + s * d.y();
     x_lo = std::min(x_lo, x);
@@ -253,7 +282,6 @@ void Renderer::SetGroundBounds(View& view) const {
   view.y_min = y_lo;
   view.y_max = y_hi;
 }
-
 
 namespace {
 
@@ -294,7 +322,8 @@ void Renderer::RenderStones(const Field& field, const View& view) {
   for (size_t i = first; i < last; ++i) {
     const Stone& st = field.stones()[i];
     if (st.position_m.x() < view.x_min - 0.2 || st.position_m.x() > view.x_max + 0.2) continue;
-    const PixelBox box = BoxAround(view, st.position_m.x(), st.position_m.y(), st.semi_major_m, 0.0);
+    const PixelBox box =
+        BoxAround(view, st.position_m.x(), st.position_m.y(), st.semi_major_m, 0.0);
     const double ca = std::cos(st.angle_rad);
     const double sa = std::sin(st.angle_rad);
     for (int v = box.v0; v <= box.v1 && !box.empty(); ++v) {
@@ -359,36 +388,55 @@ void Renderer::RenderPlants(const Field& field, const View& view, RenderedFrame&
                               Eigen::Vector2d(view.centre.x(), view.centre.y());
     return d.squaredNorm();
   };
-  std::sort(visible_.begin(), visible_.end(),
-            [&](int a, int b) { return distance2(a) > distance2(b) || (distance2(a) == distance2(b) && a < b); });
+  std::sort(visible_.begin(), visible_.end(), [&](int a, int b) {
+    return distance2(a) > distance2(b) || (distance2(a) == distance2(b) && a < b);
+  });
 
   out.plants.clear();
-  const double fine = 1.0 / (0.5 * kTexelM);
+  struct Job {
+    PlantShape shape;
+    PixelBox box;
+    int index;
+    uint16_t instance;
+  };
+  std::vector<Job> jobs;
   for (int index : visible_) {
     const Plant& p = field.plants()[static_cast<size_t>(index)];
-    const PixelBox box = BoxAround(view, p.position_m.x() + 0.5 * p.lean_m.x(),
-                                   p.position_m.y() + 0.5 * p.lean_m.y(),
-                                   p.radius_m + p.lean_m.norm(), p.height_m);
+    const PixelBox box =
+        BoxAround(view, p.position_m.x() + 0.5 * p.lean_m.x(),
+                  p.position_m.y() + 0.5 * p.lean_m.y(), p.radius_m + p.lean_m.norm(), p.height_m);
     if (box.empty()) continue;
     out.plants.push_back({index, 0, {0.0, 0.0}});
-    const auto instance = static_cast<uint16_t>(std::min<size_t>(out.plants.size(), 65535));
-    const uint8_t material = p.cls == PlantClass::kCrop ? kCrop : kWeed;
-    const auto leaf = static_cast<float>(options_.leaf_texture_contrast);
-    const PlantShape shape(p);
-    for (int v = box.v0; v <= box.v1; ++v) {
-      auto* shade = shade_.ptr<float>(v);
-      auto* mat = material_.ptr<uint8_t>(v);
-      auto* inst = out.instances.ptr<uint16_t>(v);
-      for (int u = box.u0; u <= box.u1; ++u) {
-        const PlantHit hit = shape.Intersect(view.centre, view.RayAt(u + 0.5, v), options_.ray_samples);
-        if (!hit.hit) continue;
-        mat[u] = material;
-        inst[u] = instance;
-        const float t = Texel(leaf_texture_, u * 0.002 + index * 0.37, v * 0.002, fine);
-        shade[u] = static_cast<float>(p.brightness * (0.78 + 0.3 * hit.radial)) * (1.0F + leaf * t);
+    jobs.push_back({PlantShape(p), box, index,
+                    static_cast<uint16_t>(std::min<size_t>(out.plants.size(), 65535))});
+  }
+  const double fine = 1.0 / (0.5 * kTexelM);
+  const auto leaf = static_cast<float>(options_.leaf_texture_contrast);
+  ForRowBands(view.height, threads_, [&](int first_row, int end_row) {
+    for (const Job& job : jobs) {
+      const Plant& p = field.plants()[static_cast<size_t>(job.index)];
+      const PixelBox& box = job.box;
+      const PlantShape& shape = job.shape;
+      const int index = job.index;
+      const uint16_t instance = job.instance;
+      const uint8_t material = p.cls == PlantClass::kCrop ? kCrop : kWeed;
+      for (int v = std::max(box.v0, first_row); v <= std::min(box.v1, end_row - 1); ++v) {
+        auto* shade = shade_.ptr<float>(v);
+        auto* mat = material_.ptr<uint8_t>(v);
+        auto* inst = out.instances.ptr<uint16_t>(v);
+        for (int u = box.u0; u <= box.u1; ++u) {
+          const PlantHit hit =
+              shape.Intersect(view.centre, view.RayAt(u + 0.5, v), options_.ray_samples);
+          if (!hit.hit) continue;
+          mat[u] = material;
+          inst[u] = instance;
+          const float t = Texel(leaf_texture_, u * 0.002 + index * 0.37, v * 0.002, fine);
+          shade[u] =
+              static_cast<float>(p.brightness * (0.78 + 0.3 * hit.radial)) * (1.0F + leaf * t);
+        }
       }
     }
-  }
+  });
 }
 
 void Renderer::Compose(const View& view, uint64_t frame_seed, RenderedFrame& out) {
@@ -401,42 +449,48 @@ void Renderer::Compose(const View& view, uint64_t frame_seed, RenderedFrame& out
       {0.40F, 0.42F, 0.45F},  // stone
       {0.60F, 0.60F, 0.60F},  // beyond range: haze
   }};
-  const std::array<float, 5> nir = {static_cast<float>(o.soil_reflectance),
-                                    static_cast<float>(o.crop_reflectance),
-                                    static_cast<float>(o.weed_reflectance),
-                                    static_cast<float>(o.stone_reflectance), 0.6F};
+  const std::array<float, 5> nir = {
+      static_cast<float>(o.soil_reflectance), static_cast<float>(o.crop_reflectance),
+      static_cast<float>(o.weed_reflectance), static_cast<float>(o.stone_reflectance), 0.6F};
   const bool rgb = o.kind == ImageKind::kRgb;
   out.image.create(view.height, view.width, rgb ? CV_8UC3 : CV_8UC1);
   Rng rng(frame_seed);
-  size_t noise_at = rng.NextU64() % (kNoiseTable / 2);
+  const size_t noise_base = rng.NextU64() % kNoiseTable;
+  const size_t channels = rgb ? 3 : 1;
   const auto noise = static_cast<float>(o.sensor_noise);
   const auto vehicle_shadow = static_cast<float>(1.0 - o.vehicle_shadow_depth);
   const auto plant_shadow = static_cast<float>(1.0 - o.plant_shadow_depth);
-  for (int v = 0; v < view.height; ++v) {
-    const auto light = static_cast<float>(
-        o.exposure * (1.0 + o.illumination_gradient * ((v + 0.5) / view.height - 0.5)));
-    const auto* shade = shade_.ptr<float>(v);
-    const auto* mat = material_.ptr<uint8_t>(v);
-    const auto* shadow = shadow_.ptr<uint8_t>(v);
-    auto* label = out.labels.ptr<uint8_t>(v);
-    auto* pixel = out.image.ptr<uint8_t>(v);
-    for (int u = 0; u < view.width; ++u) {
-      const uint8_t m = mat[u];
-      label[u] = (m == kCrop || m == kWeed) ? m : 0;
-      float gain = light * shade[u];
-      if ((shadow[u] & kVehicleShadow) != 0) gain *= vehicle_shadow;
-      if ((shadow[u] & kPlantShadow) != 0 && (m == kSoil || m == kStone)) gain *= plant_shadow;
-      if (!rgb) {
-        const float value = nir[m] * gain + noise * noise_table_[(noise_at++) & (kNoiseTable - 1U)];
-        pixel[u] = cv::saturate_cast<uint8_t>(255.0F * value);
-        continue;
-      }
-      for (int ch = 0; ch < 3; ++ch) {
-        const float value = colour[m][static_cast<size_t>(ch)] * gain + noise * noise_table_[(noise_at++) & (kNoiseTable - 1U)];
-        pixel[3 * u + ch] = cv::saturate_cast<uint8_t>(255.0F * value);
+  ForRowBands(view.height, threads_, [&](int first_row, int end_row) {
+    for (int v = first_row; v < end_row; ++v) {
+      size_t noise_at =
+          noise_base + static_cast<size_t>(v) * static_cast<size_t>(view.width) * channels;
+      const auto light = static_cast<float>(
+          o.exposure * (1.0 + o.illumination_gradient * ((v + 0.5) / view.height - 0.5)));
+      const auto* shade = shade_.ptr<float>(v);
+      const auto* mat = material_.ptr<uint8_t>(v);
+      const auto* shadow = shadow_.ptr<uint8_t>(v);
+      auto* label = out.labels.ptr<uint8_t>(v);
+      auto* pixel = out.image.ptr<uint8_t>(v);
+      for (int u = 0; u < view.width; ++u) {
+        const uint8_t m = mat[u];
+        label[u] = (m == kCrop || m == kWeed) ? m : 0;
+        float gain = light * shade[u];
+        if ((shadow[u] & kVehicleShadow) != 0) gain *= vehicle_shadow;
+        if ((shadow[u] & kPlantShadow) != 0 && (m == kSoil || m == kStone)) gain *= plant_shadow;
+        if (!rgb) {
+          const float value =
+              nir[m] * gain + noise * noise_table_[(noise_at++) & (kNoiseTable - 1U)];
+          pixel[u] = cv::saturate_cast<uint8_t>(255.0F * value);
+          continue;
+        }
+        for (int ch = 0; ch < 3; ++ch) {
+          const float value = colour[m][static_cast<size_t>(ch)] * gain +
+                              noise * noise_table_[(noise_at++) & (kNoiseTable - 1U)];
+          pixel[3 * u + ch] = cv::saturate_cast<uint8_t>(255.0F * value);
+        }
       }
     }
-  }
+  });
   // Per-plant visible area and centroid from the instance image.
   for (int v = 0; v < view.height; ++v) {
     const auto* inst = out.instances.ptr<uint16_t>(v);

@@ -24,33 +24,35 @@ enum class ImageKind { kNir, kRgb };
 
 struct RenderOptions {
   ImageKind kind = ImageKind::kNir;
-  double exposure = 1.0;                 // overall gain
-  double soil_reflectance = 0.26;        // NIR, relative to a white target
+  double exposure = 1.0;           // overall gain
+  double soil_reflectance = 0.26;  // NIR, relative to a white target
   double crop_reflectance = 0.72;
   double weed_reflectance = 0.66;
   double stone_reflectance = 0.42;
-  double soil_texture_contrast = 0.22;   // clods and furrows, fraction of soil brightness
+  double soil_texture_contrast = 0.22;  // clods and furrows, fraction of soil brightness
   double leaf_texture_contrast = 0.08;
-  double illumination_gradient = 0.15;   // brightness change from top to bottom of the image
-  double vehicle_shadow_depth = 0.0;     // 0: no shadow; 0.7: 70 % darker inside
-  double vehicle_shadow_edge_m = 1.0;    // forward distance of the shadow edge (vehicle frame)
-  double vehicle_shadow_slope = 0.15;    // edge slope dy/dx across the image
-  double plant_shadow_depth = 0.0;       // darkening of soil under plant shadows
-  double sun_azimuth_rad = 0.6;          // direction shadows fall (field frame, from +x, CCW)
+  double illumination_gradient = 0.15;  // brightness change from top to bottom of the image
+  double vehicle_shadow_depth = 0.0;    // 0: no shadow; 0.7: 70 % darker inside
+  double vehicle_shadow_edge_m = 1.0;   // forward distance of the shadow edge (vehicle frame)
+  double vehicle_shadow_slope = 0.15;   // edge slope dy/dx across the image
+  double plant_shadow_depth = 0.0;      // darkening of soil under plant shadows
+  double sun_azimuth_rad = 0.6;         // direction shadows fall (field frame, from +x, CCW)
   double sun_elevation_rad = 0.9;
-  double specular_fraction = 0.0;        // fraction of soil that glints
+  double specular_fraction = 0.0;  // fraction of soil that glints
   double specular_gain = 1.8;
-  double sensor_noise = 0.015;           // sd, fraction of full scale
-  double max_range_m = 12.0;             // ground beyond this is not rendered (horizon haze)
-  int ray_samples = 6;                   // heights tested per plant ray
+  double sensor_noise = 0.015;  // sd, fraction of full scale
+  double max_range_m = 12.0;    // ground beyond this is not rendered (horizon haze)
+  int ray_samples = 4;          // heights tested per plant ray
+  int threads = 0;              // row bands rendered in parallel; 0: one per core (≤ 4).
+                                // Output does not depend on it.
 
   OptionErrors Validate() const;
 };
 
 // One rendered plant, for the ground truth.
 struct RenderedPlant {
-  int plant_index = 0;   // index into Field::plants()
-  int area_px = 0;       // visible pixels (after occlusion)
+  int plant_index = 0;  // index into Field::plants()
+  int area_px = 0;      // visible pixels (after occlusion)
   Eigen::Vector2d centroid_px{0.0, 0.0};
 };
 
@@ -82,13 +84,14 @@ class Renderer {
   void Blur(const View& view, double blur_m, RenderedFrame& out);
 
   RenderOptions options_;
-  std::vector<float> soil_texture_;   // tileable value noise, kTexture²
+  int threads_ = 1;
+  std::vector<float> soil_texture_;  // tileable value noise, kTexture²
   std::vector<float> leaf_texture_;
-  std::vector<float> noise_table_;    // N(0, 1) samples
-  cv::Mat shade_;      // CV_32F brightness factor per pixel
-  cv::Mat material_;   // CV_8U: 0 soil, 1 crop, 2 weed, 3 stone, 4 beyond range
-  cv::Mat shadow_;     // CV_8U: bit 1 plant shadow, bit 2 vehicle shadow
-  std::vector<int> visible_;  // field plant indices drawn this frame
+  std::vector<float> noise_table_;  // N(0, 1) samples
+  cv::Mat shade_;                   // CV_32F brightness factor per pixel
+  cv::Mat material_;                // CV_8U: 0 soil, 1 crop, 2 weed, 3 stone, 4 beyond range
+  cv::Mat shadow_;                  // CV_8U: bit 1 plant shadow, bit 2 vehicle shadow
+  std::vector<int> visible_;        // field plant indices drawn this frame
 };
 
 }  // namespace plantscale::sim
