@@ -12,7 +12,8 @@ namespace plantscale::app {
 namespace {
 
 void AddSimulateOptions(CLI::App* cmd, auto& a) {
-  cmd->add_option("--preset", a.preset, "preset name (config/presets) or YAML file")->capture_default_str();
+  cmd->add_option("--preset", a.preset, "preset name (config/presets) or YAML file")
+      ->capture_default_str();
   cmd->add_option("--length-m", a.length_m, "distance to drive, metres (default: the preset's)");
   cmd->add_option("--seed", a.seed, "random seed (default: the preset's)");
   cmd->add_option("--every", a.every, "write images of every k-th frame (truth for all)")
@@ -44,19 +45,19 @@ SimulateRequest MakeRequest(const Args& a, const std::string& config_dir) {
   return r;
 }
 
-void PrintSummary(const SimulateRequest& r, const SimulateSummary& s) {
+void PrintSummary(const char* command, const SimulateRequest& r, const SimulateSummary& s) {
   const double deg = 180.0 / std::numbers::pi;
-  std::cout << std::fixed << std::setprecision(2)
-            << "plantscale simulate: preset " << r.options.preset << ", seed " << r.options.seed
-            << "\n  driven            " << s.distance_m << " m in " << s.frames << " frames ("
-            << s.dropped << " dropped), odometry says " << s.odometry_distance_m << " m"
+  std::cout << std::fixed << std::setprecision(2) << "plantscale " << command << ": preset "
+            << r.options.preset << ", seed " << r.options.seed << "\n  driven            "
+            << s.distance_m << " m in " << s.frames << " frames (" << s.dropped
+            << " dropped), odometry says " << s.odometry_distance_m << " m"
             << "\n  field             " << s.crops_in_field << " crops, " << s.weeds_in_field
             << " weeds; " << s.plants_seen << " plants seen, " << std::setprecision(0)
             << s.mean_plant_pixels << " px per plant per frame" << std::setprecision(1)
             << "\n  vehicle vs rows   RMS offset " << 1000.0 * s.rms_offset_m << " mm, max "
             << 1000.0 * s.max_abs_offset_m << " mm, max bearing " << std::setprecision(2)
-            << deg * s.max_abs_bearing_rad << " deg"
-            << std::setprecision(1) << "\n  speed             "
+            << deg * s.max_abs_bearing_rad << " deg" << std::setprecision(1)
+            << "\n  speed             "
             << (s.simulate_seconds > 0 ? s.frames / s.simulate_seconds : 0.0)
             << " frames/s simulated, " << s.wall_seconds << " s in all with disk writes"
             << "\n  wrote             " << r.out.string() << "/ (" << s.images_written
@@ -68,8 +69,10 @@ void PrintSummary(const SimulateRequest& r, const SimulateSummary& s) {
 }  // namespace
 
 CommandLine::CommandLine(CLI::App& cli) {
-  cli.add_option("--config-dir", config_dir_, "folder with cameras/ and presets/ (default: built-in)");
-  simulate_ = cli.add_subcommand("simulate", "drive the field simulator and write frames and ground truth");
+  cli.add_option("--config-dir", config_dir_,
+                 "folder with cameras/ and presets/ (default: built-in)");
+  simulate_ =
+      cli.add_subcommand("simulate", "drive the field simulator and write frames and ground truth");
   AddSimulateOptions(simulate_, sim_);
   simulate_->add_option("--out", sim_.out, "output folder")->required();
 
@@ -92,7 +95,7 @@ int CommandLine::Run() const {
 int CommandLine::Simulate() const {
   const SimulateRequest request = MakeRequest(sim_, config_dir_);
   const SimulateSummary summary = RunSimulation(request, std::cerr);
-  PrintSummary(request, summary);
+  PrintSummary("simulate", request, summary);
   return 0;
 }
 
@@ -101,12 +104,13 @@ int CommandLine::Demo() const {
   if (!args.length_m) args.length_m = 40.0;
   const SimulateRequest request = MakeRequest(args, config_dir_);
   const SimulateSummary summary = RunSimulation(request, std::cerr);
-  PrintSummary(request, summary);
+  PrintSummary("demo", request, summary);
   return 0;
 }
 
 int CommandLine::Presets() const {
-  const std::filesystem::path dir = config_dir_.empty() ? DefaultConfigDir() : std::filesystem::path(config_dir_);
+  const std::filesystem::path dir =
+      config_dir_.empty() ? DefaultConfigDir() : std::filesystem::path(config_dir_);
   for (const char* kind : {"presets", "cameras"}) {
     std::cout << kind << " (" << (dir / kind).string() << "):\n";
     std::vector<std::string> names;

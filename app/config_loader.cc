@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <numbers>
 #include <set>
@@ -26,7 +26,8 @@ class MapReader {
  public:
   MapReader(YAML::Node node, std::string file, std::string path)
       : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {
-    if (!node_.IsMap()) throw ConfigError(file_, path_.empty() ? "(top level)" : path_, "expected a mapping");
+    if (!node_.IsMap())
+      throw ConfigError(file_, path_.empty() ? "(top level)" : path_, "expected a mapping");
   }
 
   bool Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
@@ -49,7 +50,8 @@ class MapReader {
   void Angle(const std::string& stem, double& out_rad) {
     const std::string rad = stem + "_rad";
     const std::string deg = stem + "_deg";
-    if (Has(rad) && Has(deg)) throw ConfigError(file_, Join(path_, stem), "give _rad or _deg, not both");
+    if (Has(rad) && Has(deg))
+      throw ConfigError(file_, Join(path_, stem), "give _rad or _deg, not both");
     Get(rad, out_rad);
     if (Has(deg)) out_rad = As<double>(Node(deg), deg) * std::numbers::pi / 180.0;
   }
@@ -73,15 +75,17 @@ class MapReader {
     try {
       T value = n.as<T>();
       if constexpr (std::is_floating_point_v<T>) {
-        if (!std::isfinite(value)) throw ConfigError(file_, where, "must be a finite number" + line);
+        if (!std::isfinite(value))
+          throw ConfigError(file_, where, "must be a finite number" + line);
       }
       return value;
     } catch (const YAML::BadConversion&) {
-      const char* type = std::is_same_v<T, bool>             ? "true or false"
-                         : std::is_integral_v<T>             ? "an integer"
-                         : std::is_floating_point_v<T>       ? "a number"
-                                                             : "a string";
-      throw ConfigError(file_, where, std::string("expected ") + type + ", got '" + n.Scalar() + "'" + line);
+      const char* type = std::is_same_v<T, bool>       ? "true or false"
+                         : std::is_integral_v<T>       ? "an integer"
+                         : std::is_floating_point_v<T> ? "a number"
+                                                       : "a string";
+      throw ConfigError(file_, where,
+                        std::string("expected ") + type + ", got '" + n.Scalar() + "'" + line);
     }
   }
 
@@ -93,7 +97,9 @@ class MapReader {
 
 YAML::Node ParseFile(const fs::path& file) {
   std::ifstream in(file);
-  if (!in) throw ConfigError(file.string(), "(file)", "cannot be read: " + std::string(std::strerror(errno)));
+  if (!in)
+    throw ConfigError(file.string(), "(file)",
+                      "cannot be read: " + std::string(std::strerror(errno)));
   try {
     YAML::Node root = YAML::Load(in);
     if (!root || root.IsNull()) throw ConfigError(file.string(), "(file)", "is empty");
@@ -124,8 +130,9 @@ fs::path Resolve(const std::string& name_or_path, const fs::path& dir, const cha
   if (fs::exists(file)) return file;
   std::string known;
   for (const std::string& n : Available(dir)) known += (known.empty() ? "" : ", ") + n;
-  throw ConfigError(dir.string(), name_or_path,
-                    std::string("unknown ") + what + " (known: " + (known.empty() ? "none" : known) + ")");
+  throw ConfigError(
+      dir.string(), name_or_path,
+      std::string("unknown ") + what + " (known: " + (known.empty() ? "none" : known) + ")");
 }
 
 void ReadCamera(MapReader& r, geometry::CameraOptions& o) {
@@ -299,7 +306,8 @@ sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
   top.Finish();
   const OptionErrors errors = o.Validate();
   if (!errors.empty()) {
-    const bool from_camera_file = errors[0].key.rfind("camera.", 0) == 0 && camera_source != file.string();
+    const bool from_camera_file =
+        errors[0].key.rfind("camera.", 0) == 0 && camera_source != file.string();
     throw ConfigError(from_camera_file ? camera_source : file.string(), errors[0].key,
                       errors[0].reason);
   }

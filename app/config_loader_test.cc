@@ -13,14 +13,19 @@ namespace fs = std::filesystem;
 class ConfigLoaderTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("plantscale_config_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ =
+        fs::temp_directory_path() /
+        ("plantscale_config_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "cameras");
     fs::create_directories(dir_ / "presets");
     Write("cameras/cam.yaml", "height_m: 1.5\ntilt_deg: 45\nfocal_length_m: 0.0048\n");
   }
   void TearDown() override { fs::remove_all(dir_); }
-  void Write(const std::string& name, const std::string& text) { std::ofstream(dir_ / name) << text; }
+  void Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+  }
   std::string ErrorOf(const std::string& preset) {
     try {
       LoadSimulatorPreset(preset, dir_);

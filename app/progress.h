@@ -1,6 +1,11 @@
 #pragma once
-// A one-line progress bar on a terminal stream, redrawn at most every 1 %.
+// A one-line progress bar, redrawn at most every 1 % on a terminal; when
+// standard error is not a terminal (logs, CI) a plain line every 10 %.
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
 #include <ostream>
 #include <string>
 
@@ -15,6 +20,12 @@ class ProgressBar {
     if (!enabled_) return;
     const int percent = std::min(100, 100 * done / total_);
     if (percent == last_percent_) return;
+    if (!tty_) {
+      if (percent / 10 == last_percent_ / 10) return;
+      last_percent_ = percent;
+      out_ << label_ << ": " << percent << "% (" << done << "/" << total_ << ")\n" << std::flush;
+      return;
+    }
     last_percent_ = percent;
     const int filled = percent * kWidth / 100;
     out_ << '\r' << label_ << " [" << std::string(static_cast<size_t>(filled), '#')
@@ -22,7 +33,7 @@ class ProgressBar {
          << done << "/" << total_ << ")" << std::flush;
   }
   void Finish() {
-    if (enabled_ && last_percent_ >= 0) out_ << '\n' << std::flush;
+    if (enabled_ && tty_ && last_percent_ >= 0) out_ << '\n' << std::flush;
   }
 
  private:
@@ -32,6 +43,7 @@ class ProgressBar {
   int total_;
   bool enabled_;
   int last_percent_ = -1;
+  bool tty_ = ::isatty(::fileno(stderr)) != 0;
 };
 
 }  // namespace plantscale::app

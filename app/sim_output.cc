@@ -52,8 +52,8 @@ std::string FrameName(int index) {
 class Staging {
  public:
   explicit Staging(const fs::path& out) : out_(fs::absolute(out)) {
-    staging_ = out_.parent_path() / ("." + out_.filename().string() + ".partial-" +
-                                     std::to_string(::getpid()));
+    staging_ = out_.parent_path() /
+               ("." + out_.filename().string() + ".partial-" + std::to_string(::getpid()));
     std::error_code ec;
     fs::create_directories(out_.parent_path(), ec);
     fs::remove_all(staging_, ec);
@@ -71,8 +71,8 @@ class Staging {
   const fs::path& path() const { return staging_; }
   void Commit() {
     std::error_code ec;
-    const fs::path old = out_.parent_path() / ("." + out_.filename().string() + ".old-" +
-                                               std::to_string(::getpid()));
+    const fs::path old = out_.parent_path() /
+                         ("." + out_.filename().string() + ".old-" + std::to_string(::getpid()));
     if (fs::exists(out_)) fs::rename(out_, old);
     fs::rename(staging_, out_);
     committed_ = true;
@@ -92,9 +92,10 @@ struct TruthFiles {
                        "frame,utime,x_m,y_m,heading_rad,distance_m,t_x_m,Y_m,psi_rad,"
                        "row_spacing_m,plant_spacing_m,line0,camera_pitch_rad,camera_roll_rad,"
                        "camera_height_offset_m,plants_visible,image")),
-        visible(OpenCsv(folder / "visible_plants.csv",
-                        "frame,instance,plant_id,class,row,line,x_m,y_m,vehicle_x_m,vehicle_y_m,"
-                        "radius_m,height_m,root_u_px,root_v_px,area_px,centroid_u_px,centroid_v_px")),
+        visible(
+            OpenCsv(folder / "visible_plants.csv",
+                    "frame,instance,plant_id,class,row,line,x_m,y_m,vehicle_x_m,vehicle_y_m,"
+                    "radius_m,height_m,root_u_px,root_v_px,area_px,centroid_u_px,centroid_v_px")),
         odometry(OpenCsv(folder / "odometry.csv",
                          "utime,left_m_s,right_m_s,true_left_m_s,true_right_m_s,slipping")) {}
 
@@ -138,23 +139,26 @@ void WriteFrameTruth(TruthFiles& t, const sim::SimFrame& f, const std::string& i
 
 void WriteFieldTruth(const fs::path& dir, const sim::Field& field) {
   const fs::path plants_file = dir / "plants.csv";
-  std::ofstream plants = OpenCsv(plants_file, "plant_id,class,row,line,x_m,y_m,radius_m,height_m,fractured");
+  std::ofstream plants =
+      OpenCsv(plants_file, "plant_id,class,row,line,x_m,y_m,radius_m,height_m,fractured");
   for (const sim::Plant& p : field.plants()) {
     plants << p.id << ',' << sim::ToString(p.cls) << ',' << p.row << ',' << p.line << ','
-           << p.position_m.x() << ',' << p.position_m.y() << ',' << p.radius_m << ','
-           << p.height_m << ',' << (p.fractured_lobe >= 0 ? 1 : 0) << '\n';
+           << p.position_m.x() << ',' << p.position_m.y() << ',' << p.radius_m << ',' << p.height_m
+           << ',' << (p.fractured_lobe >= 0 ? 1 : 0) << '\n';
   }
   CloseChecked(plants, plants_file);
   const fs::path lines_file = dir / "lines.csv";
   std::ofstream lines = OpenCsv(lines_file, "line,y_m,row_spacing_m,plant_spacing_m");
   for (size_t i = 0; i < field.line_y_m().size(); ++i) {
     const double y = field.line_y_m()[i];
-    lines << i << ',' << y << ',' << field.RowSpacingAt(y) << ',' << field.PlantSpacingAt(y) << '\n';
+    lines << i << ',' << y << ',' << field.RowSpacingAt(y) << ',' << field.PlantSpacingAt(y)
+          << '\n';
   }
   CloseChecked(lines, lines_file);
 }
 
-nlohmann::json RunJson(const SimulateRequest& r, const SimulateSummary& s, const sim::Simulator& sim) {
+nlohmann::json RunJson(const SimulateRequest& r, const SimulateSummary& s,
+                       const sim::Simulator& sim) {
   const geometry::CameraOptions& c = r.options.camera;
   return {
       {"preset", r.options.preset},
@@ -168,9 +172,13 @@ nlohmann::json RunJson(const SimulateRequest& r, const SimulateSummary& s, const
       {"crops_in_field", s.crops_in_field},
       {"weeds_in_field", s.weeds_in_field},
       {"camera",
-       {{"height_m", c.height_m}, {"tilt_rad", c.tilt_rad}, {"focal_length_m", c.focal_length_m},
-        {"pixel_width_m", c.pixel_width_m}, {"pixel_height_m", c.pixel_height_m},
-        {"image_width_px", c.image_width_px}, {"image_height_px", c.image_height_px},
+       {{"height_m", c.height_m},
+        {"tilt_rad", c.tilt_rad},
+        {"focal_length_m", c.focal_length_m},
+        {"pixel_width_m", c.pixel_width_m},
+        {"pixel_height_m", c.pixel_height_m},
+        {"image_width_px", c.image_width_px},
+        {"image_height_px", c.image_height_px},
         {"principal_point_u_px", sim.camera().principal_point().x()},
         {"principal_point_v_px", sim.camera().principal_point().y()},
         {"virtual_plane_height_m", c.virtual_plane_height_m}}},
@@ -185,7 +193,8 @@ SimulateSummary RunSimulation(const SimulateRequest& request, std::ostream& prog
   sim::Simulator simulator(request.options);  // validates before anything is written
   Staging staging(request.out);
   const fs::path root = staging.path();
-  for (const char* sub : {"frames", "labels", "instances", "truth"}) fs::create_directories(root / sub);
+  for (const char* sub : {"frames", "labels", "instances", "truth"})
+    fs::create_directories(root / sub);
   TruthFiles truth(root / "truth");
   WriteFieldTruth(root / "truth", simulator.field());
 
@@ -214,7 +223,8 @@ SimulateSummary RunSimulation(const SimulateRequest& request, std::ostream& prog
     }
     WriteFrameTruth(truth, frame, image);
     for (const sim::OdometrySample& o : frame.odometry) {
-      s.odometry_distance_m += 0.5 * (o.left_m_s + o.right_m_s) / request.options.vehicle.odometry_rate_hz;
+      s.odometry_distance_m +=
+          0.5 * (o.left_m_s + o.right_m_s) / request.options.vehicle.odometry_rate_hz;
     }
     for (const sim::PlantTruth& p : x.plants) {
       seen.insert(p.plant_id);

@@ -13,8 +13,8 @@ namespace plantscale::app {
 struct SimulateRequest {
   sim::SimulatorOptions options;
   std::filesystem::path out;
-  int image_every = 1;    // write images of every k-th frame (truth for all)
-  bool progress = true;   // progress bar on the given stream
+  int image_every = 1;   // write images of every k-th frame (truth for all)
+  bool progress = true;  // progress bar on the given stream
 };
 
 struct SimulateSummary {

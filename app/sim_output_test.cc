@@ -15,7 +15,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("plantscale_out_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path dir =
+      fs::temp_directory_path() / ("plantscale_out_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(dir);
   return dir;
 }
@@ -50,7 +51,8 @@ TEST(SimOutput, WritesFramesLabelsAndTruth) {
   EXPECT_NEAR(CountLines(out / "truth" / "odometry.csv") - 1, 4 * s.frames, 4);
   const cv::Mat frame = cv::imread((out / "frames" / "000000.png").string(), cv::IMREAD_UNCHANGED);
   const cv::Mat labels = cv::imread((out / "labels" / "000000.png").string(), cv::IMREAD_UNCHANGED);
-  const cv::Mat instances = cv::imread((out / "instances" / "000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat instances =
+      cv::imread((out / "instances" / "000000.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_FALSE(frame.empty());
   EXPECT_EQ(frame.cols, 640);
   EXPECT_EQ(frame.rows, 480);

@@ -37,8 +37,8 @@ void RunFrames(benchmark::State& state, ImageKind kind) {
     if (!simulator.Next(frame)) state.SkipWithError("pass ended");
     benchmark::DoNotOptimize(frame.rendered.image.data);
   }
-  state.counters["frames_per_s"] = benchmark::Counter(
-      static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 
 void BM_SimulatorNirFrame640x480(benchmark::State& state) { RunFrames(state, ImageKind::kNir); }

@@ -15,13 +15,13 @@ namespace plantscale {
 namespace {
 
 struct PresetStats {
-  double plant_fraction = 0.0;      // labelled plant pixels / all pixels
-  double plant_grey = 0.0;          // mean NIR grey of plant pixels
+  double plant_fraction = 0.0;  // labelled plant pixels / all pixels
+  double plant_grey = 0.0;      // mean NIR grey of plant pixels
   double soil_grey = 0.0;
-  double bottom_soil_grey = 0.0;    // soil in the bottom eighth of the image
-  double middle_soil_grey = 0.0;    // soil in the middle eighth
+  double bottom_soil_grey = 0.0;  // soil in the bottom eighth of the image
+  double middle_soil_grey = 0.0;  // soil in the middle eighth
   double weeds_per_frame = 0.0;
-  double centroid_error_m = 0.0;    // RMS, crop centroids vs grid truth, on the virtual plane
+  double centroid_error_m = 0.0;  // RMS, crop centroids vs grid truth, on the virtual plane
   int frames = 0;
 };
 
@@ -48,8 +48,14 @@ PresetStats RunPreset(const std::string& preset) {
         }
         soil_sum += g;
         ++soil_n;
-        if (v >= img.rows * 7 / 8) { bottom_sum += g; ++bottom_n; }
-        if (v >= img.rows * 7 / 16 && v < img.rows * 9 / 16) { mid_sum += g; ++mid_n; }
+        if (v >= img.rows * 7 / 8) {
+          bottom_sum += g;
+          ++bottom_n;
+        }
+        if (v >= img.rows * 7 / 16 && v < img.rows * 9 / 16) {
+          mid_sum += g;
+          ++mid_n;
+        }
       }
     }
     for (const sim::PlantTruth& p : f.truth.plants) {
@@ -57,8 +63,9 @@ PresetStats RunPreset(const std::string& preset) {
       // Whole, isolated crops away from the image edge: their blob centroid on
       // the virtual plane should be near the grid position from the truth.
       if (p.cls != sim::PlantClass::kCrop || f.truth.line0 < 0 || p.area_px < 200) continue;
-      if (p.centroid_px.x() < 60 || p.centroid_px.x() > img.cols - 60 ||
-          p.centroid_px.y() < 60 || p.centroid_px.y() > img.rows - 60) continue;
+      if (p.centroid_px.x() < 60 || p.centroid_px.x() > img.cols - 60 || p.centroid_px.y() < 60 ||
+          p.centroid_px.y() > img.rows - 60)
+        continue;
       const auto ground = camera.ImageToVirtualPlane(p.centroid_px);
       if (!ground) continue;
       const Eigen::Vector2d grid =
@@ -82,7 +89,8 @@ PresetStats RunPreset(const std::string& preset) {
 class PresetsTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    for (const char* p : {"A", "B", "C", "D", "testbed", "field", "treatment"}) stats_[p] = RunPreset(p);
+    for (const char* p : {"A", "B", "C", "D", "testbed", "field", "treatment"})
+      stats_[p] = RunPreset(p);
   }
   static std::map<std::string, PresetStats> stats_;
 };
@@ -121,6 +129,30 @@ TEST_F(PresetsTest, CropCentroidsOnTheVirtualPlaneMatchTheGridTruth) {
   for (const char* p : {"B", "C", "field"}) {
     EXPECT_LT(stats_[p].centroid_error_m, 0.08) << p;
     EXPECT_GT(stats_[p].frames, 30) << p;
+  }
+}
+
+}  // namespace
+}  // namespace plantscale
+
+namespace plantscale {
+namespace {
+
+TEST(SimulatorDeterminism, SameBytesWhateverTheThreadCount) {
+  sim::SimulatorOptions o = app::LoadSimulatorPreset("C", app::DefaultConfigDir());
+  o.length_m = 0.5;
+  std::vector<cv::Mat> images[2];
+  for (int k = 0; k < 2; ++k) {
+    o.render.threads = k == 0 ? 1 : 3;
+    o.render.kind = sim::ImageKind::kRgb;
+    sim::Simulator simulator(o);
+    sim::SimFrame f;
+    while (simulator.Next(f)) images[k].push_back(f.rendered.image.clone());
+  }
+  ASSERT_EQ(images[0].size(), images[1].size());
+  ASSERT_GT(images[0].size(), 5U);
+  for (size_t i = 0; i < images[0].size(); ++i) {
+    EXPECT_EQ(cv::norm(images[0][i], images[1][i], cv::NORM_INF), 0.0) << "frame " << i;
   }
 }
 

@@ -23,8 +23,7 @@ class InternalError : public std::logic_error {
 
 }  // namespace plantscale
 
-#define PLANTSCALE_CHECK(condition, message)                                 \
-  do {                                                                        \
-    if (!(condition)) ::plantscale::FailCheck(#condition, __FILE__, __LINE__, \
-                                              (message));                     \
+#define PLANTSCALE_CHECK(condition, message)                                              \
+  do {                                                                                    \
+    if (!(condition)) ::plantscale::FailCheck(#condition, __FILE__, __LINE__, (message)); \
   } while (false)

@@ -11,14 +11,14 @@ class Rng {
  public:
   explicit Rng(uint64_t seed);
 
-  uint64_t NextU64();            // xoshiro256** step
-  double Uniform();              // [0, 1)
+  uint64_t NextU64();  // xoshiro256** step
+  double Uniform();    // [0, 1)
   double Uniform(double low, double high);
-  double Normal();               // standard normal (Marsaglia polar method)
+  double Normal();  // standard normal (Marsaglia polar method)
   double Normal(double mean, double sd) { return mean + sd * Normal(); }
   double LogNormal(double median, double log_sd);  // median * exp(log_sd * N(0,1))
   bool Bernoulli(double p) { return Uniform() < p; }
-  int Poisson(double mean);      // Knuth for small means, normal approx. above 50
+  int Poisson(double mean);  // Knuth for small means, normal approx. above 50
   // An independent stream derived from this seed and a label (splitmix64).
   static Rng Derived(uint64_t seed, uint64_t stream);
 

@@ -23,7 +23,7 @@ Eigen::Matrix3d RollRotation(double roll) {
   const double c = std::cos(roll);
   const double s = std::sin(roll);
   Eigen::Matrix3d r;
-  r << c, 0.0, s,  //
+  r << c, 0.0, s,     //
       0.0, 1.0, 0.0,  //
       -s, 0.0, c;
   return r;
@@ -87,7 +87,7 @@ std::optional<Eigen::Vector2d> CameraModel::ImageToPlane(const Eigen::Vector2d& 
                                                          double plane_height_m) const {
   const Eigen::Vector3d d = Ray(uv);
   const double drop = plane_height_m - options_.height_m;  // < 0 below the camera
-  if (d.z() * drop <= 0.0) return std::nullopt;          // ray never reaches the plane
+  if (d.z() * drop <= 0.0) return std::nullopt;            // ray never reaches the plane
   const double s = drop / d.z();
   return Eigen::Vector2d(s * d.x(), s * d.y());
 }

@@ -26,12 +26,12 @@
 namespace plantscale::geometry {
 
 struct CameraOptions {
-  double height_m = 1.2;               // optical centre above the soil
-  double tilt_rad = 0.8727;            // optical axis below the horizontal, (0, π/2]
-  double roll_rad = 0.0;               // about the vehicle's forward axis (bumps)
-  double focal_length_m = 0.006;       // f
-  double pixel_width_m = 9.0e-6;       // dx
-  double pixel_height_m = 9.0e-6;      // dy
+  double height_m = 1.2;           // optical centre above the soil
+  double tilt_rad = 0.8727;        // optical axis below the horizontal, (0, π/2]
+  double roll_rad = 0.0;           // about the vehicle's forward axis (bumps)
+  double focal_length_m = 0.006;   // f
+  double pixel_width_m = 9.0e-6;   // dx
+  double pixel_height_m = 9.0e-6;  // dy
   int image_width_px = 640;
   int image_height_px = 480;
   std::optional<double> principal_point_u_px;  // C_x; image centre when unset

@@ -88,11 +88,12 @@ TEST(CameraModel, MatchesThesisEquations25And26AtZeroBearing) {
 TEST(CameraModel, ProjectJacobianMatchesFiniteDifferences) {
   const CameraModel camera(DisturbedCamera());
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.1, 1.5, 0.0), Eigen::Vector3d(-0.7, 2.4, 0.2),
-                                  Eigen::Vector3d(0.9, 3.5, 0.05)}) {
+                                   Eigen::Vector3d(0.9, 3.5, 0.05)}) {
     const auto f = [&](const Eigen::Vector3d& q) -> Eigen::Vector2d { return *camera.Project(q); };
     const Eigen::Matrix<double, 2, 3> numeric = NumericJacobian<2, 3>(f, p, 1e-6);
     EXPECT_LT((camera.ProjectJacobian(p) - numeric).norm(), 1e-5 * numeric.norm())
-        << camera.ProjectJacobian(p) << "\nvs\n" << numeric;
+        << camera.ProjectJacobian(p) << "\nvs\n"
+        << numeric;
   }
 }
 
@@ -115,7 +116,7 @@ TEST(CameraModel, ImageToPlaneRoundTripsWithProject) {
 TEST(CameraModel, ImageToPlaneJacobianMatchesFiniteDifferences) {
   const CameraModel camera(DisturbedCamera());
   for (const Eigen::Vector2d& uv : {Eigen::Vector2d(40.0, 400.0), Eigen::Vector2d(320.0, 240.0),
-                                   Eigen::Vector2d(600.0, 120.0)}) {
+                                    Eigen::Vector2d(600.0, 120.0)}) {
     const auto f = [&](const Eigen::Vector2d& q) -> Eigen::Vector2d {
       return *camera.ImageToPlane(q, 0.12);
     };
@@ -124,9 +125,9 @@ TEST(CameraModel, ImageToPlaneJacobianMatchesFiniteDifferences) {
     // It is the inverse of the forward Jacobian restricted to the plane.
     const Eigen::Vector2d g = f(uv);
     const Eigen::Matrix2d forward = camera.ProjectJacobian({g.x(), g.y(), 0.12}).leftCols<2>();
-    EXPECT_LT((camera.ImageToPlaneJacobian(uv, 0.12) * forward - Eigen::Matrix2d::Identity())
-                  .norm(),
-              1e-9);
+    EXPECT_LT(
+        (camera.ImageToPlaneJacobian(uv, 0.12) * forward - Eigen::Matrix2d::Identity()).norm(),
+        1e-9);
   }
 }
 

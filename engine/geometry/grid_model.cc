@@ -17,7 +17,7 @@ GridState GridState::FromVector(const Vector5d& x) {
 Eigen::Vector2d PlantInVehicle(const GridState& s, int m, int n) {
   const double c = std::cos(s.bearing_rad);
   const double si = std::sin(s.bearing_rad);
-  const double gx = n * s.row_spacing_m;                   // eq. 2.1
+  const double gx = n * s.row_spacing_m;                  // eq. 2.1
   const double gy = m * s.plant_spacing_m + s.forward_m;  // eq. 2.2
   return {c * gx + si * gy + s.offset_m, -si * gx + c * gy};
 }
@@ -49,8 +49,7 @@ GridModel::GridModel(const CameraModel& camera, const GridModelOptions& options)
   ThrowIfInvalid("grid model", options.Validate());
 }
 
-std::optional<Eigen::Vector2d> GridModel::ImageOfPlant(const GridState& state, int m,
-                                                       int n) const {
+std::optional<Eigen::Vector2d> GridModel::ImageOfPlant(const GridState& state, int m, int n) const {
   const Eigen::Vector2d g = PlantInVehicle(state, m, n);
   return camera_.Project({g.x(), g.y(), camera_.options().virtual_plane_height_m});
 }

@@ -44,8 +44,8 @@ Eigen::Vector2d PlantInVehicle(const GridState& state, int m, int n);
 Eigen::Matrix<double, 2, 5> PlantInVehicleJacobian(const GridState& state, int m, int n);
 
 struct GridModelOptions {
-  int rows_each_side = 1;       // rows n = −k..k; the thesis bed has 3 rows
-  double max_range_m = 6.0;     // lines beyond this forward distance are ignored
+  int rows_each_side = 1;    // rows n = −k..k; the thesis bed has 3 rows
+  double max_range_m = 6.0;  // lines beyond this forward distance are ignored
   double in_view_margin_px = 0.0;
 
   OptionErrors Validate() const;

@@ -13,9 +13,7 @@ using testing::Degrees;
 using testing::DisturbedCamera;
 using testing::ObliqueCamera;
 
-GridState SomeState() {
-  return GridState{0.031, 1.42, Degrees(2.5), 0.48, 0.44};
-}
+GridState SomeState() { return GridState{0.031, 1.42, Degrees(2.5), 0.48, 0.44}; }
 
 Eigen::Matrix<double, 2, 5> NumericStateJacobian(const auto& f, const GridState& s) {
   Eigen::Matrix<double, 2, 5> j;
@@ -41,9 +39,7 @@ TEST(GridModel, PlantPositionsFollowThesisEquations21And22AtZeroBearing) {
 TEST(GridModel, PlantInVehicleJacobianMatchesFiniteDifferences) {
   for (int m : {0, 1, 4}) {
     for (int n : {-1, 0, 1}) {
-      const auto f = [&](const GridState& s) -> Eigen::Vector2d {
-        return PlantInVehicle(s, m, n);
-      };
+      const auto f = [&](const GridState& s) -> Eigen::Vector2d { return PlantInVehicle(s, m, n); };
       const auto numeric = NumericStateJacobian(f, SomeState());
       EXPECT_LT((PlantInVehicleJacobian(SomeState(), m, n) - numeric).norm(), 1e-7);
     }
@@ -61,7 +57,9 @@ TEST(GridModel, ImageJacobianMatchesFiniteDifferences) {
       const auto numeric = NumericStateJacobian(f, SomeState());
       const auto analytic = model.ImageOfPlantJacobian(SomeState(), m, n);
       EXPECT_LT((analytic - numeric).norm(), 1e-5 * numeric.norm())
-          << "m=" << m << " n=" << n << "\n" << analytic << "\nvs\n" << numeric;
+          << "m=" << m << " n=" << n << "\n"
+          << analytic << "\nvs\n"
+          << numeric;
     }
   }
 }

@@ -76,7 +76,9 @@ Field::Field(const FieldOptions& options, double y_begin_m, double y_end_m, uint
   PlantCrops(seed);
   SowWeeds(seed, y_begin_m, y_end_m);
   ScatterStones(seed, y_begin_m, y_end_m);
-  const auto by_y = [](const auto& a, const auto& b) { return a.position_m.y() < b.position_m.y(); };
+  const auto by_y = [](const auto& a, const auto& b) {
+    return a.position_m.y() < b.position_m.y();
+  };
   std::stable_sort(plants_.begin(), plants_.end(), by_y);
   std::stable_sort(stones_.begin(), stones_.end(), by_y);
   for (size_t i = 0; i < plants_.size(); ++i) plants_[i].id = static_cast<int>(i);
@@ -151,14 +153,14 @@ void Field::SowWeeds(uint64_t seed, double y_begin, double y_end) {
       x = RowX(n, y) + rng.Normal(0.0, 0.04);
     }
     p.position_m = {x, y};
-    p.radius_m = std::min(o.weed_max_radius_m,
-                          rng.LogNormal(o.weed_radius_median_m, o.weed_radius_log_sd));
+    p.radius_m =
+        std::min(o.weed_max_radius_m, rng.LogNormal(o.weed_radius_median_m, o.weed_radius_log_sd));
     p.height_m = o.weed_height_ratio * p.radius_m;
     p.lobes = 2 + static_cast<int>(rng.Uniform(0.0, 4.0));
     p.lobe_depth = rng.Uniform(0.2, 0.6);
     p.lobe_phase_rad = rng.Uniform(0.0, kTwoPi);
     p.brightness = 0.95 + rng.Normal(0.0, o.plant_brightness_sd);
-    p.row = static_cast<int>(std::lround(x / o.row_spacing_m));
+    p.row = std::clamp(static_cast<int>(std::lround(x / RowSpacingAt(y))), -half, half);
     plants_.push_back(p);
   }
 }

@@ -22,17 +22,17 @@ const char* ToString(PlantClass c);
 struct Plant {
   int id = 0;
   PlantClass cls = PlantClass::kCrop;
-  Eigen::Vector2d position_m;   // root, field frame
-  double radius_m = 0.1;        // outline radius at the tips of the leaves
-  double height_m = 0.1;        // height of the leaf tips (the bowl's rim)
+  Eigen::Vector2d position_m;        // root, field frame
+  double radius_m = 0.1;             // outline radius at the tips of the leaves
+  double height_m = 0.1;             // height of the leaf tips (the bowl's rim)
   Eigen::Vector2d lean_m{0.0, 0.0};  // rim centre offset from the root
-  int lobes = 6;                // leaves
-  double lobe_depth = 0.3;      // 0: round outline; 1: leaves separated to the centre
+  int lobes = 6;                     // leaves
+  double lobe_depth = 0.3;           // 0: round outline; 1: leaves separated to the centre
   double lobe_phase_rad = 0.0;
-  double brightness = 1.0;      // relative reflectance of this plant
-  int fractured_lobe = -1;      // leaf cut from the body by a dark gap (fig. 2.18)
-  int row = 0;                  // crop: row index n; weed: nearest row
-  int line = -1;                // crop: field plant-line index; weed: −1
+  double brightness = 1.0;  // relative reflectance of this plant
+  int fractured_lobe = -1;  // leaf cut from the body by a dark gap (fig. 2.18)
+  int row = 0;              // crop: row index n; weed: nearest row
+  int line = -1;            // crop: field plant-line index; weed: −1
 };
 
 struct Stone {
@@ -44,30 +44,30 @@ struct Stone {
 };
 
 struct FieldOptions {
-  int rows = 3;                         // rows in the bed (odd: a central row)
-  double row_spacing_m = 0.475;         // r̄ (thesis test footage ≈ 475 mm)
-  double plant_spacing_m = 0.45;        // l̄ (≈ 450 mm)
-  double spacing_drift_fraction = 0.01; // amplitude of the slow drift of r̄ and l̄
+  int rows = 3;                          // rows in the bed (odd: a central row)
+  double row_spacing_m = 0.475;          // r̄ (thesis test footage ≈ 475 mm)
+  double plant_spacing_m = 0.45;         // l̄ (≈ 450 mm)
+  double spacing_drift_fraction = 0.01;  // amplitude of the slow drift of r̄ and l̄
   double spacing_drift_wavelength_m = 25.0;
-  double planting_jitter_m = 0.012;     // per-plant placement error (sd)
+  double planting_jitter_m = 0.012;  // per-plant placement error (sd)
   double missing_plant_fraction = 0.03;
-  double crop_radius_m = 0.11;          // mean leaf-tip radius
+  double crop_radius_m = 0.11;  // mean leaf-tip radius
   double crop_radius_sd_fraction = 0.15;
-  double crop_height_ratio = 0.8;       // rim height / radius (inverted-hemisphere = 1)
+  double crop_height_ratio = 0.8;  // rim height / radius (inverted-hemisphere = 1)
   double crop_lean_sd_m = 0.01;
   int crop_lobes = 7;
   double crop_lobe_depth = 0.25;
-  double fractured_fraction = 0.0;      // crops with a leaf cut off by shadow
+  double fractured_fraction = 0.0;  // crops with a leaf cut off by shadow
   double weed_density_per_m2 = 6.0;
   double weed_radius_median_m = 0.025;
   double weed_radius_log_sd = 0.45;
   double weed_max_radius_m = 0.09;
-  double weed_in_row_fraction = 0.25;   // weeds placed inside a crop row
+  double weed_in_row_fraction = 0.25;  // weeds placed inside a crop row
   double weed_height_ratio = 0.35;
   double stone_density_per_m2 = 3.0;
   double stone_size_median_m = 0.025;
-  double plant_brightness_sd = 0.06;    // plant-to-plant reflectance variation
-  double bed_margin_m = 0.6;            // soil beyond the outer rows that is populated
+  double plant_brightness_sd = 0.06;  // plant-to-plant reflectance variation
+  double bed_margin_m = 0.6;          // soil beyond the outer rows that is populated
 
   OptionErrors Validate() const;
 };
@@ -82,7 +82,7 @@ class Field {
   const std::vector<Stone>& stones() const { return stones_; }  // sorted by y
   // Planted (nominal) y of every plant line, increasing; index = line id.
   const std::vector<double>& line_y_m() const { return line_y_; }
-  double RowSpacingAt(double y_m) const;  // r̄ at y, with drift
+  double RowSpacingAt(double y_m) const;    // r̄ at y, with drift
   double PlantSpacingAt(double y_m) const;  // l̄ at y, with drift
   double RowX(int n, double y_m) const { return n * RowSpacingAt(y_m); }
   int crop_count() const { return crop_count_; }

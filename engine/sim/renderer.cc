@@ -235,7 +235,10 @@ void Renderer::RenderGround(View& view) {
         const float t2 = Texel(soil_texture_, y + 17.3, x - 5.1, coarse);
         material[u] = kSoil;
         shade[u] = 1.0F + contrast * (0.65F * t1 + 0.35F * t2);
-        if (t2 > view.specular_threshold && t1 > 0.0F) shade[u] += glint;
+        // Glints: small speckles where a fine (≈1 cm) lookup is in its top fraction.
+        if (Texel(soil_texture_, x - 3.7, y + 1.9, 7.0 * fine) > view.specular_threshold) {
+          shade[u] += glint;
+        }
         if (shadow_on > 0.0) {
           const double vy = -view.sin_h * gx + view.cos_h * gy;
           const double vx = view.cos_h * gx + view.sin_h * gy;

@@ -50,17 +50,17 @@ geometry::CameraModel Simulator::CameraFor(const CameraBounce& bounce) const {
 
 bool Simulator::Next(SimFrame& frame) {
   const VehicleOptions& vo = options_.vehicle;
+  frame.odometry.clear();  // refilled with every sample since the last delivered frame
   for (;;) {
     if (vehicle_.distance_m() >= options_.length_m) return false;
-    const double due_s = (frame_index_ + 1) / vo.frame_rate_hz +
-                         timing_rng_.Normal(0.0, vo.frame_jitter_s);
+    const double due_s =
+        (frame_index_ + 1) / vo.frame_rate_hz + timing_rng_.Normal(0.0, vo.frame_jitter_s);
     const bool dropped = timing_rng_.Bernoulli(vo.dropped_frame_fraction);
     ++frame_index_;
     // Drive until the capture time, keeping the odometry in between.
     Pose2 before = vehicle_.pose();
     int64_t before_utime = vehicle_.utime();
     const auto due_utime = static_cast<int64_t>(std::llround(due_s * 1e6));
-    if (!dropped) frame.odometry.clear();
     while (vehicle_.utime() < due_utime) {
       before = vehicle_.pose();
       before_utime = vehicle_.utime();

@@ -90,10 +90,12 @@ OdometrySample Vehicle::Step() {
   slip_left_m_ -= ds;
   const double slip = s.slipping ? 1.0 + o.slip_fraction : 1.0;
   const double noise = o.odometry_noise_fraction * o.speed_m_s;
-  s.left_m_s = s.true_left_m_s * slip * (1.0 + o.odometry_scale_error - 0.5 * o.wheel_scale_difference) +
-               rng_.Normal(0.0, noise);
-  s.right_m_s = s.true_right_m_s * slip * (1.0 + o.odometry_scale_error + 0.5 * o.wheel_scale_difference) +
-                rng_.Normal(0.0, noise);
+  s.left_m_s =
+      s.true_left_m_s * slip * (1.0 + o.odometry_scale_error - 0.5 * o.wheel_scale_difference) +
+      rng_.Normal(0.0, noise);
+  s.right_m_s =
+      s.true_right_m_s * slip * (1.0 + o.odometry_scale_error + 0.5 * o.wheel_scale_difference) +
+      rng_.Normal(0.0, noise);
   return s;
 }
 

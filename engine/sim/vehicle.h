@@ -14,10 +14,10 @@ namespace plantscale::sim {
 
 struct VehicleOptions {
   double speed_m_s = 0.7;
-  double track_width_m = 1.5;          // W of eq. 4.3, between the driven wheels
-  double start_offset_m = 0.0;         // lateral start position (field x)
+  double track_width_m = 1.5;   // W of eq. 4.3, between the driven wheels
+  double start_offset_m = 0.0;  // lateral start position (field x)
   double start_heading_rad = 0.0;
-  double zigzag_amplitude_m = 0.03;    // steering error about the row
+  double zigzag_amplitude_m = 0.03;  // steering error about the row
   double zigzag_wavelength_m = 8.0;
   double heading_wander_sd_rad = 0.003;
   double odometry_rate_hz = 50.0;
@@ -27,14 +27,14 @@ struct VehicleOptions {
   double slip_bursts_per_100m = 2.0;      // wheel spin: the wheels turn, the ground does not
   double slip_burst_length_m = 0.4;
   double slip_fraction = 0.15;
-  double bump_pitch_sd_rad = 0.004;       // camera bounce (the thesis assumes none)
+  double bump_pitch_sd_rad = 0.004;  // camera bounce (the thesis assumes none)
   double bump_roll_sd_rad = 0.003;
   double bump_height_sd_m = 0.004;
   double bump_correlation_s = 0.25;
   double frame_rate_hz = 12.5;
-  double frame_jitter_s = 0.002;          // timing jitter of frame capture
+  double frame_jitter_s = 0.002;  // timing jitter of frame capture
   double dropped_frame_fraction = 0.0;
-  double exposure_s = 0.002;              // motion blur = speed · exposure
+  double exposure_s = 0.002;  // motion blur = speed · exposure
 
   OptionErrors Validate() const;
 };
@@ -47,9 +47,9 @@ struct Pose2 {
 
 struct OdometrySample {
   int64_t utime = 0;
-  double left_m_s = 0.0;   // measured wheel speeds, what the vehicle reports
+  double left_m_s = 0.0;  // measured wheel speeds, what the vehicle reports
   double right_m_s = 0.0;
-  double true_left_m_s = 0.0;   // ground speed under each wheel
+  double true_left_m_s = 0.0;  // ground speed under each wheel
   double true_right_m_s = 0.0;
   bool slipping = false;
 };
@@ -57,7 +57,7 @@ struct OdometrySample {
 struct CameraBounce {
   double pitch_rad = 0.0;  // added to the tilt
   double roll_rad = 0.0;
-  double height_m = 0.0;   // added to the height
+  double height_m = 0.0;  // added to the height
 };
 
 class Vehicle {

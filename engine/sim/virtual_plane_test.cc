@@ -84,9 +84,8 @@ TEST(VirtualGroundPlane, HalvesTheHemisphereProjectionErrorAsInThesis238) {
   const geometry::CameraModel camera(ThesisCamera());
   const Errors ground = ProjectionErrors(camera, 0.0);
   const Errors virtual_plane = ProjectionErrors(camera, 0.15);
-  std::printf("ground plane:  y %.1f..%.1f mm, x %.1f..%.1f mm (%d plants)\n",
-              1e3 * ground.min_y, 1e3 * ground.max_y, 1e3 * ground.min_x, 1e3 * ground.max_x,
-              ground.plants);
+  std::printf("ground plane:  y %.1f..%.1f mm, x %.1f..%.1f mm (%d plants)\n", 1e3 * ground.min_y,
+              1e3 * ground.max_y, 1e3 * ground.min_x, 1e3 * ground.max_x, ground.plants);
   std::printf("virtual plane: y %.1f..%.1f mm, x %.1f..%.1f mm\n", 1e3 * virtual_plane.min_y,
               1e3 * virtual_plane.max_y, 1e3 * virtual_plane.min_x, 1e3 * virtual_plane.max_x);
   ASSERT_GE(ground.plants, 15);
