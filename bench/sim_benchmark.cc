@@ -4,6 +4,7 @@
 
 #include <numbers>
 
+#include "engine/geometry/test_cameras.h"
 #include "engine/sim/simulator.h"
 
 namespace plantscale::sim {
@@ -13,11 +14,7 @@ namespace {
 SimulatorOptions FieldLike(ImageKind kind) {
   SimulatorOptions o;
   o.preset = "bench-field";
-  o.camera.height_m = 1.5;
-  o.camera.tilt_rad = 45.0 * std::numbers::pi / 180.0;
-  o.camera.focal_length_m = 0.0048;
-  o.camera.pixel_width_m = 8.6e-6;
-  o.camera.pixel_height_m = 8.3e-6;
+  o.camera = geometry::testing::ThesisCamera();
   o.camera.virtual_plane_height_m = 0.1;
   o.field.crop_radius_m = 0.14;
   o.field.fractured_fraction = 0.1;

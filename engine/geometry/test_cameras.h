@@ -1,5 +1,5 @@
 #pragma once
-// Cameras shared by the geometry and simulator tests.
+// Cameras shared by the geometry and simulator tests and the benchmarks.
 
 #include <numbers>
 
@@ -21,6 +21,19 @@ inline CameraOptions ObliqueCamera() {
   o.image_height_px = 480;
   o.principal_point_u_px = 322.5;
   o.principal_point_v_px = 236.0;
+  return o;
+}
+
+// The thesis vehicle camera as shipped in config/cameras/thesis.yaml.
+inline CameraOptions ThesisCamera() {
+  CameraOptions o;
+  o.height_m = 1.5;
+  o.tilt_rad = Degrees(45.0);
+  o.focal_length_m = 0.0048;
+  o.pixel_width_m = 8.6e-6;
+  o.pixel_height_m = 8.3e-6;
+  o.image_width_px = 640;
+  o.image_height_px = 480;
   return o;
 }
 

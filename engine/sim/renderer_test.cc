@@ -1,3 +1,4 @@
+#include "engine/geometry/test_cameras.h"
 #include "engine/sim/renderer.h"
 
 #include <gtest/gtest.h>
@@ -19,17 +20,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 // config/cameras/thesis.yaml: 1.5 m up, 45° below the horizontal.
-geometry::CameraOptions ThesisCamera() {
-  geometry::CameraOptions o;
-  o.height_m = 1.5;
-  o.tilt_rad = 45.0 * kPi / 180.0;
-  o.focal_length_m = 0.0048;
-  o.pixel_width_m = 8.6e-6;
-  o.pixel_height_m = 8.3e-6;
-  o.image_width_px = 640;
-  o.image_height_px = 480;
-  return o;
-}
+using geometry::testing::ThesisCamera;
 
 geometry::CameraOptions StraightDownCamera() {
   geometry::CameraOptions o = ThesisCamera();

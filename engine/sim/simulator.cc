@@ -60,10 +60,12 @@ bool Simulator::Next(SimFrame& frame) {
     // Drive until the capture time, keeping the odometry in between.
     Pose2 before = vehicle_.pose();
     int64_t before_utime = vehicle_.utime();
+    double before_distance = vehicle_.distance_m();
     const auto due_utime = static_cast<int64_t>(std::llround(due_s * 1e6));
     while (vehicle_.utime() < due_utime) {
       before = vehicle_.pose();
       before_utime = vehicle_.utime();
+      before_distance = vehicle_.distance_m();
       frame.odometry.push_back(vehicle_.Step());
     }
     if (dropped) {
@@ -77,7 +79,7 @@ bool Simulator::Next(SimFrame& frame) {
     truth.utime = due_utime;
     truth.pose = Interpolate(before, vehicle_.pose(), t);
     truth.bounce = vehicle_.bounce();
-    truth.distance_m = vehicle_.distance_m();
+    truth.distance_m = before_distance + t * (vehicle_.distance_m() - before_distance);
     const geometry::CameraModel camera = CameraFor(truth.bounce);
     renderer_.Render(field_, camera, truth.pose, vo.speed_m_s, vo.exposure_s,
                      options_.seed * 1000003ULL + static_cast<uint64_t>(frame_index_),

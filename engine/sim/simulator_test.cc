@@ -1,3 +1,4 @@
+#include "engine/geometry/test_cameras.h"
 #include "engine/sim/simulator.h"
 
 #include <gtest/gtest.h>
@@ -23,13 +24,7 @@ bool HasKey(const OptionErrors& errors, const std::string& key) {
 SimulatorOptions ShortPass() {
   SimulatorOptions o;
   o.preset = "unit-test";
-  o.camera.height_m = 1.5;
-  o.camera.tilt_rad = 45.0 * std::numbers::pi / 180.0;
-  o.camera.focal_length_m = 0.0048;
-  o.camera.pixel_width_m = 8.6e-6;
-  o.camera.pixel_height_m = 8.3e-6;
-  o.camera.image_width_px = 640;
-  o.camera.image_height_px = 480;
+  o.camera = geometry::testing::ThesisCamera();
   o.camera.virtual_plane_height_m = 0.0;
   o.length_m = 2.0;
   o.seed = 5;

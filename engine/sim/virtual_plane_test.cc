@@ -11,22 +11,13 @@
 #include <numbers>
 
 #include "engine/geometry/camera_model.h"
+#include "engine/geometry/test_cameras.h"
 #include "engine/sim/plant_shape.h"
 
 namespace plantscale::sim {
 namespace {
 
-geometry::CameraOptions ThesisCamera() {  // config/cameras/thesis.yaml
-  geometry::CameraOptions o;
-  o.height_m = 1.5;
-  o.tilt_rad = 45.0 * std::numbers::pi / 180.0;
-  o.focal_length_m = 0.0048;
-  o.pixel_width_m = 8.6e-6;
-  o.pixel_height_m = 8.3e-6;
-  o.image_width_px = 640;
-  o.image_height_px = 480;
-  return o;
-}
+using geometry::testing::ThesisCamera;  // config/cameras/thesis.yaml
 
 struct Errors {
   double max_x = 0.0, min_x = 1e9, max_y = 0.0, min_y = 1e9;
