@@ -113,12 +113,7 @@ int CommandLine::Presets() const {
       config_dir_.empty() ? DefaultConfigDir() : std::filesystem::path(config_dir_);
   for (const char* kind : {"presets", "cameras"}) {
     std::cout << kind << " (" << (dir / kind).string() << "):\n";
-    std::vector<std::string> names;
-    for (const auto& e : std::filesystem::directory_iterator(dir / kind)) {
-      if (e.path().extension() == ".yaml") names.push_back(e.path().stem().string());
-    }
-    std::sort(names.begin(), names.end());
-    for (const std::string& n : names) std::cout << "  " << n << '\n';
+    for (const std::string& n : ListConfigNames(dir / kind)) std::cout << "  " << n << '\n';
   }
   return 0;
 }

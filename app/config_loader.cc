@@ -110,16 +110,6 @@ YAML::Node ParseFile(const fs::path& file) {
   }
 }
 
-std::vector<std::string> Available(const fs::path& dir) {
-  std::vector<std::string> names;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
-  }
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
 fs::path Resolve(const std::string& name_or_path, const fs::path& dir, const char* what) {
   const fs::path as_path(name_or_path);
   if (as_path.extension() == ".yaml" || as_path.extension() == ".yml" ||
@@ -129,7 +119,7 @@ fs::path Resolve(const std::string& name_or_path, const fs::path& dir, const cha
   const fs::path file = dir / (name_or_path + ".yaml");
   if (fs::exists(file)) return file;
   std::string known;
-  for (const std::string& n : Available(dir)) known += (known.empty() ? "" : ", ") + n;
+  for (const std::string& n : ListConfigNames(dir)) known += (known.empty() ? "" : ", ") + n;
   throw ConfigError(
       dir.string(), name_or_path,
       std::string("unknown ") + what + " (known: " + (known.empty() ? "none" : known) + ")");
@@ -257,6 +247,16 @@ void Section(MapReader& top, const std::string& key, Fn&& read) {
 
 ConfigError::ConfigError(const std::string& file, const std::string& key, const std::string& reason)
     : std::runtime_error(file + ": " + key + ": " + reason) {}
+
+std::vector<std::string> ListConfigNames(const fs::path& dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
 
 fs::path DefaultConfigDir() {
   if (const char* env = std::getenv("PLANTSCALE_CONFIG_DIR"); env != nullptr && *env != '\0') {

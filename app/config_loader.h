@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "engine/sim/simulator.h"
 
@@ -20,6 +21,9 @@ class ConfigError : public std::runtime_error {
 
 // Where presets live: $PLANTSCALE_CONFIG_DIR, else the source tree's config/.
 std::filesystem::path DefaultConfigDir();
+
+// Names (file stems) of the .yaml files in `dir`, sorted; empty if unreadable.
+std::vector<std::string> ListConfigNames(const std::filesystem::path& dir);
 
 // `name_or_path` is a preset name (config/presets/<name>.yaml) or a path to
 // a YAML file. Throws ConfigError for an unknown preset, unreadable or

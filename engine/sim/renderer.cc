@@ -113,15 +113,17 @@ struct Renderer::View {
   const geometry::CameraModel* camera = nullptr;
 
   Eigen::Vector3d RayAt(double u, int v) const { return row_base[static_cast<size_t>(v)] + u * du; }
-  // Vehicle-frame point of a field-frame point (thesis eq. A.1 in 2-D).
-  Eigen::Vector2d ToVehicle(double x, double y) const {
-    const double dx = x - pose.x_m;
-    const double dy = y - pose.y_m;
-    return {cos_h * dx + sin_h * dy, -sin_h * dx + cos_h * dy};
+  // Field-frame ground point seen through the centre of pixel (u, v);
+  // nullopt when the ray does not go down to the ground.
+  std::optional<Eigen::Vector2d> GroundAt(int u, int v) const {
+    const Eigen::Vector3d d = RayAt(u + 0.5, v);
+    if (d.z() >= 0.0) return std::nullopt;
+    const double s = -centre.z() / d.z();
+    return Eigen::Vector2d(centre.x() + s * d.x(), centre.y() + s * d.y());
   }
   // Image position of a field-frame point at height z.
   std::optional<Eigen::Vector2d> Project(double x, double y, double z) const {
-    const Eigen::Vector2d p = ToVehicle(x, y);
+    const Eigen::Vector2d p = FieldToVehicle(pose, {x, y});
     return camera->Project({p.x(), p.y(), z});
   }
 };
@@ -321,7 +323,6 @@ PixelBox BoxAround(const ViewT& view, double x, double y, double radius, double 
 
 void Renderer::RenderStones(const Field& field, const View& view) {
   const auto [first, last] = field.StonesBetween(view.y_min - 0.2, view.y_max + 0.2);
-  const double h = view.centre.z();
   for (size_t i = first; i < last; ++i) {
     const Stone& st = field.stones()[i];
     if (st.position_m.x() < view.x_min - 0.2 || st.position_m.x() > view.x_max + 0.2) continue;
@@ -331,11 +332,10 @@ void Renderer::RenderStones(const Field& field, const View& view) {
     const double sa = std::sin(st.angle_rad);
     for (int v = box.v0; v <= box.v1 && !box.empty(); ++v) {
       for (int u = box.u0; u <= box.u1; ++u) {
-        const Eigen::Vector3d d = view.RayAt(u + 0.5, v);
-        if (d.z() >= 0.0) continue;
-        const double s = -h / d.z();
-        const double dx = view.centre.x() + s * d.x() - st.position_m.x();
-        const double dy = view.centre.y() + s * d.y() - st.position_m.y();
+        const auto ground = view.GroundAt(u, v);
+        if (!ground) continue;
+        const double dx = ground->x() - st.position_m.x();
+        const double dy = ground->y() - st.position_m.y();
         const double a = (ca * dx + sa * dy) / st.semi_major_m;
         const double b = (-sa * dx + ca * dy) / st.semi_minor_m;
         const double r2 = a * a + b * b;
@@ -354,7 +354,6 @@ void Renderer::RenderPlantShadows(const Field& field, const View& view) {
   const double ay = -std::sin(options_.sun_azimuth_rad) * reach;
   const double margin = field.max_plant_radius_m() + field.max_plant_height_m() * reach;
   const auto [first, last] = field.PlantsBetween(view.y_min - margin, view.y_max + margin);
-  const double h = view.centre.z();
   for (size_t i = first; i < last; ++i) {
     const Plant& p = field.plants()[i];
     const double cx = p.position_m.x() + p.lean_m.x() + 0.6 * p.height_m * ax;
@@ -365,11 +364,10 @@ void Renderer::RenderPlantShadows(const Field& field, const View& view) {
     for (int v = box.v0; v <= box.v1 && !box.empty(); ++v) {
       auto* shadow = shadow_.ptr<uint8_t>(v);
       for (int u = box.u0; u <= box.u1; ++u) {
-        const Eigen::Vector3d d = view.RayAt(u + 0.5, v);
-        if (d.z() >= 0.0) continue;
-        const double s = -h / d.z();
-        const double dx = view.centre.x() + s * d.x() - cx;
-        const double dy = view.centre.y() + s * d.y() - cy;
+        const auto ground = view.GroundAt(u, v);
+        if (!ground) continue;
+        const double dx = ground->x() - cx;
+        const double dy = ground->y() - cy;
         if (dx * dx + dy * dy <= r * r) shadow[u] |= kPlantShadow;
       }
     }

@@ -1,4 +1,3 @@
-#include "engine/geometry/test_cameras.h"
 #include "engine/sim/renderer.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "engine/geometry/camera_model.h"
+#include "engine/geometry/test_cameras.h"
 #include "engine/sim/plant_shape.h"
 
 namespace plantscale::sim {
@@ -56,16 +56,6 @@ Field SinglePlantField(double y_m, double height_ratio) {
   return field;
 }
 
-// Vehicle-frame position of a field point seen from `pose` (DESIGN.md §3:
-// heading CCW from the field y axis, vehicle y forward, x right).
-Eigen::Vector2d ToVehicle(const Pose2& pose, const Eigen::Vector2d& field_m) {
-  const double c = std::cos(pose.heading_rad);
-  const double s = std::sin(pose.heading_rad);
-  const double dx = field_m.x() - pose.x_m;
-  const double dy = field_m.y() - pose.y_m;
-  return {c * dx + s * dy, -s * dx + c * dy};
-}
-
 struct PixelStats {
   int count = 0;
   Eigen::Vector2d centroid{0.0, 0.0};
@@ -99,7 +89,7 @@ TEST(Renderer, FlatPlantCentroidIsItsProjectionStraightDown) {
   const Pose2 pose{-0.2, 0.9, 0.1};  // plant ≈ 0.2 m right, 0.1 m ahead, rotated view
   const RenderedFrame frame = RenderOnce(field, StraightDownCamera(), pose);
   const geometry::CameraModel camera(StraightDownCamera());
-  const Eigen::Vector2d p = ToVehicle(pose, field.plants()[0].position_m);
+  const Eigen::Vector2d p = FieldToVehicle(pose, field.plants()[0].position_m);
   const auto expected = camera.Project({p.x(), p.y(), 0.0});
   ASSERT_TRUE(expected.has_value());
   const PixelStats crop = LabelStats(frame.labels, PlantClass::kCrop);
@@ -142,7 +132,7 @@ TEST(Renderer, FlatPlantCentroidIsItsProjectionOblique) {
   const Pose2 pose{0.15, 0.0, -0.05};
   const RenderedFrame frame = RenderOnce(field, ThesisCamera(), pose);
   const geometry::CameraModel camera(ThesisCamera());
-  const Eigen::Vector2d p = ToVehicle(pose, field.plants()[0].position_m);
+  const Eigen::Vector2d p = FieldToVehicle(pose, field.plants()[0].position_m);
   const auto expected = camera.Project({p.x(), p.y(), 0.0});
   ASSERT_TRUE(expected.has_value());
   ASSERT_TRUE(camera.InImage(*expected, 60.0));

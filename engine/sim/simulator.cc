@@ -98,9 +98,8 @@ void Simulator::FillGridTruth(FrameTruth& truth) const {
   const double s = std::sin(p.heading_rad);
   const double plane = options_.camera.virtual_plane_height_m;
   const auto image_v = [&](double y) -> std::optional<double> {
-    const double dx = -p.x_m;
-    const double dy = y - p.y_m;
-    const auto uv = camera_.Project({c * dx + s * dy, -s * dx + c * dy, plane});
+    const Eigen::Vector2d v = FieldToVehicle(p, {0.0, y});
+    const auto uv = camera_.Project({v.x(), v.y(), plane});
     return uv ? std::optional<double>(uv->y()) : std::nullopt;
   };
   const std::vector<double>& lines = field_.line_y_m();
@@ -132,9 +131,6 @@ void Simulator::FillGridTruth(FrameTruth& truth) const {
 void Simulator::FillPlantTruth(const geometry::CameraModel& camera, const RenderedFrame& rendered,
                                FrameTruth& truth) const {
   truth.plants.clear();
-  const Pose2& pose = truth.pose;
-  const double c = std::cos(pose.heading_rad);
-  const double s = std::sin(pose.heading_rad);
   for (size_t k = 0; k < rendered.plants.size(); ++k) {
     const RenderedPlant& r = rendered.plants[k];
     if (r.area_px == 0) continue;  // fully hidden or outside the image
@@ -146,9 +142,7 @@ void Simulator::FillPlantTruth(const geometry::CameraModel& camera, const Render
     t.row = plant.row;
     t.line = plant.line;
     t.field_m = plant.position_m;
-    const double dx = plant.position_m.x() - pose.x_m;
-    const double dy = plant.position_m.y() - pose.y_m;
-    t.vehicle_m = {c * dx + s * dy, -s * dx + c * dy};
+    t.vehicle_m = FieldToVehicle(truth.pose, plant.position_m);
     t.radius_m = plant.radius_m;
     t.height_m = plant.height_m;
     t.root_px = camera.Project({t.vehicle_m.x(), t.vehicle_m.y(), 0.0});

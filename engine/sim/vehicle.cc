@@ -5,6 +5,14 @@
 
 namespace plantscale::sim {
 
+Eigen::Vector2d FieldToVehicle(const Pose2& pose, const Eigen::Vector2d& field_m) {
+  const double c = std::cos(pose.heading_rad);
+  const double s = std::sin(pose.heading_rad);
+  const double dx = field_m.x() - pose.x_m;
+  const double dy = field_m.y() - pose.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy};
+}
+
 OptionErrors VehicleOptions::Validate() const {
   OptionErrors e;
   RequireInRange(e, "speed_m_s", speed_m_s, 0.0, 5.0, false, true);

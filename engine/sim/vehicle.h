@@ -45,6 +45,10 @@ struct Pose2 {
   double heading_rad = 0.0;  // of the forward axis from the field y axis, CCW
 };
 
+// Vehicle-frame position of a field-frame point seen from `pose` (thesis
+// eq. A.1 in 2-D; DESIGN.md §3: vehicle y forward, x right).
+Eigen::Vector2d FieldToVehicle(const Pose2& pose, const Eigen::Vector2d& field_m);
+
 struct OdometrySample {
   int64_t utime = 0;
   double left_m_s = 0.0;  // measured wheel speeds, what the vehicle reports
