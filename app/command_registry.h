@@ -1,0 +1,56 @@
+#pragma once
+// A small registry of plantscale subcommands. Each command family lives in its
+// own file (simulate_commands.cc, segment_commands.cc, ...) and adds itself
+// with one Add*Commands(CommandRegistry&) call in commands.cc, so that
+// families never edit each other's code.
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace plantscale::app {
+
+// Options that every subcommand may read (set before the subcommand).
+struct GlobalOptions {
+  std::string config_dir;  // --config-dir; empty: DefaultConfigDir()
+  std::filesystem::path ConfigDir() const;
+};
+
+class CommandRegistry {
+ public:
+  explicit CommandRegistry(CLI::App& cli);
+
+  // Adds `name` (a subcommand of `parent`, or of the top level when null) run
+  // by `run` when parsed. Returns the CLI11 subcommand for adding options.
+  CLI::App* Add(const std::string& name, const std::string& description,
+                std::function<int()> run, CLI::App* parent = nullptr);
+
+  // Keeps `value` alive for as long as the registry (option storage).
+  template <typename T>
+  T& Keep(T value) {
+    auto holder = std::make_shared<T>(std::move(value));
+    kept_.push_back(holder);
+    return *holder;
+  }
+
+  // Runs the parsed subcommand; returns its exit code (2 when none parsed).
+  int Run() const;
+
+  CLI::App& cli() { return cli_; }
+  const GlobalOptions& global() const { return *global_; }
+
+ private:
+  struct Entry {
+    CLI::App* command;
+    std::function<int()> run;
+  };
+  CLI::App& cli_;
+  std::shared_ptr<GlobalOptions> global_;
+  std::vector<Entry> entries_;
+  std::vector<std::shared_ptr<void>> kept_;
+};
+
+}  // namespace plantscale::app
