@@ -229,6 +229,9 @@ void ReadRender(MapReader& r, sim::RenderOptions& o) {
   r.Angle("sun_elevation", o.sun_elevation_rad);
   r.Get("specular_fraction", o.specular_fraction);
   r.Get("specular_gain", o.specular_gain);
+  r.Get("leaf_shadow_fraction", o.leaf_shadow_fraction);
+  r.Get("leaf_shadow_depth", o.leaf_shadow_depth);
+  r.Get("optical_blur_px", o.optical_blur_px);
   r.Get("sensor_noise", o.sensor_noise);
   r.Get("max_range_m", o.max_range_m);
   r.Get("ray_samples", o.ray_samples);

@@ -108,7 +108,6 @@ struct Renderer::View {
   Pose2 pose;
   double cos_h = 1.0;
   double sin_h = 0.0;
-  float specular_threshold = 1e9F;
   double y_min = 0.0, y_max = 0.0, x_min = 0.0, x_max = 0.0;  // field AABB seen
   const geometry::CameraModel* camera = nullptr;
 
@@ -144,6 +143,9 @@ OptionErrors RenderOptions::Validate() const {
   RequireFinite(e, "vehicle_shadow_edge_m", vehicle_shadow_edge_m);
   RequireFinite(e, "vehicle_shadow_slope", vehicle_shadow_slope);
   RequireInRange(e, "plant_shadow_depth", plant_shadow_depth, 0.0, 1.0);
+  RequireInRange(e, "leaf_shadow_fraction", leaf_shadow_fraction, 0.0, 1.0);
+  RequireInRange(e, "leaf_shadow_depth", leaf_shadow_depth, 0.0, 1.0);
+  RequireInRange(e, "optical_blur_px", optical_blur_px, 0.0, 10.0);
   RequireFinite(e, "sun_azimuth_rad", sun_azimuth_rad);
   RequireInRange(e, "sun_elevation_rad", sun_elevation_rad, 0.05, std::numbers::pi / 2.0);
   RequireInRange(e, "specular_fraction", specular_fraction, 0.0, 0.5);
@@ -164,6 +166,8 @@ Renderer::Renderer(const RenderOptions& options, uint64_t seed) : options_(optio
   Rng rng = Rng::Derived(seed, 0x7e27);
   soil_texture_ = ValueNoise(rng, 64, 6);
   leaf_texture_ = ValueNoise(rng, 8, 3);
+  specular_threshold_ = UpperQuantile(soil_texture_, options_.specular_fraction);
+  leaf_shadow_threshold_ = UpperQuantile(leaf_texture_, options_.leaf_shadow_fraction);
   noise_table_.resize(kNoiseTable);
   for (float& v : noise_table_) v = static_cast<float>(rng.Normal());
 }
@@ -190,7 +194,6 @@ void Renderer::Render(const Field& field, const geometry::CameraModel& camera, c
     view.row_base[static_cast<size_t>(v)] =
         m * Eigen::Vector3d(-c.x() / camera.fx(), (v + 0.5 - c.y()) / camera.fy(), 1.0);
   }
-  view.specular_threshold = UpperQuantile(soil_texture_, options_.specular_fraction);
 
   shade_.create(view.height, view.width, CV_32F);
   material_.create(view.height, view.width, CV_8U);
@@ -206,6 +209,9 @@ void Renderer::Render(const Field& field, const geometry::CameraModel& camera, c
   RenderPlants(field, view, out);
   Compose(view, frame_seed, out);
   Blur(view, speed_m_s * exposure_s, out);
+  if (options_.optical_blur_px > 0.0) {
+    cv::GaussianBlur(out.image, out.image, cv::Size(0, 0), options_.optical_blur_px);
+  }
 }
 
 void Renderer::RenderGround(View& view) {
@@ -238,7 +244,7 @@ void Renderer::RenderGround(View& view) {
         material[u] = kSoil;
         shade[u] = 1.0F + contrast * (0.65F * t1 + 0.35F * t2);
         // Glints: small speckles where a fine (≈1 cm) lookup is in its top fraction.
-        if (Texel(soil_texture_, x - 3.7, y + 1.9, 7.0 * fine) > view.specular_threshold) {
+        if (Texel(soil_texture_, x - 3.7, y + 1.9, 7.0 * fine) > specular_threshold_) {
           shade[u] += glint;
         }
         if (shadow_on > 0.0) {
@@ -413,6 +419,7 @@ void Renderer::RenderPlants(const Field& field, const View& view, RenderedFrame&
   }
   const double fine = 1.0 / (0.5 * kTexelM);
   const auto leaf = static_cast<float>(options_.leaf_texture_contrast);
+  const auto leaf_shadow = static_cast<float>(1.0 - options_.leaf_shadow_depth);
   ForRowBands(view.height, threads_, [&](int first_row, int end_row) {
     for (const Job& job : jobs) {
       const Plant& p = field.plants()[static_cast<size_t>(job.index)];
@@ -434,6 +441,10 @@ void Renderer::RenderPlants(const Field& field, const View& view, RenderedFrame&
           const float t = Texel(leaf_texture_, u * 0.002 + index * 0.37, v * 0.002, fine);
           shade[u] =
               static_cast<float>(p.brightness * (0.78 + 0.3 * hit.radial)) * (1.0F + leaf * t);
+          if (Texel(leaf_texture_, v * 0.002 - index * 0.53, u * 0.002 + 1.7, fine) >
+              leaf_shadow_threshold_) {
+            shade[u] *= leaf_shadow;
+          }
         }
       }
     }

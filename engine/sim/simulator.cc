@@ -48,7 +48,7 @@ geometry::CameraModel Simulator::CameraFor(const CameraBounce& bounce) const {
   return geometry::CameraModel(o);
 }
 
-bool Simulator::Next(SimFrame& frame) {
+bool Simulator::Next(SimFrame& frame, bool render) {
   const VehicleOptions& vo = options_.vehicle;
   frame.odometry.clear();  // refilled with every sample since the last delivered frame
   for (;;) {
@@ -80,11 +80,16 @@ bool Simulator::Next(SimFrame& frame) {
     truth.pose = Interpolate(before, vehicle_.pose(), t);
     truth.bounce = vehicle_.bounce();
     truth.distance_m = before_distance + t * (vehicle_.distance_m() - before_distance);
+    FillGridTruth(truth);
+    truth.plants.clear();
+    if (!render) {
+      frame.rendered = RenderedFrame{};
+      return true;
+    }
     const geometry::CameraModel camera = CameraFor(truth.bounce);
     renderer_.Render(field_, camera, truth.pose, vo.speed_m_s, vo.exposure_s,
                      options_.seed * 1000003ULL + static_cast<uint64_t>(frame_index_),
                      frame.rendered);
-    FillGridTruth(truth);
     FillPlantTruth(camera, frame.rendered, truth);
     return true;
   }

@@ -68,7 +68,9 @@ class Simulator {
   explicit Simulator(const SimulatorOptions& options);
 
   // Advances to the next captured frame; false once the pass is driven.
-  bool Next(SimFrame& frame);
+  // With render = false only the pose, odometry and grid truth are filled
+  // (no image, no plant truth); later frames are the same bytes either way.
+  bool Next(SimFrame& frame, bool render = true);
 
   const SimulatorOptions& options() const { return options_; }
   const Field& field() const { return field_; }

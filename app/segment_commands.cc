@@ -1,0 +1,128 @@
+#include "app/segment_commands.h"
+
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "app/config_loader.h"
+#include "app/segmentation_eval.h"
+
+namespace plantscale::app {
+namespace {
+
+struct EvaluateArgs {
+  std::string preset = "C";
+  int seeds = 3;
+  int frames = 10;
+  std::optional<int64_t> seed;
+  std::string image;
+  bool json = false;
+  std::string roc_csv;
+  std::string baseline;
+  double costs_ratio = 3.644;
+  std::string method = "local";
+  double gain = 0.0;
+  double smoothing_px = -1.0;
+};
+
+nlohmann::json MethodJson(const MethodEvaluation& m) {
+  nlohmann::json j{{"method", m.method},
+                   {"plant_pixel_recall", m.rates.recall},
+                   {"plant_pixel_precision", m.rates.precision},
+                   {"soil_pixel_accuracy", m.rates.soil_accuracy},
+                   {"fpr", m.rates.fpr}};
+  if (!m.curve.points.empty()) j["auc"] = m.auc;
+  if (!m.parameter_name.empty()) j[m.parameter_name] = m.parameter;
+  return j;
+}
+
+nlohmann::json EvaluationJson(const SegmentationEvaluation& e) {
+  nlohmann::json j{{"preset", e.preset},
+                   {"image", e.image_kind},
+                   {"seeds", e.seeds},
+                   {"frames", e.frames},
+                   {"plant_pixel_fraction", e.plant_fraction},
+                   {"threshold_method", e.ours.method},
+                   {"auc", e.ours.auc},
+                   {"plant_pixel_recall", e.ours.rates.recall},
+                   {"plant_pixel_precision", e.ours.rates.precision},
+                   {"soil_pixel_accuracy", e.ours.rates.soil_accuracy}};
+  j["baseline_thesis"] = {{"fixed", MethodJson(e.thesis_fixed)},
+                          {"adaptive", MethodJson(e.thesis_adaptive)}};
+  return j;
+}
+
+void PrintTable(const SegmentationEvaluation& e, std::ostream& out) {
+  out << std::fixed << std::setprecision(4) << "segmentation on preset " << e.preset << " ("
+      << e.image_kind << ", " << e.seeds << " seeds, " << e.frames << " frames, plant pixels "
+      << 100.0 * e.plant_fraction << " %)\n"
+      << "  method              AUC     recall  precision  soil acc  parameter\n";
+  for (const MethodEvaluation* m : {&e.ours, &e.thesis_fixed, &e.thesis_adaptive}) {
+    out << "  " << std::left << std::setw(18)
+        << (m == &e.ours ? "ours: " + m->method : "thesis " + m->method) << std::right
+        << std::setw(7) << m->auc << std::setw(9) << m->rates.recall << std::setw(11)
+        << m->rates.precision << std::setw(10) << m->rates.soil_accuracy << "  "
+        << m->parameter_name << (m->parameter_name.empty() ? "" : " = ") << m->parameter << '\n';
+  }
+}
+
+int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& global) {
+  SegmentationEvalOptions o;
+  o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
+  if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
+  if (a.image == "rgb") o.sim.render.kind = sim::ImageKind::kRgb;
+  if (a.image == "nir") o.sim.render.kind = sim::ImageKind::kNir;
+  o.seeds = a.seeds;
+  o.frames_per_seed = a.frames;
+  o.costs_ratio = a.costs_ratio;
+  o.segmenter.method = *vision::ParseThresholdMethod(a.method);
+  if (a.gain > 0) { o.segmenter.local.gain = a.gain; o.segmenter.adaptive_gain = a.gain; o.segmenter.fixed_threshold = a.gain; }
+  if (a.smoothing_px >= 0) o.segmenter.smoothing_px = a.smoothing_px;
+  const SegmentationEvaluation e = EvaluateSegmentation(o);
+  if (a.json) {
+    std::cout << EvaluationJson(e).dump(2) << '\n';
+  } else {
+    PrintTable(e, std::cout);
+  }
+  return 0;
+}
+
+}  // namespace
+
+CLI::App* EvaluateCommand(CommandRegistry& registry) {
+  const auto named = [](CLI::App* c) { return c->get_name() == "evaluate"; };
+  for (CLI::App* existing : registry.cli().get_subcommands(named)) return existing;
+  CLI::App* evaluate = registry.Add("evaluate", "measure accuracy on simulator presets", nullptr);
+  evaluate->require_subcommand(1);
+  return evaluate;
+}
+
+void AddSegmentCommands(CommandRegistry& registry) {
+  const GlobalOptions& global = registry.global();
+  EvaluateArgs& ev = registry.Keep(EvaluateArgs{});
+  CLI::App* cmd = registry.Add(
+      "segmentation", "plant/soil pixel accuracy, ROC and AUC against simulator truth",
+      [&ev, &global] { return EvaluateSegmentationCommand(ev, global); },
+      EvaluateCommand(registry));
+  cmd->add_option("--preset", ev.preset, "preset name or YAML file")->capture_default_str();
+  cmd->add_option("--seeds", ev.seeds, "number of seeds")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--frames", ev.frames, "non-overlapping frames per seed")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--seed", ev.seed, "first seed (default: the preset's)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--image", ev.image, "nir or rgb (default: the preset's)")
+      ->check(CLI::IsMember({"nir", "rgb"}));
+  cmd->add_option("--costs-ratio", ev.costs_ratio, "Φ of thesis eq. 2.23 for baselines")
+      ->capture_default_str();
+  cmd->add_flag("--json", ev.json, "print one JSON object");
+  cmd->add_option("--method", ev.method, "threshold method")->check(CLI::IsMember({"fixed", "otsu", "adaptive", "local"}));
+  cmd->add_option("--gain", ev.gain, "gain");
+  cmd->add_option("--smoothing-px", ev.smoothing_px, "smoothing");
+  cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
+  cmd->add_option("--baseline", ev.baseline, "also report the thesis's baselines")
+      ->check(CLI::IsMember({"thesis"}));
+}
+
+}  // namespace plantscale::app

@@ -1,0 +1,57 @@
+#pragma once
+// `plantscale evaluate segmentation`: runs a simulator preset, segments
+// non-overlapping frames and scores every method against the label images
+// (thesis §2.3.2–2.3.6): ROC curve, AUC, and pixel rates at each method's
+// operating point. Border ("doubt") pixels are excluded and only the
+// trapezoid between the wheels counts, as in the thesis's hand labels.
+
+#include <string>
+#include <vector>
+
+#include "engine/sim/simulator.h"
+#include "engine/vision/roc.h"
+#include "engine/vision/segmenter.h"
+
+namespace plantscale::app {
+
+struct SegmentationEvalOptions {
+  sim::SimulatorOptions sim;
+  int seeds = 3;              // seeds sim.seed, sim.seed + 1, ...
+  int frames_per_seed = 10;   // non-overlapping frames per seed
+  int doubt_band_px = 1;      // label border excluded on each side
+  double costs_ratio = 3.644; // Φ of eq. 2.23 (the thesis's, set on sequence C)
+  vision::SegmenterOptions segmenter;  // the product's method and operating point
+
+  OptionErrors Validate() const;
+};
+
+struct PixelRates {
+  double recall = 0.0;           // TPR: plant pixels found
+  double precision = 0.0;        // TP / (TP + FP)
+  double soil_accuracy = 0.0;    // 1 − FPR
+  double fpr = 0.0;
+};
+
+struct MethodEvaluation {
+  std::string method;          // "fixed", "adaptive", ...
+  std::string parameter_name;  // "tau" or "alpha"
+  vision::RocCurve curve;
+  double auc = 0.0;
+  double parameter = 0.0;      // at the operating point
+  PixelRates rates;            // at the operating point
+};
+
+struct SegmentationEvaluation {
+  std::string preset;
+  std::string image_kind;  // "nir" or "rgb"
+  int seeds = 0, frames = 0;
+  double plant_fraction = 0.0;  // P_P over the evaluated pixels
+  MethodEvaluation ours;        // the product's segmenter at its own parameters
+  // The thesis's baselines: fixed and adaptive thresholds with the operating
+  // point set by the costs ratio on this preset's own curve (as table 2.2).
+  MethodEvaluation thesis_fixed, thesis_adaptive;
+};
+
+SegmentationEvaluation EvaluateSegmentation(const SegmentationEvalOptions& options);
+
+}  // namespace plantscale::app

@@ -1,0 +1,226 @@
+#include "engine/vision/blobs.h"
+
+#include <array>
+#include <cstring>
+
+#include "engine/common/check.h"
+
+namespace plantscale::vision {
+namespace {
+
+constexpr uint64_t kOnes = 0x0101010101010101ULL;
+constexpr uint64_t kHighs = 0x8080808080808080ULL;
+
+uint64_t LoadWord(const uint8_t* p) {
+  uint64_t word;
+  std::memcpy(&word, p, sizeof word);
+  return word;
+}
+// True when some byte of `word` is zero (the classic haszero bit trick).
+bool HasZeroByte(uint64_t word) { return ((word - kOnes) & ~word & kHighs) != 0; }
+
+// First u >= `u` with row[u] == 0 (or `width`), eight pixels at a time.
+int SkipPlant(const uint8_t* row, int u, int width) {
+  while (u + 8 <= width && !HasZeroByte(LoadWord(row + u))) u += 8;
+  while (u < width && row[u] != 0) ++u;
+  return u;
+}
+// First u >= `u` with row[u] != 0 (or `width`).
+int SkipSoil(const uint8_t* row, int u, int width) {
+  while (u + 8 <= width && LoadWord(row + u) == 0) u += 8;
+  while (u < width && row[u] == 0) ++u;
+  return u;
+}
+
+// Σ (a + k)² for k = 0..n-1.
+double SumOfSquares(double a, double n) {
+  return n * a * a + a * n * (n - 1.0) + (n - 1.0) * n * (2.0 * n - 1.0) / 6.0;
+}
+
+// Moore neighbours clockwise on screen (v grows downwards), starting west.
+const std::array<cv::Point, 8> kClockwise = {{
+    {-1, 0}, {-1, -1}, {0, -1}, {1, -1}, {1, 0}, {1, 1}, {0, 1}, {-1, 1}}};
+
+int DirectionIndex(cv::Point d) {
+  for (int i = 0; i < 8; ++i) {
+    if (kClockwise[static_cast<size_t>(i)] == d) return i;
+  }
+  PLANTSCALE_CHECK(false, "not a neighbour offset");
+}
+
+bool IsSet(const cv::Mat& mask, cv::Point p) {
+  return p.x >= 0 && p.y >= 0 && p.x < mask.cols && p.y < mask.rows &&
+         mask.ptr<uint8_t>(p.y)[p.x] != 0;
+}
+
+// Clockwise search around `c` starting after the background pixel at `back`.
+int NextBoundaryDirection(const cv::Mat& mask, cv::Point c, int back) {
+  for (int k = 1; k <= 8; ++k) {
+    const int d = (back + k) % 8;
+    if (IsSet(mask, c + kClockwise[static_cast<size_t>(d)])) return d;
+  }
+  return -1;  // an isolated pixel
+}
+
+}  // namespace
+
+OptionErrors BlobOptions::Validate() const {
+  OptionErrors e;
+  if (min_area_px < 1) e.push_back({"min_area_px", "must be >= 1 (got " +
+                                                       std::to_string(min_area_px) + ")"});
+  return e;
+}
+
+BlobExtractor::BlobExtractor(const BlobOptions& options) : options_(options) {
+  ThrowIfInvalid("blob options", options_.Validate());
+}
+
+void BlobExtractor::FindRuns(const cv::Mat& mask) {
+  runs_.clear();
+  int prev_begin = 0, prev_end = 0;
+  for (int v = 0; v < mask.rows; ++v) {
+    const auto* row = mask.ptr<uint8_t>(v);
+    const int cur_begin = static_cast<int>(runs_.size());
+    for (int u = SkipSoil(row, 0, mask.cols); u < mask.cols;) {
+      const int end = SkipPlant(row, u, mask.cols);
+      runs_.push_back({v, u, end});
+      u = SkipSoil(row, end, mask.cols);
+    }
+    const int cur_end = static_cast<int>(runs_.size());
+    parent_.resize(runs_.size());
+    for (int i = cur_begin; i < cur_end; ++i) parent_[static_cast<size_t>(i)] = i;
+    UniteRows(prev_begin, prev_end, cur_begin, cur_end);
+    prev_begin = cur_begin;
+    prev_end = cur_end;
+  }
+}
+
+// 8-connectivity: runs of adjacent rows touch when they overlap or meet at a
+// corner. Two pointers, since both rows' runs are sorted by u.
+void BlobExtractor::UniteRows(int prev_begin, int prev_end, int cur_begin, int cur_end) {
+  int j = prev_begin;
+  for (int i = cur_begin; i < cur_end; ++i) {
+    const Run& cur = runs_[static_cast<size_t>(i)];
+    while (j < prev_end && runs_[static_cast<size_t>(j)].u_end < cur.u_begin) ++j;
+    for (int k = j; k < prev_end && runs_[static_cast<size_t>(k)].u_begin <= cur.u_end; ++k) {
+      const int a = Find(i), b = Find(k);
+      // The smaller run index stays the root: roots are first runs in raster order.
+      if (a < b) parent_[static_cast<size_t>(b)] = a;
+      if (b < a) parent_[static_cast<size_t>(a)] = b;
+    }
+  }
+}
+
+int BlobExtractor::Find(int i) {
+  auto& p = parent_;
+  while (p[static_cast<size_t>(i)] != i) {
+    p[static_cast<size_t>(i)] = p[static_cast<size_t>(p[static_cast<size_t>(i)])];
+    i = p[static_cast<size_t>(i)];
+  }
+  return i;
+}
+
+void BlobExtractor::Accumulate(const cv::Mat& mask) {
+  run_blob_.assign(runs_.size(), -1);
+  moments_.clear();
+  boxes_.clear();
+  first_run_.clear();
+  int slots = 0;
+  for (size_t i = 0; i < runs_.size(); ++i) {
+    const Run& r = runs_[i];
+    const auto root = static_cast<size_t>(Find(static_cast<int>(i)));
+    if (run_blob_[root] < 0) {
+      run_blob_[root] = slots++;
+      moments_.insert(moments_.end(), 6, 0.0);
+      boxes_.emplace_back(r.u_begin, r.v, 0, 0);
+      first_run_.push_back(static_cast<int>(i));
+    }
+    const auto s = static_cast<size_t>(run_blob_[root]);
+    const double n = r.u_end - r.u_begin, vc = r.v + 0.5;
+    const double su = n * (r.u_begin + r.u_end) / 2.0;
+    double* m = &moments_[6 * s];
+    m[0] += n;
+    m[1] += su;
+    m[2] += n * vc;
+    m[3] += SumOfSquares(r.u_begin + 0.5, n);
+    m[4] += n * vc * vc;
+    m[5] += su * vc;
+    boxes_[s] |= cv::Rect(r.u_begin, r.v, r.u_end - r.u_begin, 1);
+  }
+  count_ = 0;
+  for (int s = 0; s < slots; ++s) {
+    const double* m = &moments_[6 * static_cast<size_t>(s)];
+    if (m[0] < options_.min_area_px) continue;
+    if (pool_.size() <= static_cast<size_t>(count_)) pool_.emplace_back();
+    Blob& b = pool_[static_cast<size_t>(count_++)];
+    b.id = count_;
+    b.area_px = static_cast<int>(m[0]);
+    b.centroid_px = {m[1] / m[0], m[2] / m[0]};
+    const double cu = b.centroid_px.x(), cv_ = b.centroid_px.y();
+    b.covariance_px2 << m[3] / m[0] - cu * cu, m[5] / m[0] - cu * cv_,
+        m[5] / m[0] - cu * cv_, m[4] / m[0] - cv_ * cv_;
+    b.bbox_px = boxes_[static_cast<size_t>(s)];
+    b.on_ground = false;
+    b.contour.clear();
+    if (options_.trace_contours) {
+      const Run& first = runs_[static_cast<size_t>(first_run_[static_cast<size_t>(s)])];
+      TraceOuterContour(mask, {first.u_begin, first.v}, b.contour);
+    }
+  }
+}
+
+std::span<const Blob> BlobExtractor::Extract(const cv::Mat& mask) {
+  PLANTSCALE_CHECK(mask.type() == CV_8UC1, "mask must be CV_8UC1");
+  FindRuns(mask);
+  Accumulate(mask);
+  return {pool_.data(), static_cast<size_t>(count_)};
+}
+
+std::span<const Blob> BlobExtractor::Extract(const cv::Mat& mask,
+                                             const geometry::CameraModel& camera) {
+  Extract(mask);
+  const double h = camera.options().virtual_plane_height_m;
+  for (int i = 0; i < count_; ++i) {
+    Blob& b = pool_[static_cast<size_t>(i)];
+    const auto ground = camera.ImageToPlane(b.centroid_px, h);
+    b.on_ground = ground.has_value();
+    if (!ground) continue;
+    b.ground_m = *ground;
+    b.ground_area_m2 = b.area_px * std::abs(camera.ImageToPlaneJacobian(b.centroid_px, h)
+                                                .determinant());
+  }
+  return {pool_.data(), static_cast<size_t>(count_)};
+}
+
+void TraceOuterContour(const cv::Mat& mask, cv::Point start, std::vector<cv::Point>& contour) {
+  contour.clear();
+  contour.push_back(start);
+  // `start` is the blob's top-left pixel, so its west neighbour is soil.
+  const int first = NextBoundaryDirection(mask, start, 0);
+  if (first < 0) return;
+  cv::Point c = start;
+  int d = first;
+  const size_t limit = 4 * static_cast<size_t>(mask.total()) + 8;
+  while (contour.size() < limit) {
+    const cv::Point next = c + kClockwise[static_cast<size_t>(d)];
+    // The last soil pixel checked before `next`, seen from `next`.
+    const cv::Point back = c + kClockwise[static_cast<size_t>((d + 7) % 8)];
+    c = next;
+    d = NextBoundaryDirection(mask, c, DirectionIndex(back - c));
+    if (c == start && d == first) break;  // Jacob's stopping criterion
+    contour.push_back(c);
+  }
+}
+
+void FreemanChainCode(std::span<const cv::Point> contour, std::vector<uint8_t>& codes) {
+  // Freeman code of each clockwise direction index (screen v grows downwards).
+  constexpr std::array<uint8_t, 8> kFreeman = {4, 3, 2, 1, 0, 7, 6, 5};
+  codes.clear();
+  if (contour.size() < 2) return;
+  for (size_t i = 0; i < contour.size(); ++i) {
+    const cv::Point d = contour[(i + 1) % contour.size()] - contour[i];
+    codes.push_back(kFreeman[static_cast<size_t>(DirectionIndex(d))]);
+  }
+}
+
+}  // namespace plantscale::vision

@@ -1,0 +1,86 @@
+#pragma once
+// Blobs: connected plant-matter regions of a binary mask (thesis §2.3.7).
+//
+// The thesis chain-codes each blob's outline (Freeman) and reads centroid and
+// area from it; we label 8-connected runs with a union-find over run-length
+// segments, which gives the same blobs, centroids and areas in one pass over
+// the mask, and trace the outer contour (Moore neighbour, in Freeman chain
+// order) only when asked. Everything reuses its buffers: after the first
+// frame of a given size no memory is allocated unless a frame has more runs
+// or blobs than any before it.
+
+#include <opencv2/core.hpp>
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "engine/common/options.h"
+#include "engine/geometry/camera_model.h"
+
+namespace plantscale::vision {
+
+struct BlobOptions {
+  int min_area_px = 1;          // blobs smaller than this are dropped
+  bool trace_contours = false;  // fill Blob::contour (outer boundary)
+
+  OptionErrors Validate() const;
+};
+
+struct Blob {
+  int id = 0;  // 1..n in raster order of each blob's first pixel
+  int area_px = 0;
+  // Pixel coordinates: origin top-left, the first pixel's centre is (0.5, 0.5).
+  Eigen::Vector2d centroid_px{0.0, 0.0};
+  Eigen::Matrix2d covariance_px2 = Eigen::Matrix2d::Zero();  // second central moments
+  cv::Rect bbox_px;
+  std::vector<cv::Point> contour;  // outer boundary pixels, clockwise from the top-left one
+  // Projected through the CameraModel onto the virtual ground plane (vehicle
+  // frame, metres); on_ground is false when the centroid's ray misses it.
+  bool on_ground = false;
+  Eigen::Vector2d ground_m{0.0, 0.0};
+  double ground_area_m2 = 0.0;  // area_px × the pixel's footprint at the centroid
+};
+
+class BlobExtractor {
+ public:
+  explicit BlobExtractor(const BlobOptions& options = {});
+
+  // Labels the non-zero pixels of `mask` (CV_8UC1). The span stays valid
+  // until the next call.
+  std::span<const Blob> Extract(const cv::Mat& mask);
+  // Extract, then project every blob onto the camera's virtual ground plane.
+  std::span<const Blob> Extract(const cv::Mat& mask, const geometry::CameraModel& camera);
+
+  const BlobOptions& options() const { return options_; }
+
+ private:
+  struct Run {
+    int v, u_begin, u_end;  // pixels [u_begin, u_end) of image row v
+  };
+  void FindRuns(const cv::Mat& mask);
+  void UniteRows(int prev_begin, int prev_end, int cur_begin, int cur_end);
+  int Find(int i);
+  void Accumulate(const cv::Mat& mask);
+
+  BlobOptions options_;
+  std::vector<Run> runs_;
+  std::vector<int> parent_;
+  std::vector<int> run_blob_;     // blob slot per root run, -1 before assignment
+  std::vector<double> moments_;   // per blob: n, Σu, Σv, Σu², Σv², Σuv (6 each)
+  std::vector<cv::Rect> boxes_;
+  std::vector<int> first_run_;
+  std::vector<Blob> pool_;        // blob storage kept across frames
+  int count_ = 0;
+};
+
+// Outer boundary of the 8-connected blob containing `start` (its top-left
+// pixel), traced by Moore-neighbour search; clockwise in image coordinates.
+void TraceOuterContour(const cv::Mat& mask, cv::Point start, std::vector<cv::Point>& contour);
+
+// Freeman chain code of a closed 8-connected contour (0 = +u, counting
+// anticlockwise on screen: 1 = up-right, 2 = up, ...), thesis fig. 2.16.
+void FreemanChainCode(std::span<const cv::Point> contour, std::vector<uint8_t>& codes);
+
+}  // namespace plantscale::vision

@@ -1,0 +1,80 @@
+#pragma once
+// Plant-matter segmentation of one camera frame: plant image (NIR grey or a
+// colour index), threshold, blobs. One object per camera stream; it keeps its
+// buffers, so frames after the first allocate nothing.
+
+#include <opencv2/core.hpp>
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include "engine/common/options.h"
+#include "engine/geometry/camera_model.h"
+#include "engine/vision/blobs.h"
+#include "engine/vision/colour_index.h"
+#include "engine/vision/local_threshold.h"
+
+namespace plantscale::vision {
+
+enum class ThresholdMethod {
+  kFixed,     // eq. 2.14 at fixed_threshold
+  kOtsu,      // Otsu's threshold per frame
+  kAdaptive,  // Hague's adaptive interpolating threshold, eq. 2.15, gain α
+  kLocal,     // ours: gain times a local soil level (local_threshold.h)
+};
+std::optional<ThresholdMethod> ParseThresholdMethod(std::string_view name);
+const char* Name(ThresholdMethod method);
+
+struct SegmenterOptions {
+  ThresholdMethod method = ThresholdMethod::kLocal;
+  double fixed_threshold = 128.0;  // τ, grey levels (kFixed)
+  double adaptive_gain = 1.64;     // α (kAdaptive); the thesis's hand-tuned value (§2.3.6)
+  LocalThresholdOptions local;     // kLocal
+  // Gaussian smoothing of the plant image before thresholding (sigma,
+  // pixels; 0: none). Lifts shaded leaf patches that bright leaf surrounds
+  // and averages sensor noise away.
+  double smoothing_px = 2.0;
+  // Colour input (CV_8UC3, BGR) is turned into this index first; grey
+  // input (CV_8UC1) is used as it is.
+  ColourIndex colour_index = ColourIndex::kExG;
+  BlobOptions blobs;
+
+  OptionErrors Validate() const;
+};
+
+struct Segmentation {
+  cv::Mat plant_image;  // CV_8UC1, plants bright (the grey input or the colour index), smoothed
+  cv::Mat mask;         // CV_8UC1, 255 plant, 0 soil
+  double threshold_at_top = 0.0;     // grey-level threshold used at the top row
+  double threshold_at_bottom = 0.0;  // ... and at the bottom row (differ for kAdaptive)
+  std::span<const Blob> blobs;
+};
+
+class Segmenter {
+ public:
+  explicit Segmenter(const SegmenterOptions& options);
+
+  // Throws DataError for an empty image or one that is not CV_8UC1 / CV_8UC3.
+  // The result stays valid until the next call.
+  const Segmentation& Process(const cv::Mat& image);
+  // The same, with blobs projected onto the camera's virtual ground plane.
+  const Segmentation& Process(const cv::Mat& image, const geometry::CameraModel& camera);
+
+  // The continuous score behind the last mask (CV_32FC1) and the score
+  // level the mask is cut at: grey level (fixed, Otsu), I/μ(v) (adaptive) or
+  // I/B (local). Sweeping a threshold over it gives the method's ROC curve.
+  double Score(cv::Mat& score);
+
+  const SegmenterOptions& options() const { return options_; }
+
+ private:
+  void Threshold(const cv::Mat& image);
+
+  SegmenterOptions options_;
+  BlobExtractor blobs_;
+  LocalThreshold local_;
+  cv::Mat index_;
+  Segmentation result_;
+};
+
+}  // namespace plantscale::vision
