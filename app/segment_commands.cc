@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/config_loader.h"
+#include "app/photo_segmentation.h"
 #include "app/segmentation_eval.h"
 
 namespace plantscale::app {
@@ -88,6 +89,16 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   return 0;
 }
 
+int SegmentCommand(const SegmentPhotosRequest& request) {
+  const SegmentPhotosResult r = SegmentPhotos(request, std::cerr);
+  for (const std::string& e : r.errors) std::cerr << "plantscale segment: error: " << e << '\n';
+  std::cout << "plantscale segment: " << r.images << " image(s) segmented into "
+            << request.out.string() << "/";
+  if (r.failed > 0) std::cout << ", " << r.failed << " failed";
+  std::cout << '\n';
+  return r.failed > 0 ? 1 : 0;
+}
+
 }  // namespace
 
 CLI::App* EvaluateCommand(CommandRegistry& registry) {
@@ -100,6 +111,33 @@ CLI::App* EvaluateCommand(CommandRegistry& registry) {
 
 void AddSegmentCommands(CommandRegistry& registry) {
   const GlobalOptions& global = registry.global();
+  SegmentPhotosRequest& seg = registry.Keep(SegmentPhotosRequest{});
+  std::string& seg_out = registry.Keep(std::string{});
+  std::vector<std::string>& seg_inputs = registry.Keep(std::vector<std::string>{});
+  bool& seg_quiet = registry.Keep(false);
+  CLI::App* segment = registry.Add(
+      "segment", "plant masks and blob lists for photographs (PNG/JPEG, colour or NIR)", [&] {
+        seg.inputs.assign(seg_inputs.begin(), seg_inputs.end());
+        seg.out = seg_out;
+        seg.progress = !seg_quiet;
+        return SegmentCommand(seg);
+      });
+  segment->add_option("inputs", seg_inputs, "image files or folders of images")->required();
+  segment->add_option("--out", seg_out, "output folder (NAME_mask.png, NAME_blobs.csv)")
+      ->required();
+  segment->add_option("--method", seg.method,
+                      "auto (colour: exg, grey: nir), exg (excess green + Otsu), nir (local "
+                      "soil-level threshold), adaptive (thesis eq. 2.15)")
+      ->check(CLI::IsMember({"auto", "exg", "nir", "adaptive"}))
+      ->capture_default_str();
+  segment->add_option("--index", seg.index, "colour index for colour photographs")
+      ->check(CLI::IsMember({"exg", "exgr", "cive"}))
+      ->capture_default_str();
+  segment->add_option("--min-area-px", seg.min_area_px,
+                      "drop smaller blobs (default: 1e-5 of the image, at least 4)")
+      ->check(CLI::NonNegativeNumber);
+  segment->add_flag("--quiet", seg_quiet, "no progress bar");
+
   EvaluateArgs& ev = registry.Keep(EvaluateArgs{});
   CLI::App* cmd = registry.Add(
       "segmentation", "plant/soil pixel accuracy, ROC and AUC against simulator truth",

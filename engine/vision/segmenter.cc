@@ -31,6 +31,7 @@ const char* Name(ThresholdMethod method) {
 OptionErrors SegmenterOptions::Validate() const {
   OptionErrors e;
   RequireInRange(e, "fixed_threshold", fixed_threshold, 0.0, 256.0);
+  RequireInRange(e, "otsu_floor", otsu_floor, 0.0, 256.0);
   RequirePositive(e, "adaptive_gain", adaptive_gain);
   RequireInRange(e, "smoothing_px", smoothing_px, 0.0, 20.0);
   for (OptionError& b : Prefixed("blobs", blobs.Validate())) e.push_back(std::move(b));
@@ -70,6 +71,10 @@ void Segmenter::Threshold(const cv::Mat& image) {
       break;
     case ThresholdMethod::kOtsu:
       result_.threshold_at_top = result_.threshold_at_bottom = OtsuThreshold(grey, result_.mask);
+      if (result_.threshold_at_top < options_.otsu_floor) {
+        FixedThreshold(grey, options_.otsu_floor, result_.mask);
+        result_.threshold_at_top = result_.threshold_at_bottom = options_.otsu_floor;
+      }
       break;
     case ThresholdMethod::kAdaptive: {
       const InterpolatedMean mean = ComputeInterpolatedMean(grey);

@@ -28,6 +28,10 @@ const char* Name(ThresholdMethod method);
 struct SegmenterOptions {
   ThresholdMethod method = ThresholdMethod::kLocal;
   double fixed_threshold = 128.0;  // τ, grey levels (kFixed)
+  // Lowest threshold Otsu may pick (grey levels). With a colour index, a
+  // pixel that is not greener than neutral (index 0 = 127.5) is never plant,
+  // however the histogram splits (evening light, purple soil, haze).
+  double otsu_floor = 0.0;
   double adaptive_gain = 1.64;     // α (kAdaptive); the thesis's hand-tuned value (§2.3.6)
   LocalThresholdOptions local;     // kLocal
   // Gaussian smoothing of the plant image before thresholding (sigma,

@@ -1,0 +1,188 @@
+#include "app/photo_segmentation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <ostream>
+
+#include "app/progress.h"
+#include "engine/common/options.h"
+#include "engine/vision/segmenter.h"
+
+namespace plantscale::app {
+namespace fs = std::filesystem;
+namespace {
+
+bool IsImageFile(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+}
+
+bool IsJpeg(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".jpg" || ext == ".jpeg";
+}
+
+// libjpeg decodes a truncated file into a grey-filled image with only a
+// warning; a complete JPEG ends with the EOI marker FF D9.
+bool JpegComplete(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary | std::ios::ate);
+  const std::streamoff size = in.tellg();
+  if (size < 4) return false;
+  in.seekg(size - 2);
+  char tail[2] = {0, 0};
+  in.read(tail, 2);
+  return static_cast<unsigned char>(tail[0]) == 0xFF && static_cast<unsigned char>(tail[1]) == 0xD9;
+}
+
+// 8-bit grey or BGR; throws DataError naming what is wrong.
+cv::Mat ReadImage(const fs::path& p) {
+  std::error_code ec;
+  const auto size = fs::file_size(p, ec);
+  if (ec) throw DataError("cannot read: " + ec.message());
+  if (size == 0) throw DataError("empty file (0 bytes)");
+  if (IsJpeg(p) && !JpegComplete(p)) throw DataError("truncated JPEG (no end-of-image marker)");
+  cv::Mat image = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw DataError("not a readable PNG/JPEG image (corrupt or truncated)");
+  if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
+  if (image.depth() != CV_8U) throw DataError("unsupported pixel depth (need 8 or 16 bit)");
+  switch (image.channels()) {
+    case 1: case 3: return image;
+    case 4: cv::cvtColor(image, image, cv::COLOR_BGRA2BGR); return image;
+    case 2: cv::cvtColor(image, image, cv::COLOR_GRAY2BGR); return image;  // never from imread
+    default: throw DataError("unsupported channel count " + std::to_string(image.channels()));
+  }
+}
+
+// A colour file whose three channels are equal is a grey (NIR) image.
+bool IsGreyInColour(const cv::Mat& bgr) {
+  cv::Mat ch[3];
+  cv::split(bgr, ch);
+  return cv::countNonZero(ch[0] != ch[1]) == 0 && cv::countNonZero(ch[1] != ch[2]) == 0;
+}
+
+vision::SegmenterOptions OptionsFor(const SegmentPhotosRequest& r, const cv::Mat& image,
+                                    cv::Mat& input) {
+  vision::SegmenterOptions o;
+  o.colour_index = *vision::ParseColourIndex(r.index);
+  const bool colour = image.channels() == 3 && !IsGreyInColour(image);
+  input = image;
+  if (image.channels() == 3 && !colour) cv::cvtColor(image, input, cv::COLOR_BGR2GRAY);
+  std::string method = r.method == "auto" ? (colour ? "exg" : "nir") : r.method;
+  if (method == "nir" && colour) {
+    throw DataError("--method nir needs a near-infrared (single-channel) image; this one is "
+                    "colour: use --method exg");
+  }
+  if (method == "exg") {
+    if (!colour) throw DataError("--method exg needs a colour image; this one is grey: use nir");
+    // Colour indices are differences, not ratios, so the soil-relative gain
+    // of the local threshold does not apply; Otsu on the index is the
+    // standard (Meyer & Neto 2008) and needs no tuning per photograph.
+    o.method = vision::ThresholdMethod::kOtsu;
+    o.otsu_floor = 127.5 + 127.5 * 0.05;  // ExG >= 0.05: visibly greener than grey
+    if (o.colour_index == vision::ColourIndex::kExGR) {
+      o.method = vision::ThresholdMethod::kFixed;  // ExGR's own zero (Meyer & Neto 2008)
+      o.fixed_threshold = 128.0;
+    }
+  } else if (method == "adaptive") {
+    o.method = vision::ThresholdMethod::kAdaptive;
+    o.smoothing_px = 0.0;  // the thesis's method as published
+  } else {
+    o.method = vision::ThresholdMethod::kLocal;
+  }
+  // Photographs of unknown scale: light smoothing only (sensor noise, JPEG
+  // blocks); the 2 px of the product default were set on 640×480 frames.
+  o.smoothing_px = 1.0;
+  const double pixels = static_cast<double>(image.total());
+  o.blobs.min_area_px = r.min_area_px > 0 ? r.min_area_px
+                                          : std::max(4, static_cast<int>(std::ceil(1e-5 * pixels)));
+  return o;
+}
+
+void WriteAtomically(const fs::path& path, const auto& write) {
+  // Same extension: encoders are chosen by it.
+  const fs::path tmp = path.parent_path() /
+                       ("." + path.stem().string() + ".partial" + path.extension().string());
+  write(tmp);
+  fs::rename(tmp, path);
+}
+
+void WriteBlobs(const fs::path& path, std::span<const vision::Blob> blobs) {
+  WriteAtomically(path, [&](const fs::path& tmp) {
+    std::ofstream out(tmp);
+    out << "id,centroid_u,centroid_v,area_px,bbox_u,bbox_v,bbox_width,bbox_height\n";
+    out.precision(2);
+    out << std::fixed;
+    for (const vision::Blob& b : blobs) {
+      out << b.id << ',' << b.centroid_px.x() << ',' << b.centroid_px.y() << ',' << b.area_px
+          << ',' << b.bbox_px.x << ',' << b.bbox_px.y << ',' << b.bbox_px.width << ','
+          << b.bbox_px.height << '\n';
+    }
+    if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
+  });
+}
+
+void SegmentOne(const SegmentPhotosRequest& r, const fs::path& file) {
+  const cv::Mat image = ReadImage(file);
+  cv::Mat input;
+  vision::Segmenter segmenter(OptionsFor(r, image, input));
+  const vision::Segmentation& s = segmenter.Process(input);
+  const std::string stem = file.stem().string();
+  const fs::path mask = r.out / (stem + "_mask.png");
+  WriteAtomically(mask, [&](const fs::path& tmp) {
+    if (!cv::imwrite(tmp.string(), s.mask)) throw std::runtime_error("cannot write " + mask.string());
+  });
+  WriteBlobs(r.out / (stem + "_blobs.csv"), s.blobs);
+}
+
+}  // namespace
+
+std::vector<fs::path> CollectImages(const std::vector<fs::path>& inputs,
+                                    std::vector<std::string>& errors) {
+  std::vector<fs::path> files;
+  for (const fs::path& in : inputs) {
+    std::error_code ec;
+    if (fs::is_directory(in, ec)) {
+      std::vector<fs::path> found;
+      for (const auto& e : fs::directory_iterator(in, ec)) {
+        if (e.is_regular_file() && IsImageFile(e.path())) found.push_back(e.path());
+      }
+      if (ec) errors.push_back(in.string() + ": cannot list folder: " + ec.message());
+      else if (found.empty()) errors.push_back(in.string() + ": no PNG or JPEG images in folder");
+      std::sort(found.begin(), found.end());
+      files.insert(files.end(), found.begin(), found.end());
+    } else if (fs::exists(in, ec)) {
+      files.push_back(in);
+    } else {
+      errors.push_back(in.string() + ": no such file or folder");
+    }
+  }
+  return files;
+}
+
+SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log) {
+  SegmentPhotosResult result;
+  const std::vector<fs::path> files = CollectImages(request.inputs, result.errors);
+  result.failed = static_cast<int>(result.errors.size());
+  fs::create_directories(request.out);
+  ProgressBar bar(log, "segment", static_cast<int>(files.size()), request.progress);
+  int done = 0;
+  for (const fs::path& file : files) {
+    try {
+      SegmentOne(request, file);
+      ++result.images;
+    } catch (const std::exception& e) {
+      result.errors.push_back(file.string() + ": " + e.what());
+      ++result.failed;
+    }
+    bar.Update(++done);
+  }
+  bar.Finish();
+  return result;
+}
+
+}  // namespace plantscale::app
