@@ -72,9 +72,14 @@ void ScoreFrame(const cv::Mat& image, const cv::Mat& labels, const cv::Mat& vali
                 vision::Segmenter& segmenter, Accumulators& acc) {
   const vision::Segmentation& s = segmenter.Process(image);
   acc.ours.Add(s.mask, labels, valid);
-  acc.fixed.AddImage(s.plant_image, labels, valid);
+  // The thesis's baselines see the plant image as it is (no smoothing).
+  cv::Mat raw = image;
+  if (image.channels() == 3) {
+    vision::ComputeColourIndex(image, segmenter.options().colour_index, raw);
+  }
+  acc.fixed.AddImage(raw, labels, valid);
   cv::Mat score;
-  vision::AdaptiveScore(s.plant_image, vision::ComputeInterpolatedMean(s.plant_image), score);
+  vision::AdaptiveScore(raw, vision::ComputeInterpolatedMean(raw), score);
   acc.adaptive.AddImage(score, labels, valid);
   acc.ours_threshold = segmenter.Score(score);
   if (segmenter.options().method == vision::ThresholdMethod::kFixed ||

@@ -57,9 +57,9 @@ void Segmenter::Threshold(const cv::Mat& image) {
     plant = &index_;
   }
   if (options_.smoothing_px > 0.0) {
-    // A 5×5 kernel: the Gaussian's tails beyond 2 px change the AUC by
-    // < 0.001 on presets A–D but cost 3× the time.
-    cv::GaussianBlur(*plant, result_.plant_image, cv::Size(5, 5), options_.smoothing_px);
+    // The full kernel (±3σ): truncating it to 5×5 saves a third of the
+    // frame time but drops preset D's AUC from 0.9905 to 0.9889.
+    cv::GaussianBlur(*plant, result_.plant_image, cv::Size(0, 0), options_.smoothing_px);
   } else {
     result_.plant_image = *plant;  // a header: no copy
   }
