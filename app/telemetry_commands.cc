@@ -2,12 +2,14 @@
 
 #include <atomic>
 #include <csignal>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "app/camera_source.h"
 #include "app/config_loader.h"
 #include "telemetry/log.h"
 #include "telemetry/log_stats.h"
@@ -53,41 +55,75 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
   cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
 }
 
-int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+namespace {
+
+using SourceFactory =
+    std::function<std::unique_ptr<tm::FrameSource>(tm::Transport& transport, int64_t boot)>;
+
+// The vehicle process: LCM (and the log) around a runner with the stages
+// that exist today; the simulator's truth stage only when `sim_truth`.
+int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
+               const std::string& title) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
   std::unique_ptr<tm::LoggingTransport> logged;
   tm::Transport* transport = &lcm;
-  const tm::VehicleRunner* clock_source = nullptr;
+  const tm::VehicleRunner* clock = nullptr;
   if (!args.log.empty()) {
     log = std::make_unique<tm::LogWriter>(args.log);
     logged = std::make_unique<tm::LoggingTransport>(
-        lcm, *log, [&clock_source] { return clock_source ? clock_source->now_utime() : tm::WallUtime(); });
+        lcm, *log, [&clock] { return clock ? clock->now_utime() : tm::WallUtime(); });
     transport = logged.get();
   }
   tm::Publisher publisher(*transport, tm::PublisherOptions{});
-  sim::Simulator simulator(options);
-  tm::SimFrameSource source(simulator, boot);
+  std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
   tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
-  clock_source = &runner;
+  clock = &runner;
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
   runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}));
-  runner.AddStage(std::make_unique<tm::SimTruthStage>());
+  if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
   g_stop = false;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
-  const tm::RunSummary s = runner.Run(source, &g_stop);
+  const tm::RunSummary s = runner.Run(*source, &g_stop);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  std::cout << "plantscale simulate --publish: preset " << options.preset << ", seed "
-            << options.seed << ", " << s.frames << " frames (" << s.dropped_frames
-            << " dropped) over " << std::fixed << std::setprecision(1) << s.seconds
-            << " s on " << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
+  std::cout << title << ", " << s.frames << " frames (" << s.dropped_frames << " dropped) over "
+            << std::fixed << std::setprecision(1) << s.seconds << " s on "
+            << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
   PrintPublisherTraffic(publisher, s.seconds);
   if (log) std::cout << "  log               " << args.log << " (" << log->events() << " events)\n";
   return 0;
+}
+
+struct RunArgs {
+  PublishArgs publish;
+  CameraSourceOptions camera;
+};
+
+int Run(const RunArgs& a) {
+  return RunVehicle(
+      a.publish,
+      [&a](tm::Transport& t, int64_t boot) {
+        return std::make_unique<CameraFrameSource>(a.camera, t, boot);
+      },
+      false, "plantscale run: camera " + a.camera.camera);
+}
+
+}  // namespace
+
+int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+  sim::Simulator simulator(options);
+  return RunVehicle(
+      args,
+      [&simulator](tm::Transport&, int64_t boot) {
+        return std::make_unique<tm::SimFrameSource>(simulator, boot);
+      },
+      true,
+      "plantscale simulate --publish: preset " + options.preset + ", seed " +
+          std::to_string(options.seed));
 }
 
 namespace {
@@ -148,6 +184,17 @@ int TelemetryStats(const std::string& log, bool json) {
 }  // namespace
 
 void AddTelemetryCommands(CommandRegistry& registry) {
+  RunArgs& run = registry.Keep(RunArgs{});
+  CLI::App* rc = registry.Add(
+      "run", "the vehicle process on a real camera (V4L2 device or image folder) and LCM odometry",
+      [&run] { return Run(run); });
+  rc->add_option("--camera", run.camera.camera, "/dev/videoN, N, or a folder of images")->required();
+  rc->add_option("--frame-rate", run.camera.folder_frame_rate_hz,
+                 "frame rate of a folder of images, Hz")->capture_default_str();
+  rc->add_flag("--fast", run.publish.fast, "folder of images: as fast as possible");
+  rc->add_option("--lcm-url", run.publish.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
+  rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
+
   ReplayArgs& replay = registry.Keep(ReplayArgs{});
   CLI::App* r = registry.Add("replay", "republish an LCM log with its original timing",
                              [&replay] { return RunReplay(replay); });

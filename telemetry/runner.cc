@@ -66,6 +66,7 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
                 std::to_string(frame.frame_index));
     }
     status_.dropped_frames = dropped;
+    status_.faults = source.faults(frame.utime);
     ++status_.frames;
     for (const std::unique_ptr<Stage>& stage : stages_) stage->Process(frame, status_, publisher_);
     summary.seconds = 1e-6 * static_cast<double>(frame.utime - first_utime);

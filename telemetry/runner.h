@@ -35,6 +35,8 @@ class FrameSource {
   virtual bool Next(VehicleFrame& frame) = 0;  // false at the end
   virtual int dropped_frames() const = 0;      // lost so far by the source
   virtual std::string name() const = 0;        // "simulate", "run"
+  // Faults of the source (camera, odometry input), reported in the heartbeat.
+  virtual std::vector<std::string> faults(int64_t /*now_utime*/) const { return {}; }
 };
 
 // The simulator as a frame source; times are shifted to `epoch_utime`.

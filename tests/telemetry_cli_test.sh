@@ -58,5 +58,18 @@ expect 2 "only with --publish" -- "$plantscale" simulate --preset testbed --fast
 expect 2 "excludes" -- "$plantscale" simulate --preset testbed --publish --out "$work/x"
 expect 1 "LCM URL 'nosuch://': cannot start" -- "$plantscale" simulate --preset testbed --publish --lcm-url nosuch://
 
+# plantscale run on a folder of images (frames written by simulate).
+"$plantscale" simulate --preset testbed --length-m 1 --seed 4 --quiet --out "$work/frames_run" >/dev/null ||
+  fail "simulate --out for run's frames"
+expect 0 "plantscale run: camera .*frames" -- "$plantscale" run --camera "$work/frames_run/frames" --fast \
+  --lcm-url memq:// --log "$work/run_camera.lcmlog"
+"$plantscale" telemetry-stats "$work/run_camera.lcmlog" >"$work/run_camera.txt"
+grep -q "^PLANTSCALE_THUMBNAIL" "$work/run_camera.txt" || fail "run published no thumbnails"
+grep -q "^PLANTSCALE_HEALTH" "$work/run_camera.txt" || fail "run published no heartbeat"
+grep -q "SIM_TRUTH" "$work/run_camera.txt" && fail "run published simulator truth"
+expect 1 "video99: cannot open the camera" -- "$plantscale" run --camera /dev/video99 --lcm-url memq://
+mkdir -p "$work/empty"
+expect 1 "empty: no images" -- "$plantscale" run --camera "$work/empty" --lcm-url memq://
+
 echo "$failures failure(s)"
 exit $((failures > 0))
