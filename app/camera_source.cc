@@ -23,12 +23,14 @@ std::vector<fs::path> ListImages(const fs::path& dir) {
     if (e.is_regular_file() && IsImage(e.path())) images.push_back(e.path());
   }
   std::sort(images.begin(), images.end());
-  if (images.empty()) throw std::runtime_error(dir.string() + ": no images (png, jpg, bmp, tif, pgm)");
+  if (images.empty())
+    throw std::runtime_error(dir.string() + ": no images (png, jpg, bmp, tif, pgm)");
   return images;
 }
 
 bool AllDigits(const std::string& s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+  return !s.empty() &&
+         std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
 }
 
 }  // namespace

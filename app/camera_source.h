@@ -7,10 +7,9 @@
 
 #include <filesystem>
 #include <memory>
+#include <opencv2/videoio.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/videoio.hpp>
 
 #include "telemetry/odometry_input.h"
 #include "telemetry/runner.h"
@@ -18,7 +17,7 @@
 namespace plantscale::app {
 
 struct CameraSourceOptions {
-  std::string camera;             // /dev/videoN, N, or a folder of images
+  std::string camera;                  // /dev/videoN, N, or a folder of images
   double folder_frame_rate_hz = 12.5;  // stamps of folder images
 };
 

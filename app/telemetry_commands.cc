@@ -35,11 +35,10 @@ void PrintPublisherTraffic(const tm::Publisher& publisher, double seconds) {
   for (const auto& [name, c] : publisher.counters()) {
     const double kbit_s = seconds > 0 ? 8e-3 * static_cast<double>(c.bytes) / seconds : 0.0;
     total += kbit_s;
-    std::cout << "  " << std::left << std::setw(26) << name << std::right << std::setw(6)
-              << c.sent << std::setw(10) << c.dropped_rate << "," << std::setw(6)
-              << c.dropped_budget << std::setw(15)
-              << (c.sent ? c.bytes / c.sent : 0) << std::fixed << std::setprecision(1)
-              << std::setw(8) << kbit_s << '\n';
+    std::cout << "  " << std::left << std::setw(26) << name << std::right << std::setw(6) << c.sent
+              << std::setw(10) << c.dropped_rate << "," << std::setw(6) << c.dropped_budget
+              << std::setw(15) << (c.sent ? c.bytes / c.sent : 0) << std::fixed
+              << std::setprecision(1) << std::setw(8) << kbit_s << '\n';
   }
   std::cout << "  total " << std::fixed << std::setprecision(1) << total << " kbit/s over "
             << seconds << " s of run\n";
@@ -51,7 +50,8 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
   cmd->add_flag("--publish", a.publish,
                 "publish telemetry over LCM instead of writing files (vehicle runner)");
   cmd->add_flag("--fast", a.fast, "with --publish: as fast as possible, not in real time");
-  cmd->add_option("--lcm-url", a.lcm_url, "with --publish: LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
+  cmd->add_option("--lcm-url", a.lcm_url,
+                  "with --publish: LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
 }
 
@@ -152,12 +152,16 @@ int RunReplay(const ReplayArgs& a) {
 nlohmann::json TrafficJson(const tm::LogTraffic& t) {
   nlohmann::json channels = nlohmann::json::object();
   for (const auto& [name, c] : t.channels) {
-    channels[name] = {{"messages", c.messages}, {"rate_hz", c.rate_hz}, {"kbit_s", c.kbit_s},
+    channels[name] = {{"messages", c.messages},
+                      {"rate_hz", c.rate_hz},
+                      {"kbit_s", c.kbit_s},
                       {"bytes_per_message", c.messages ? c.bytes / c.messages : 0},
                       {"max_bytes", c.max_bytes}};
   }
-  nlohmann::json j = {{"channels", channels}, {"total_kbit_s", t.total_kbit_s},
-                      {"events", t.events}, {"duration_s", t.duration_s}};
+  nlohmann::json j = {{"channels", channels},
+                      {"total_kbit_s", t.total_kbit_s},
+                      {"events", t.events},
+                      {"duration_s", t.duration_s}};
   if (!t.error.empty()) j["error"] = t.error;
   return j;
 }
@@ -188,11 +192,14 @@ void AddTelemetryCommands(CommandRegistry& registry) {
   CLI::App* rc = registry.Add(
       "run", "the vehicle process on a real camera (V4L2 device or image folder) and LCM odometry",
       [&run] { return Run(run); });
-  rc->add_option("--camera", run.camera.camera, "/dev/videoN, N, or a folder of images")->required();
+  rc->add_option("--camera", run.camera.camera, "/dev/videoN, N, or a folder of images")
+      ->required();
   rc->add_option("--frame-rate", run.camera.folder_frame_rate_hz,
-                 "frame rate of a folder of images, Hz")->capture_default_str();
+                 "frame rate of a folder of images, Hz")
+      ->capture_default_str();
   rc->add_flag("--fast", run.publish.fast, "folder of images: as fast as possible");
-  rc->add_option("--lcm-url", run.publish.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
+  rc->add_option("--lcm-url", run.publish.lcm_url,
+                 "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
 
   ReplayArgs& replay = registry.Keep(ReplayArgs{});
@@ -208,10 +215,12 @@ void AddTelemetryCommands(CommandRegistry& registry) {
 
   std::string& stats_log = registry.Keep(std::string{});
   bool& stats_json = registry.Keep(false);
-  CLI::App* s = registry.Add("telemetry-stats", "per-channel messages, rate and bandwidth of an LCM log",
-                             [&stats_log, &stats_json] { return TelemetryStats(stats_log, stats_json); });
+  CLI::App* s =
+      registry.Add("telemetry-stats", "per-channel messages, rate and bandwidth of an LCM log",
+                   [&stats_log, &stats_json] { return TelemetryStats(stats_log, stats_json); });
   s->add_option("LOG", stats_log, "LCM log file")->required();
-  s->add_flag("--json", stats_json, "JSON: channels.<name>.{messages, rate_hz, kbit_s}, total_kbit_s");
+  s->add_flag("--json", stats_json,
+              "JSON: channels.<name>.{messages, rate_hz, kbit_s}, total_kbit_s");
 }
 
 }  // namespace plantscale::app

@@ -90,7 +90,9 @@ void BM_PublisherGridState(benchmark::State& state) {
   for (auto _ : state) {
     grid.utime = (utime += 80'000);
     benchmark::DoNotOptimize(publisher.Publish(channels::kGrid, grid));
-    if (utime % 8'000'000 == 0) while (memq.Handle(0)) {}
+    if (utime % 8'000'000 == 0)
+      while (memq.Handle(0)) {
+      }
   }
   state.SetItemsProcessed(state.iterations());
 }

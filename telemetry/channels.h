@@ -14,10 +14,10 @@ inline constexpr char kEvents[] = "PLANTSCALE_EVENTS";        // event_t, when t
 inline constexpr char kOdometry[] = "PLANTSCALE_ODOMETRY";    // odometry_t, 12.5 Hz
 inline constexpr char kPose[] = "PLANTSCALE_POSE";            // pose_t, dead reckoning
 // Simulator ground truth: never on the tracker's channels.
-inline constexpr char kSimTruth[] = "PLANTSCALE_SIM_TRUTH";            // grid_state_t, MODE_TRUTH
-inline constexpr char kSimTruthPose[] = "PLANTSCALE_SIM_TRUTH_POSE";   // pose_t
+inline constexpr char kSimTruth[] = "PLANTSCALE_SIM_TRUTH";           // grid_state_t, MODE_TRUTH
+inline constexpr char kSimTruthPose[] = "PLANTSCALE_SIM_TRUTH_POSE";  // pose_t
 // Station → vehicle, and sensors → vehicle for `plantscale run`.
-inline constexpr char kCommand[] = "PLANTSCALE_COMMAND";          // command_t
-inline constexpr char kOdometryIn[] = "PLANTSCALE_ODOMETRY_IN";   // odometry_t, 50 Hz
+inline constexpr char kCommand[] = "PLANTSCALE_COMMAND";         // command_t
+inline constexpr char kOdometryIn[] = "PLANTSCALE_ODOMETRY_IN";  // odometry_t, 50 Hz
 
 }  // namespace plantscale::telemetry::channels

@@ -103,7 +103,8 @@ plantscale_plant_t ToLcm(const PlantObservation& p) {
 PlantObservation FromLcm(const plantscale_plant_t& m) {
   RequireFiniteAll(m.position_m, "plantscale_plant_t", "position_m");
   RequireFiniteAll(m.covariance, "plantscale_plant_t", "covariance");
-  if (m.cls < 0 || m.cls > 2) throw DataError("plantscale_plant_t.cls: unknown value " + std::to_string(m.cls));
+  if (m.cls < 0 || m.cls > 2)
+    throw DataError("plantscale_plant_t.cls: unknown value " + std::to_string(m.cls));
   PlantObservation p;
   p.id = m.id;
   p.kind = static_cast<PlantKind>(m.cls);
@@ -177,8 +178,11 @@ plantscale_nozzles_t ToLcm(const NozzleBar& bar, int64_t utime) {
   m.failsafe = bar.failsafe ? 1 : 0;
   m.num_shots = static_cast<int16_t>(bar.shots.size());
   for (const NozzleShot& s : bar.shots) {
-    m.shots.push_back({static_cast<int16_t>(s.nozzle), s.open_utime, s.close_utime,
-                       {s.position_m.x(), s.position_m.y()}, s.plant_id});
+    m.shots.push_back({static_cast<int16_t>(s.nozzle),
+                       s.open_utime,
+                       s.close_utime,
+                       {s.position_m.x(), s.position_m.y()},
+                       s.plant_id});
   }
   return m;
 }
@@ -190,8 +194,8 @@ NozzleBar FromLcm(const plantscale_nozzles_t& m) {
   bar.failsafe = m.failsafe != 0;
   for (const plantscale_shot_t& s : m.shots) {
     RequireFiniteAll(s.position_m, "plantscale_shot_t", "position_m");
-    bar.shots.push_back({s.nozzle, s.open_utime, s.close_utime,
-                         {s.position_m[0], s.position_m[1]}, s.plant_id});
+    bar.shots.push_back(
+        {s.nozzle, s.open_utime, s.close_utime, {s.position_m[0], s.position_m[1]}, s.plant_id});
   }
   return bar;
 }

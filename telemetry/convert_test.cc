@@ -96,7 +96,8 @@ TEST(Convert, MapTileRoundTripsCompressed) {
   t.width = 64;
   t.height = 64;
   t.cells.assign(64 * 64, plantscale_map_tile_t::CELL_SOIL);
-  for (int i = 100; i < 140; ++i) t.cells[static_cast<size_t>(i)] = plantscale_map_tile_t::CELL_CROP;
+  for (int i = 100; i < 140; ++i)
+    t.cells[static_cast<size_t>(i)] = plantscale_map_tile_t::CELL_CROP;
   const plantscale_map_tile_t m = ToLcm(t, 1);
   EXPECT_LT(m.cells.size(), t.cells.size() / 20);  // mostly soil: > 20x smaller
   const MapTileDelta back = FromLcm(m);

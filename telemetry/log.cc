@@ -21,8 +21,7 @@ void LogWriter::Write(const std::string& channel, const void* data, size_t size,
   event.datalen = static_cast<int32_t>(size);
   event.data = const_cast<void*>(data);  // lcm::LogEvent is not const-correct; only read
   if (file_->writeEvent(&event) != 0 || std::fflush(file_->getFilePtr()) != 0) {
-    throw LogError(path_.string() + ": write failed after " + std::to_string(events_) +
-                   " events");
+    throw LogError(path_.string() + ": write failed after " + std::to_string(events_) + " events");
   }
   ++events_;
 }
@@ -48,8 +47,8 @@ std::optional<LogEvent> LogReader::Next() {
       error_ = path_.string() + ": " +
                (events_read_ == 0 ? std::string("not an LCM log, or its first event is cut off")
                                   : std::string("event cut off or corrupt")) +
-               " at byte offset " + std::to_string(offset) + " of " + std::to_string(size_) +
-               " (" + std::to_string(events_read_) + " whole events read before it)";
+               " at byte offset " + std::to_string(offset) + " of " + std::to_string(size_) + " (" +
+               std::to_string(events_read_) + " whole events read before it)";
     }
     return std::nullopt;
   }

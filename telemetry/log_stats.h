@@ -15,7 +15,7 @@ struct ChannelTraffic {
   int64_t bytes = 0;      // payload bytes
   int64_t max_bytes = 0;  // largest message
   double rate_hz = 0.0;
-  double kbit_s = 0.0;    // payload kilobits (1000 bits) per second
+  double kbit_s = 0.0;  // payload kilobits (1000 bits) per second
 };
 
 struct LogTraffic {

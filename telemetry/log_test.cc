@@ -17,7 +17,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempLog(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("plantscale_log_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("plantscale_log_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return dir / name;
 }

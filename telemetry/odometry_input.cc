@@ -1,7 +1,6 @@
 #include "telemetry/odometry_input.h"
 
 #include <cmath>
-
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 
 #include "telemetry/channels.h"
@@ -10,9 +9,8 @@
 namespace plantscale::telemetry {
 
 void OdometryInput::Attach(Transport& transport) {
-  transport.Subscribe(channels::kOdometryIn, [this](const ReceivedMessage& m) {
-    Feed(m.channel, m.data, m.size);
-  });
+  transport.Subscribe(channels::kOdometryIn,
+                      [this](const ReceivedMessage& m) { Feed(m.channel, m.data, m.size); });
 }
 
 void OdometryInput::Feed(const std::string& channel, const void* data, size_t size) {
@@ -50,10 +48,12 @@ std::vector<std::string> OdometryInput::Faults(int64_t now_utime, double stale_s
     faults.push_back(std::string("odometry: nothing received on ") + channels::kOdometryIn);
   } else if (1e-6 * static_cast<double>(now_utime - last_utime_) > stale_s) {
     faults.push_back("odometry: stale, last sample " +
-                     std::to_string(1e-6 * static_cast<double>(now_utime - last_utime_)) + " s old");
+                     std::to_string(1e-6 * static_cast<double>(now_utime - last_utime_)) +
+                     " s old");
   }
   if (rejected_ > 0) {
-    faults.push_back("odometry: " + std::to_string(rejected_) + " bad messages, last: " + last_problem_);
+    faults.push_back("odometry: " + std::to_string(rejected_) +
+                     " bad messages, last: " + last_problem_);
   }
   return faults;
 }

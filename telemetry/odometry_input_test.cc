@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <limits>
-
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 
 #include "telemetry/channels.h"

@@ -53,8 +53,8 @@ TEST(Publisher, SequenceNumbersCountSentMessages) {
   RecordingTransport t;
   Publisher p(t, PublisherOptions{});
   for (int i = 0; i < 3; ++i) p.Publish(channels::kOdometry, Odometry(100'000LL * i));
-  const auto last = Decode<plantscale_odometry_t>("x", t.sent.back().bytes.data(),
-                                                  t.sent.back().bytes.size());
+  const auto last =
+      Decode<plantscale_odometry_t>("x", t.sent.back().bytes.data(), t.sent.back().bytes.size());
   ASSERT_TRUE(last.has_value());
   EXPECT_EQ(last->seq, 2);
 }

@@ -15,7 +15,8 @@ OptionErrors ReplayOptions::Validate() const {
   try {
     std::regex check(channels);
   } catch (const std::regex_error& e) {
-    errors.push_back({"channels", "not a regular expression: '" + channels + "' (" + e.what() + ")"});
+    errors.push_back(
+        {"channels", "not a regular expression: '" + channels + "' (" + e.what() + ")"});
   }
   return errors;
 }
@@ -39,9 +40,9 @@ ReplaySummary Replay(const std::filesystem::path& log, Transport& transport,
       wall_start = Clock::now();
     }
     const double log_s = 1e-6 * static_cast<double>(e->utime - start_utime);
-    std::this_thread::sleep_until(
-        wall_start + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(log_s / options.speed)));
+    std::this_thread::sleep_until(wall_start +
+                                  std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(log_s / options.speed)));
     transport.Publish(e->channel, e->data.data(), e->data.size());
     ++summary.published;
     summary.log_seconds = log_s;

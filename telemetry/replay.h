@@ -13,9 +13,9 @@
 namespace plantscale::telemetry {
 
 struct ReplayOptions {
-  double speed = 1.0;            // 2: twice as fast as recorded
-  double start_s = 0.0;          // skip this much of the log (from its first event)
-  std::string channels = ".*";   // ECMAScript regex matched against whole names
+  double speed = 1.0;           // 2: twice as fast as recorded
+  double start_s = 0.0;         // skip this much of the log (from its first event)
+  std::string channels = ".*";  // ECMAScript regex matched against whole names
 
   // Keys: "speed", "start_s", "channels".
   OptionErrors Validate() const;
@@ -24,9 +24,9 @@ struct ReplayOptions {
 struct ReplaySummary {
   int64_t events_read = 0;
   int64_t published = 0;
-  double log_seconds = 0.0;   // span of the published events in the log
+  double log_seconds = 0.0;  // span of the published events in the log
   double wall_seconds = 0.0;
-  std::string error;          // LogReader::error(), empty when the log was whole
+  std::string error;  // LogReader::error(), empty when the log was whole
 };
 
 // Throws InvalidOptionsError, LogError (cannot open) or TransportError.

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -17,7 +18,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempLog(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("plantscale_replay_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("plantscale_replay_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return dir / name;
 }
@@ -33,8 +35,10 @@ fs::path TwoSecondLog(const std::string& name) {
   return path;
 }
 
-// Replays at 10× over memq:// while another thread receives; arrival times
-// follow the log's timing scaled by 1/10 within 15 ms.
+// Replays at 10× over memq:// while another thread receives. Pacing means no
+// event arrives before its time ((t − t0) / 10, 1 ms clock tolerance); on a
+// loaded machine events can only be late, so lateness is bounded loosely:
+// median ≤ 5 ms and the whole replay within 50 ms of 0.2 s.
 TEST(Replay, KeepsOriginalTimingScaledBySpeed) {
   const fs::path path = TwoSecondLog("timing.lcmlog");
   LcmTransport t("memq://");
@@ -56,11 +60,17 @@ TEST(Replay, KeepsOriginalTimingScaledBySpeed) {
   receiver.join();
   EXPECT_EQ(s.published, 21);
   EXPECT_NEAR(s.log_seconds, 2.0, 1e-9);
-  EXPECT_NEAR(s.wall_seconds, 0.2, 0.015);
+  EXPECT_GE(s.wall_seconds, 0.2 - 0.001);
+  EXPECT_LE(s.wall_seconds, 0.2 + 0.05);
   ASSERT_EQ(arrivals.size(), 21u);
+  std::vector<double> lateness;
   for (size_t i = 0; i < arrivals.size(); ++i) {
-    EXPECT_NEAR(arrivals[i], 0.01 * static_cast<double>(i), 0.015) << "event " << i;
+    const double expected = 0.01 * static_cast<double>(i);
+    EXPECT_GE(arrivals[i], expected - 0.001) << "event " << i << " arrived early";
+    lateness.push_back(arrivals[i] - expected);
   }
+  std::sort(lateness.begin(), lateness.end());
+  EXPECT_LE(lateness[lateness.size() / 2], 0.005);
 }
 
 TEST(Replay, StartOffsetAndChannelFilter) {

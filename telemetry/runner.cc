@@ -1,9 +1,8 @@
 #include "telemetry/runner.h"
 
 #include <chrono>
-#include <thread>
-
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
+#include <thread>
 
 #include "telemetry/channels.h"
 
@@ -24,8 +23,7 @@ bool SimFrameSource::Next(VehicleFrame& frame) {
   return true;
 }
 
-VehicleRunner::VehicleRunner(Publisher& publisher, const RunnerOptions& options,
-                             int64_t boot_utime)
+VehicleRunner::VehicleRunner(Publisher& publisher, const RunnerOptions& options, int64_t boot_utime)
     : publisher_(publisher), options_(options), now_utime_(boot_utime) {
   status_.boot_utime = boot_utime;
 }
@@ -56,14 +54,15 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
       Event(plantscale_event_t::SEVERITY_INFO, "run_started", "run started: " + source.name());
     }
     if (options_.real_time) {
-      std::this_thread::sleep_until(wall_start + std::chrono::microseconds(frame.utime - first_utime));
+      std::this_thread::sleep_until(wall_start +
+                                    std::chrono::microseconds(frame.utime - first_utime));
     }
     now_utime_ = frame.utime;
     const int dropped = source.dropped_frames();
     if (dropped > status_.dropped_frames) {
       Event(plantscale_event_t::SEVERITY_WARNING, "frame_dropped",
-            std::to_string(dropped - status_.dropped_frames) + " camera frame(s) dropped before frame " +
-                std::to_string(frame.frame_index));
+            std::to_string(dropped - status_.dropped_frames) +
+                " camera frame(s) dropped before frame " + std::to_string(frame.frame_index));
     }
     status_.dropped_frames = dropped;
     status_.faults = source.faults(frame.utime);

@@ -10,11 +10,10 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "engine/sim/simulator.h"
 #include "telemetry/publisher.h"

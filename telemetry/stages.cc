@@ -2,7 +2,6 @@
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
@@ -63,8 +62,8 @@ void ThumbnailStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& p
 void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
   for (const sim::OdometrySample& s : frame.odometry) {
     if (last_utime_ >= 0) {
-      status.distance_m += 0.5 * (s.left_m_s + s.right_m_s) * 1e-6 *
-                           static_cast<double>(s.utime - last_utime_);
+      status.distance_m +=
+          0.5 * (s.left_m_s + s.right_m_s) * 1e-6 * static_cast<double>(s.utime - last_utime_);
     }
     last_utime_ = s.utime;
   }
@@ -84,7 +83,8 @@ void SimTruthStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& pu
   publisher.Publish(channels::kSimTruth,
                     TruthToLcm(frame.truth->grid, frame.utime, frame.frame_index));
   const sim::Pose2& p = frame.truth->pose;
-  publisher.Publish(channels::kSimTruthPose, ToLcm(Pose{p.x_m, p.y_m, p.heading_rad, Eigen::Matrix3d::Zero()}, frame.utime));
+  publisher.Publish(channels::kSimTruthPose,
+                    ToLcm(Pose{p.x_m, p.y_m, p.heading_rad, Eigen::Matrix3d::Zero()}, frame.utime));
 }
 
 }  // namespace plantscale::telemetry

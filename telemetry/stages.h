@@ -21,7 +21,7 @@ class HealthStage : public Stage {
 };
 
 struct ThumbnailOptions {
-  int width_px = 160;    // height keeps the aspect ratio
+  int width_px = 160;  // height keeps the aspect ratio
   int jpeg_quality = 60;
 
   OptionErrors Validate() const;

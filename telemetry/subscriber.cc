@@ -37,9 +37,8 @@ Subscriber::Subscriber(const SubscriberOptions& options) : options_(options) {
 }
 
 void Subscriber::Attach(Transport& transport) {
-  transport.Subscribe(".*", [this](const ReceivedMessage& m) {
-    Feed(m.channel, m.data, m.size, m.recv_utime);
-  });
+  transport.Subscribe(
+      ".*", [this](const ReceivedMessage& m) { Feed(m.channel, m.data, m.size, m.recv_utime); });
 }
 
 TelemetrySnapshot Subscriber::Snapshot() const {
@@ -54,8 +53,8 @@ void Subscriber::NoteProblem(std::string line) {
 // Decodes, counts and applies one message under the lock. Bad bytes and
 // rejected values are counted on the channel and described in `problems`.
 template <typename Message, typename Apply>
-void Subscriber::Take(const std::string& channel, const void* data, size_t size,
-                      int64_t recv_utime, Apply&& apply) {
+void Subscriber::Take(const std::string& channel, const void* data, size_t size, int64_t recv_utime,
+                      Apply&& apply) {
   std::string error;
   std::optional<Message> message = Decode<Message>(channel, data, size, &error);
   std::lock_guard lock(mutex_);
@@ -89,8 +88,7 @@ void Subscriber::Feed(const std::string& channel, const void* data, size_t size,
   if (s.received == 1) NoteProblem("unknown channel " + channel + " (ignored)");
 }
 
-bool Subscriber::Dispatch(const std::string& channel, const void* data, size_t size,
-                          int64_t recv) {
+bool Subscriber::Dispatch(const std::string& channel, const void* data, size_t size, int64_t recv) {
   using namespace channels;
   const int n = options_.history_length;
   TelemetrySnapshot& st = state_;
@@ -132,7 +130,8 @@ bool Subscriber::Dispatch(const std::string& channel, const void* data, size_t s
       st.health_recv_utime = recv;
     });
   } else if (channel == kThumbnail) {
-    Take<plantscale_thumbnail_t>(channel, data, size, recv, [&](const auto& m) { st.thumbnail = m; });
+    Take<plantscale_thumbnail_t>(channel, data, size, recv,
+                                 [&](const auto& m) { st.thumbnail = m; });
   } else if (channel == kOdometry) {
     Take<plantscale_odometry_t>(channel, data, size, recv, [&](const auto& m) { st.odometry = m; });
   } else if (channel == kCommand) {

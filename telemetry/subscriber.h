@@ -11,14 +11,13 @@
 #include <map>
 #include <mutex>
 #include <optional>
-#include <string>
-#include <utility>
-#include <vector>
-
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/common/options.h"
 #include "telemetry/transport.h"
@@ -47,14 +46,14 @@ struct ChannelStats {
 };
 
 struct TelemetrySnapshot {
-  std::optional<GridEstimate> grid;    // PLANTSCALE_GRID
-  std::optional<GridEstimate> truth;   // PLANTSCALE_SIM_TRUTH
+  std::optional<GridEstimate> grid;   // PLANTSCALE_GRID
+  std::optional<GridEstimate> truth;  // PLANTSCALE_SIM_TRUTH
   std::deque<GridEstimate> grid_history;
   std::deque<GridEstimate> truth_history;
   std::optional<Pose> pose;
   std::optional<Pose> truth_pose;
   std::deque<std::pair<int64_t, Pose>> truth_pose_history;
-  std::vector<PlantObservation> plants;  // latest frame's
+  std::vector<PlantObservation> plants;               // latest frame's
   std::map<std::pair<int, int>, MapTileDelta> tiles;  // newest revision per tile
   std::optional<NozzleBar> nozzles;
   std::deque<NozzleShot> shots;

@@ -71,7 +71,8 @@ TEST(Subscriber, MalformedMessagesAreCountedAndNamedNeverThrown) {
   EXPECT_EQ(g.lost, 2);
   EXPECT_EQ(snap.unknown_channel_messages, 1);
   ASSERT_EQ(snap.problems.size(), 4u);
-  EXPECT_NE(snap.problems[0].find("channel PLANTSCALE_GRID"), std::string::npos) << snap.problems[0];
+  EXPECT_NE(snap.problems[0].find("channel PLANTSCALE_GRID"), std::string::npos)
+      << snap.problems[0];
   EXPECT_NE(snap.problems[2].find("state"), std::string::npos) << snap.problems[2];
   EXPECT_NE(snap.problems[3].find("SOMEONE_ELSES"), std::string::npos);
   ASSERT_TRUE(snap.grid.has_value());
@@ -113,7 +114,8 @@ TEST(Subscriber, SnapshotsAreConsistentWhileAnotherThreadFeeds) {
     if (!snap.grid) continue;
     const auto& h = snap.grid_history;
     if (h.back().frame_index != snap.grid->frame_index) ++inconsistent;
-    if (h.back().frame_index - h.front().frame_index != static_cast<int>(h.size()) - 1) ++inconsistent;
+    if (h.back().frame_index - h.front().frame_index != static_cast<int>(h.size()) - 1)
+      ++inconsistent;
   }
   producer.join();
   EXPECT_EQ(inconsistent, 0) << "of " << snapshots << " snapshots";

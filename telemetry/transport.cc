@@ -15,8 +15,8 @@ int64_t WallUtime() {
 OptionErrors LcmTransportOptions::Validate() const {
   OptionErrors errors;
   if (url.find("://") == std::string::npos) {
-    errors.push_back({"url", "must look like provider://address, e.g. udpm:// or memq:// (got '" +
-                                 url + "')"});
+    errors.push_back(
+        {"url", "must look like provider://address, e.g. udpm:// or memq:// (got '" + url + "')"});
   }
   return errors;
 }
