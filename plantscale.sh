@@ -11,6 +11,7 @@ cd "$(dirname "$0")"
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libopencv-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libspdlog-dev
+  liblcm-dev liblcm-bin libglib2.0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )

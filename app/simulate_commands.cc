@@ -8,6 +8,7 @@
 
 #include "app/config_loader.h"
 #include "app/sim_output.h"
+#include "app/telemetry_commands.h"
 
 namespace plantscale::app {
 namespace {
@@ -20,6 +21,7 @@ struct SimulateArgs {
   int every = 1;
   std::string image;
   bool quiet = false;
+  PublishArgs publish;  // simulate only: --publish, --fast, --lcm-url, --log
 };
 
 
@@ -77,7 +79,15 @@ void PrintSummary(const char* command, const SimulateRequest& r, const SimulateS
 
 
 int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* name) {
+  if (args.out.empty() && !args.publish.publish) {
+    throw ConfigError("command line", "--out", "required (or --publish to stream telemetry)");
+  }
+  const PublishArgs& p = args.publish;
+  if (!p.publish && (p.fast || !p.lcm_url.empty() || !p.log.empty())) {
+    throw ConfigError("command line", "--fast/--lcm-url/--log", "only with --publish");
+  }
   const SimulateRequest request = MakeRequest(args, global);
+  if (args.publish.publish) return SimulateAndPublish(request.options, args.publish);
   const SimulateSummary summary = RunSimulation(request, std::cerr);
   PrintSummary(name, request, summary);
   return 0;
@@ -102,7 +112,9 @@ void AddSimulateCommands(CommandRegistry& registry) {
       "simulate", "drive the field simulator and write frames and ground truth",
       [&sim, &global] { return Simulate(sim, global, "simulate"); });
   AddSimulateOptions(simulate, sim);
-  simulate->add_option("--out", sim.out, "output folder")->required();
+  CLI::Option* out = simulate->add_option("--out", sim.out, "output folder (unless --publish)");
+  AddPublishOptions(simulate, sim.publish);
+  out->excludes("--publish");
 
   SimulateArgs& demo = registry.Keep(SimulateArgs{});
   demo.out = "out/demo";

@@ -1,0 +1,226 @@
+#include "app/telemetry_commands.h"
+
+#include <atomic>
+#include <csignal>
+#include <functional>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "app/camera_source.h"
+#include "app/config_loader.h"
+#include "telemetry/log.h"
+#include "telemetry/log_stats.h"
+#include "telemetry/replay.h"
+#include "telemetry/runner.h"
+#include "telemetry/stages.h"
+
+namespace plantscale::app {
+namespace {
+
+namespace tm = plantscale::telemetry;
+
+std::atomic<bool> g_stop{false};
+extern "C" void OnSignal(int) { g_stop = true; }
+
+std::string UrlOrDefault(const std::string& url) {
+  return url.empty() ? tm::LcmTransportOptions{}.url : url;
+}
+
+void PrintPublisherTraffic(const tm::Publisher& publisher, double seconds) {
+  std::cout << "  channel                     sent  dropped(rate,budget)  bytes/msg  kbit/s\n";
+  double total = 0.0;
+  for (const auto& [name, c] : publisher.counters()) {
+    const double kbit_s = seconds > 0 ? 8e-3 * static_cast<double>(c.bytes) / seconds : 0.0;
+    total += kbit_s;
+    std::cout << "  " << std::left << std::setw(26) << name << std::right << std::setw(6) << c.sent
+              << std::setw(10) << c.dropped_rate << "," << std::setw(6) << c.dropped_budget
+              << std::setw(15) << (c.sent ? c.bytes / c.sent : 0) << std::fixed
+              << std::setprecision(1) << std::setw(8) << kbit_s << '\n';
+  }
+  std::cout << "  total " << std::fixed << std::setprecision(1) << total << " kbit/s over "
+            << seconds << " s of run\n";
+}
+
+}  // namespace
+
+void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
+  cmd->add_flag("--publish", a.publish,
+                "publish telemetry over LCM instead of writing files (vehicle runner)");
+  cmd->add_flag("--fast", a.fast, "with --publish: as fast as possible, not in real time");
+  cmd->add_option("--lcm-url", a.lcm_url,
+                  "with --publish: LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
+  cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
+}
+
+namespace {
+
+using SourceFactory =
+    std::function<std::unique_ptr<tm::FrameSource>(tm::Transport& transport, int64_t boot)>;
+
+// The vehicle process: LCM (and the log) around a runner with the stages
+// that exist today; the simulator's truth stage only when `sim_truth`.
+int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
+               const std::string& title) {
+  const int64_t boot = tm::WallUtime();
+  tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
+  std::unique_ptr<tm::LogWriter> log;
+  std::unique_ptr<tm::LoggingTransport> logged;
+  tm::Transport* transport = &lcm;
+  const tm::VehicleRunner* clock = nullptr;
+  if (!args.log.empty()) {
+    log = std::make_unique<tm::LogWriter>(args.log);
+    logged = std::make_unique<tm::LoggingTransport>(
+        lcm, *log, [&clock] { return clock ? clock->now_utime() : tm::WallUtime(); });
+    transport = logged.get();
+  }
+  tm::Publisher publisher(*transport, tm::PublisherOptions{});
+  std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
+  tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
+  clock = &runner;
+  runner.AddStage(std::make_unique<tm::OdometryStage>());
+  runner.AddStage(std::make_unique<tm::HealthStage>());
+  runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}));
+  if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
+  g_stop = false;
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const tm::RunSummary s = runner.Run(*source, &g_stop);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  std::cout << title << ", " << s.frames << " frames (" << s.dropped_frames << " dropped) over "
+            << std::fixed << std::setprecision(1) << s.seconds << " s on "
+            << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
+  PrintPublisherTraffic(publisher, s.seconds);
+  if (log) std::cout << "  log               " << args.log << " (" << log->events() << " events)\n";
+  return 0;
+}
+
+struct RunArgs {
+  PublishArgs publish;
+  CameraSourceOptions camera;
+};
+
+int Run(const RunArgs& a) {
+  return RunVehicle(
+      a.publish,
+      [&a](tm::Transport& t, int64_t boot) {
+        return std::make_unique<CameraFrameSource>(a.camera, t, boot);
+      },
+      false, "plantscale run: camera " + a.camera.camera);
+}
+
+}  // namespace
+
+int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+  sim::Simulator simulator(options);
+  return RunVehicle(
+      args,
+      [&simulator](tm::Transport&, int64_t boot) {
+        return std::make_unique<tm::SimFrameSource>(simulator, boot);
+      },
+      true,
+      "plantscale simulate --publish: preset " + options.preset + ", seed " +
+          std::to_string(options.seed));
+}
+
+namespace {
+
+struct ReplayArgs {
+  std::string log;
+  tm::ReplayOptions options;
+  std::string lcm_url;
+};
+
+int ReportLogError(const std::string& error) {
+  if (error.empty()) return 0;
+  std::cerr << "plantscale: error: " << error << '\n';
+  return 2;
+}
+
+int RunReplay(const ReplayArgs& a) {
+  tm::LcmTransport lcm(UrlOrDefault(a.lcm_url));
+  const tm::ReplaySummary s = tm::Replay(a.log, lcm, a.options);
+  std::cout << "plantscale replay: " << s.published << " of " << s.events_read
+            << " events republished, " << std::fixed << std::setprecision(2) << s.log_seconds
+            << " s of log in " << s.wall_seconds << " s\n";
+  return ReportLogError(s.error);
+}
+
+nlohmann::json TrafficJson(const tm::LogTraffic& t) {
+  nlohmann::json channels = nlohmann::json::object();
+  for (const auto& [name, c] : t.channels) {
+    channels[name] = {{"messages", c.messages},
+                      {"rate_hz", c.rate_hz},
+                      {"kbit_s", c.kbit_s},
+                      {"bytes_per_message", c.messages ? c.bytes / c.messages : 0},
+                      {"max_bytes", c.max_bytes}};
+  }
+  nlohmann::json j = {{"channels", channels},
+                      {"total_kbit_s", t.total_kbit_s},
+                      {"events", t.events},
+                      {"duration_s", t.duration_s}};
+  if (!t.error.empty()) j["error"] = t.error;
+  return j;
+}
+
+int TelemetryStats(const std::string& log, bool json) {
+  const tm::LogTraffic t = tm::MeasureLog(log);
+  if (json) {
+    std::cout << TrafficJson(t).dump(2) << '\n';
+    return ReportLogError(t.error);
+  }
+  std::cout << std::left << std::setw(28) << "channel" << std::right << std::setw(9) << "messages"
+            << std::setw(9) << "rate_hz" << std::setw(10) << "bytes/msg" << std::setw(9)
+            << "kbit_s\n";
+  for (const auto& [name, c] : t.channels) {
+    std::cout << std::left << std::setw(28) << name << std::right << std::setw(9) << c.messages
+              << std::fixed << std::setprecision(2) << std::setw(9) << c.rate_hz << std::setw(10)
+              << (c.messages ? c.bytes / c.messages : 0) << std::setw(9) << c.kbit_s << '\n';
+  }
+  std::cout << "total " << t.total_kbit_s << " kbit/s over " << t.duration_s << " s, " << t.events
+            << " events\n";
+  return ReportLogError(t.error);
+}
+
+}  // namespace
+
+void AddTelemetryCommands(CommandRegistry& registry) {
+  RunArgs& run = registry.Keep(RunArgs{});
+  CLI::App* rc = registry.Add(
+      "run", "the vehicle process on a real camera (V4L2 device or image folder) and LCM odometry",
+      [&run] { return Run(run); });
+  rc->add_option("--camera", run.camera.camera, "/dev/videoN, N, or a folder of images")
+      ->required();
+  rc->add_option("--frame-rate", run.camera.folder_frame_rate_hz,
+                 "frame rate of a folder of images, Hz")
+      ->capture_default_str();
+  rc->add_flag("--fast", run.publish.fast, "folder of images: as fast as possible");
+  rc->add_option("--lcm-url", run.publish.lcm_url,
+                 "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
+  rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
+
+  ReplayArgs& replay = registry.Keep(ReplayArgs{});
+  CLI::App* r = registry.Add("replay", "republish an LCM log with its original timing",
+                             [&replay] { return RunReplay(replay); });
+  r->add_option("LOG", replay.log, "LCM log file")->required();
+  r->add_option("--speed", replay.options.speed, "playback speed factor")->capture_default_str();
+  r->add_option("--start", replay.options.start_s, "skip this many seconds of the log")
+      ->capture_default_str();
+  r->add_option("--channels", replay.options.channels, "regex of channels to republish")
+      ->capture_default_str();
+  r->add_option("--lcm-url", replay.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
+
+  std::string& stats_log = registry.Keep(std::string{});
+  bool& stats_json = registry.Keep(false);
+  CLI::App* s =
+      registry.Add("telemetry-stats", "per-channel messages, rate and bandwidth of an LCM log",
+                   [&stats_log, &stats_json] { return TelemetryStats(stats_log, stats_json); });
+  s->add_option("LOG", stats_log, "LCM log file")->required();
+  s->add_flag("--json", stats_json,
+              "JSON: channels.<name>.{messages, rate_hz, kbit_s}, total_kbit_s");
+}
+
+}  // namespace plantscale::app

@@ -1,0 +1,104 @@
+// Telemetry benchmarks: publish→receive latency of a grid-state message over
+// real LCM (udpm:// by default, needs the multicast route on lo:
+//   sudo ip route add 224.0.0.0/4 dev lo
+// or run inside `unshare -rn` after `ip link set lo up; ip route add
+// 224.0.0.0/4 dev lo`), and the cost of encoding and publishing over memq://.
+// PLANTSCALE_BENCH_LCM_URL overrides the URL. Issue 8 figure: p99 ≤ 10 ms.
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "telemetry/channels.h"
+#include "telemetry/codec.h"
+#include "telemetry/convert.h"
+#include "telemetry/publisher.h"
+#include "telemetry/transport.h"
+
+namespace plantscale::telemetry {
+namespace {
+
+std::string BenchUrl() {
+  const char* url = std::getenv("PLANTSCALE_BENCH_LCM_URL");
+  return url ? url : LcmTransportOptions{}.url;
+}
+
+plantscale_grid_state_t SomeGrid() {
+  GridEstimate e;
+  e.lines_in_view = {0, 1, 2, 3, 4};
+  e.covariance = geometry::Matrix5d::Identity() * 1e-4;
+  return ToLcm(e);
+}
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1))];
+}
+
+// Each iteration publishes one grid state (stamped with the wall clock) and
+// waits for it on a second LCM instance; counters give p50/p99/max in ms.
+void BM_PublishReceiveLatency(benchmark::State& state) {
+  std::unique_ptr<LcmTransport> tx, rx;
+  try {
+    tx = std::make_unique<LcmTransport>(BenchUrl());
+    rx = std::make_unique<LcmTransport>(BenchUrl());
+  } catch (const TransportError& e) {
+    state.SkipWithError(e.what());  // says when the multicast route is missing
+    return;
+  }
+  std::vector<double> latencies_ms;
+  std::atomic<int64_t> received{0};
+  rx->Subscribe(channels::kGrid, [&](const ReceivedMessage& m) {
+    const auto msg = Decode<plantscale_grid_state_t>(m.channel, m.data, m.size);
+    if (msg) latencies_ms.push_back(1e-3 * static_cast<double>(WallUtime() - msg->utime));
+    ++received;
+  });
+  plantscale_grid_state_t grid = SomeGrid();
+  int64_t sent = 0;
+  for (auto _ : state) {
+    grid.utime = WallUtime();
+    grid.seq = sent++;
+    const Bytes b = Encode(grid);
+    tx->Publish(channels::kGrid, b.data(), b.size());
+    while (received < sent && rx->Handle(50)) {
+    }
+  }
+  state.counters["p50_ms"] = Percentile(latencies_ms, 0.50);
+  state.counters["p99_ms"] = Percentile(latencies_ms, 0.99);
+  state.counters["max_ms"] = Percentile(latencies_ms, 1.0);
+  state.counters["lost"] = static_cast<double>(sent - received);
+  state.counters["bytes"] = static_cast<double>(Encode(grid).size());
+}
+BENCHMARK(BM_PublishReceiveLatency)->Iterations(2000)->UseRealTime();
+
+// Encoding plus the publisher's rate and budget bookkeeping over memq://.
+void BM_PublisherGridState(benchmark::State& state) {
+  LcmTransport memq("memq://");
+  PublisherOptions options;
+  options.channels.clear();  // no rate limit: measure the work per message
+  options.budget_kbit_s = 1e9;
+  Publisher publisher(memq, options);
+  plantscale_grid_state_t grid = SomeGrid();
+  int64_t utime = 0;
+  for (auto _ : state) {
+    grid.utime = (utime += 80'000);
+    benchmark::DoNotOptimize(publisher.Publish(channels::kGrid, grid));
+    if (utime % 8'000'000 == 0)
+      while (memq.Handle(0)) {
+      }
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_PublisherGridState);
+
+}  // namespace
+}  // namespace plantscale::telemetry
+
+BENCHMARK_MAIN();

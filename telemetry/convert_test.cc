@@ -1,0 +1,135 @@
+#include "telemetry/convert.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "engine/common/options.h"
+#include "telemetry/codec.h"
+
+namespace plantscale::telemetry {
+namespace {
+
+GridEstimate SomeEstimate() {
+  GridEstimate e;
+  e.utime = 1'700'000'000'123'456;
+  e.frame_index = 42;
+  e.state = {0.012, 0.31, -0.02, 0.48, 0.44};
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c) e.covariance(r, c) = 1e-4 * (r + 1) + 1e-6 * (c + 1) * (r + 2);
+  e.mode = FilterMode::kTracking;
+  e.lines_in_view = {0, 1, 2, 3};
+  e.observations = 17;
+  e.validated = 15;
+  e.innovation_nis = 4.25;
+  e.innovation_rms_px = 1.5;
+  return e;
+}
+
+TEST(Convert, GridStateRoundTripsThroughBytesExactly) {
+  const GridEstimate e = SomeEstimate();
+  const Bytes bytes = Encode(ToLcm(e));
+  const auto m = Decode<plantscale_grid_state_t>("PLANTSCALE_GRID", bytes.data(), bytes.size());
+  ASSERT_TRUE(m.has_value());
+  const GridEstimate back = FromLcm(*m);
+  // Doubles travel bit for bit: tolerance 0.
+  EXPECT_EQ((back.state.AsVector() - e.state.AsVector()).norm(), 0.0);
+  EXPECT_EQ((back.covariance - e.covariance).norm(), 0.0);
+  EXPECT_EQ(back.covariance(1, 3), e.covariance(1, 3));  // row-major, not transposed
+  EXPECT_EQ(back.mode, FilterMode::kTracking);
+  EXPECT_EQ(back.lines_in_view, e.lines_in_view);
+  EXPECT_EQ(back.validated, 15);
+  EXPECT_EQ(back.utime, e.utime);
+  EXPECT_DOUBLE_EQ(back.innovation_nis, 4.25);
+}
+
+TEST(Convert, TruthIsMarkedAsTruthWithZeroCovariance) {
+  geometry::GridState truth{0.05, 0.2, 0.01, 0.475, 0.45};
+  const GridEstimate e = FromLcm(TruthToLcm(truth, 80'000, 1));
+  EXPECT_EQ(e.mode, FilterMode::kTruth);
+  EXPECT_EQ(e.covariance.norm(), 0.0);
+  EXPECT_DOUBLE_EQ(e.state.offset_m, 0.05);
+}
+
+TEST(Convert, NanInGridStateIsRejectedNamingTheField) {
+  plantscale_grid_state_t m = ToLcm(SomeEstimate());
+  m.covariance[7] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    FromLcm(m);
+    FAIL() << "expected DataError";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("covariance"), std::string::npos) << e.what();
+  }
+  m = ToLcm(SomeEstimate());
+  m.filter_mode = 9;
+  EXPECT_THROW(FromLcm(m), DataError);
+}
+
+TEST(Convert, PlantsRoundTrip) {
+  PlantObservation p;
+  p.id = 7;
+  p.kind = PlantKind::kWeed;
+  p.position_m = {1.5, 12.25};
+  p.covariance << 1e-4, 2e-5, 2e-5, 3e-4;
+  p.size_m2 = 0.004;
+  p.sprayed = true;
+  p.why = plantscale_plant_t::WHY_OUTSIDE_REGION;
+  p.distance_to_crop_m = 0.12;
+  const Bytes bytes = Encode(ToLcm({p, p}, 5, 3));
+  const auto m = Decode<plantscale_plant_list_t>("P", bytes.data(), bytes.size());
+  ASSERT_TRUE(m.has_value());
+  ASSERT_EQ(m->plants.size(), 2u);
+  const PlantObservation back = FromLcm(m->plants[1]);
+  EXPECT_EQ(back.kind, PlantKind::kWeed);
+  EXPECT_EQ((back.position_m - p.position_m).norm(), 0.0);
+  EXPECT_EQ(back.covariance(0, 1), 2e-5);
+  EXPECT_TRUE(back.sprayed);
+  EXPECT_EQ(back.why, plantscale_plant_t::WHY_OUTSIDE_REGION);
+}
+
+TEST(Convert, MapTileRoundTripsCompressed) {
+  MapTileDelta t;
+  t.tile_x = 3;
+  t.tile_y = -2;
+  t.revision = 5;
+  t.width = 64;
+  t.height = 64;
+  t.cells.assign(64 * 64, plantscale_map_tile_t::CELL_SOIL);
+  for (int i = 100; i < 140; ++i)
+    t.cells[static_cast<size_t>(i)] = plantscale_map_tile_t::CELL_CROP;
+  const plantscale_map_tile_t m = ToLcm(t, 1);
+  EXPECT_LT(m.cells.size(), t.cells.size() / 20);  // mostly soil: > 20x smaller
+  const MapTileDelta back = FromLcm(m);
+  EXPECT_EQ(back.cells, t.cells);
+  EXPECT_EQ(back.tile_y, -2);
+  EXPECT_EQ(back.revision, 5);
+}
+
+TEST(Convert, NozzlesAndHealthRoundTrip) {
+  NozzleBar bar;
+  bar.open = {true, false, true};
+  bar.fault = {0, plantscale_nozzles_t::FAULT_STUCK, 0};
+  bar.failsafe = false;
+  bar.shots.push_back({2, 100, 180, {0.3, 4.0}, 11});
+  const NozzleBar b = FromLcm(ToLcm(bar, 1));
+  EXPECT_EQ(b.open, bar.open);
+  EXPECT_EQ(b.fault, bar.fault);
+  ASSERT_EQ(b.shots.size(), 1u);
+  EXPECT_EQ(b.shots[0].close_utime, 180);
+  EXPECT_DOUBLE_EQ(b.shots[0].position_m.y(), 4.0);
+
+  Health h;
+  h.source = "simulate";
+  h.frames = 120;
+  h.dropped_frames = 2;
+  h.faults = {"camera: no frame for 0.3 s"};
+  const plantscale_health_t hm = ToLcm(h, 5);
+  EXPECT_EQ(hm.protocol_version, plantscale_health_t::PROTOCOL_VERSION);
+  const Health back = FromLcm(hm);
+  EXPECT_EQ(back.faults, h.faults);
+  EXPECT_EQ(back.dropped_frames, 2);
+}
+
+}  // namespace
+}  // namespace plantscale::telemetry

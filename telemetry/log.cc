@@ -1,0 +1,66 @@
+#include "telemetry/log.h"
+
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <system_error>
+
+namespace plantscale::telemetry {
+
+LogWriter::LogWriter(const std::filesystem::path& path)
+    : path_(path), file_(std::make_unique<lcm::LogFile>(path.string(), "w")) {
+  if (!file_->good()) throw LogError(path.string() + ": cannot create the LCM log");
+}
+
+LogWriter::~LogWriter() = default;
+
+void LogWriter::Write(const std::string& channel, const void* data, size_t size, int64_t utime) {
+  lcm::LogEvent event;
+  event.eventnum = events_;
+  event.timestamp = utime;
+  event.channel = channel;
+  event.datalen = static_cast<int32_t>(size);
+  event.data = const_cast<void*>(data);  // lcm::LogEvent is not const-correct; only read
+  if (file_->writeEvent(&event) != 0 || std::fflush(file_->getFilePtr()) != 0) {
+    throw LogError(path_.string() + ": write failed after " + std::to_string(events_) + " events");
+  }
+  ++events_;
+}
+
+LogReader::LogReader(const std::filesystem::path& path)
+    : path_(path), file_(std::make_unique<lcm::LogFile>(path.string(), "r")) {
+  std::error_code ec;
+  size_ = static_cast<int64_t>(std::filesystem::file_size(path, ec));
+  if (!file_->good() || ec || std::filesystem::is_directory(path)) {
+    throw LogError(path.string() + ": cannot open the LCM log");
+  }
+}
+
+LogReader::~LogReader() = default;
+
+std::optional<LogEvent> LogReader::Next() {
+  if (done_) return std::nullopt;
+  const int64_t offset = std::ftell(file_->getFilePtr());
+  const lcm::LogEvent* e = file_->readNextEvent();
+  if (!e) {
+    done_ = true;
+    if (offset < size_) {
+      error_ = path_.string() + ": " +
+               (events_read_ == 0 ? std::string("not an LCM log, or its first event is cut off")
+                                  : std::string("event cut off or corrupt")) +
+               " at byte offset " + std::to_string(offset) + " of " + std::to_string(size_) + " (" +
+               std::to_string(events_read_) + " whole events read before it)";
+    }
+    return std::nullopt;
+  }
+  ++events_read_;
+  const auto* bytes = static_cast<const uint8_t*>(e->data);
+  return LogEvent{e->eventnum, e->timestamp, e->channel,
+                  std::vector<uint8_t>(bytes, bytes + e->datalen)};
+}
+
+void LoggingTransport::Publish(const std::string& channel, const void* data, size_t size) {
+  inner_.Publish(channel, data, size);
+  log_.Write(channel, data, size, clock_());
+}
+
+}  // namespace plantscale::telemetry

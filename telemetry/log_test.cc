@@ -1,0 +1,130 @@
+#include "telemetry/log.h"
+
+#include <gtest/gtest.h>
+#include <lcm/eventlog.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "telemetry/log_stats.h"
+#include "telemetry/testing.h"
+
+namespace plantscale::telemetry {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempLog(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("plantscale_log_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+// Events 0..n-1 on two channels, 10 ms apart, payload i+1 bytes of value i.
+void WriteLog(const fs::path& path, int n) {
+  LogWriter w(path);
+  for (int i = 0; i < n; ++i) {
+    const std::string payload(static_cast<size_t>(i + 1), static_cast<char>(i));
+    w.Write(i % 2 ? "PLANTSCALE_B" : "PLANTSCALE_A", payload.data(), payload.size(),
+            1'000'000 + 10'000LL * i);
+  }
+}
+
+TEST(Log, WrittenLogIsReadByLiblcmsOwnReader) {
+  const fs::path path = TempLog("plain.lcmlog");
+  WriteLog(path, 5);
+  lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "r");
+  ASSERT_NE(log, nullptr);
+  int n = 0;
+  while (lcm_eventlog_event_t* e = lcm_eventlog_read_next_event(log)) {
+    EXPECT_EQ(e->timestamp, 1'000'000 + 10'000LL * n);
+    EXPECT_EQ(std::string(e->channel, static_cast<size_t>(e->channellen)),
+              n % 2 ? "PLANTSCALE_B" : "PLANTSCALE_A");
+    EXPECT_EQ(e->datalen, n + 1);
+    EXPECT_EQ(static_cast<const char*>(e->data)[0], static_cast<char>(n));
+    lcm_eventlog_free_event(e);
+    ++n;
+  }
+  lcm_eventlog_destroy(log);
+  EXPECT_EQ(n, 5);
+}
+
+TEST(Log, TruncatedLogKeepsWholeEventsAndNamesFileAndOffset) {
+  const fs::path path = TempLog("cut.lcmlog");
+  WriteLog(path, 4);
+  const auto full = static_cast<int64_t>(fs::file_size(path));
+  fs::resize_file(path, static_cast<uintmax_t>(full - 2));  // cut into the last event
+  LogReader r(path);
+  int n = 0;
+  while (r.Next()) ++n;
+  EXPECT_EQ(n, 3);
+  // Each event: 28-byte header + 12-char channel + payload (1..4 bytes).
+  const int64_t offset_of_fourth = 3 * (28 + 12) + 1 + 2 + 3;
+  EXPECT_NE(r.error().find(path.string()), std::string::npos) << r.error();
+  EXPECT_NE(r.error().find("byte offset " + std::to_string(offset_of_fourth)), std::string::npos)
+      << r.error();
+}
+
+TEST(Log, FileThatIsNotALogIsReportedNotCrashed) {
+  const fs::path path = TempLog("not_a_log.txt");
+  std::ofstream(path) << "this is a text file, not an LCM event log\n";
+  LogReader r(path);
+  EXPECT_FALSE(r.Next().has_value());
+  EXPECT_NE(r.error().find("not an LCM log"), std::string::npos) << r.error();
+  EXPECT_THROW(LogReader(TempLog("missing.lcmlog")), LogError);
+  EXPECT_THROW(LogWriter(TempLog("no_such_dir") / "x.lcmlog"), LogError);
+}
+
+TEST(Log, LoggingTransportLogsWhatItPublishesAtItsClock) {
+  const fs::path path = TempLog("logged.lcmlog");
+  {
+    testing::RecordingTransport inner;
+    LogWriter w(path);
+    int64_t now = 5'000'000;
+    LoggingTransport t(inner, w, [&] { return now; });
+    t.Publish("PLANTSCALE_X", "ab", 2);
+    now += 500'000;
+    t.Publish("PLANTSCALE_X", "cd", 2);
+    EXPECT_EQ(inner.sent.size(), 2u);
+  }
+  LogReader r(path);
+  const auto a = r.Next();
+  const auto b = r.Next();
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(b->utime - a->utime, 500'000);
+  EXPECT_EQ(std::string(b->data.begin(), b->data.end()), "cd");
+}
+
+TEST(LogStats, RatesAndBandwidthPerChannel) {
+  const fs::path path = TempLog("stats.lcmlog");
+  {
+    LogWriter w(path);
+    const std::string payload(1000, 'x');
+    for (int i = 0; i <= 100; ++i) {  // 101 events over exactly 10 s
+      w.Write(i % 4 ? "A" : "B", payload.data(), payload.size(), 100'000LL * i);
+    }
+  }
+  const LogTraffic t = MeasureLog(path);
+  EXPECT_TRUE(t.error.empty());
+  EXPECT_DOUBLE_EQ(t.duration_s, 10.0);
+  EXPECT_EQ(t.channels.at("B").messages, 26);
+  EXPECT_NEAR(t.channels.at("B").rate_hz, 2.6, 1e-9);
+  // 101 kB over 10 s = 80.8 kbit/s.
+  EXPECT_NEAR(t.total_kbit_s, 80.8, 1e-9);
+  EXPECT_NEAR(t.channels.at("A").kbit_s + t.channels.at("B").kbit_s, 80.8, 1e-9);
+}
+
+TEST(Log, LcmLogplayerToolIsInstalled) {
+  if (std::system("command -v lcm-logplayer > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "lcm-logplayer not on PATH (liblcm-bin not installed)";
+  }
+  // lcm-logplayer --help prints usage and exits 1; 127 would mean it cannot run.
+  const int status = std::system("lcm-logplayer --help > /dev/null 2>&1");
+  EXPECT_NE(WEXITSTATUS(status), 127);
+}
+
+}  // namespace
+}  // namespace plantscale::telemetry

@@ -1,0 +1,80 @@
+#include "telemetry/runner.h"
+
+#include <chrono>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
+#include <thread>
+
+#include "telemetry/channels.h"
+
+namespace plantscale::telemetry {
+
+SimFrameSource::SimFrameSource(sim::Simulator& simulator, int64_t epoch_utime)
+    : simulator_(simulator), epoch_utime_(epoch_utime) {}
+
+bool SimFrameSource::Next(VehicleFrame& frame) {
+  if (!simulator_.Next(frame_)) return false;
+  truth_ = frame_.truth;
+  frame.utime = epoch_utime_ + frame_.truth.utime;
+  frame.frame_index = frame_.truth.index;
+  frame.image = frame_.rendered.image;
+  frame.odometry = frame_.odometry;
+  for (sim::OdometrySample& s : frame.odometry) s.utime += epoch_utime_;
+  frame.truth = &truth_;
+  return true;
+}
+
+VehicleRunner::VehicleRunner(Publisher& publisher, const RunnerOptions& options, int64_t boot_utime)
+    : publisher_(publisher), options_(options), now_utime_(boot_utime) {
+  status_.boot_utime = boot_utime;
+}
+
+void VehicleRunner::AddStage(std::unique_ptr<Stage> stage) { stages_.push_back(std::move(stage)); }
+
+void VehicleRunner::Event(int8_t severity, const std::string& kind, const std::string& text) {
+  plantscale_event_t e{};
+  e.utime = now_utime_;
+  e.severity = severity;
+  e.kind = kind;
+  e.text = text;
+  publisher_.Publish(channels::kEvents, e);
+}
+
+RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop) {
+  using Clock = std::chrono::steady_clock;
+  status_.source = source.name();
+  VehicleFrame frame;
+  RunSummary summary;
+  int64_t first_utime = -1;
+  Clock::time_point wall_start;
+  while ((!stop || !stop->load()) && source.Next(frame)) {
+    if (first_utime < 0) {
+      first_utime = frame.utime;
+      wall_start = Clock::now();
+      now_utime_ = frame.utime;
+      Event(plantscale_event_t::SEVERITY_INFO, "run_started", "run started: " + source.name());
+    }
+    if (options_.real_time) {
+      std::this_thread::sleep_until(wall_start +
+                                    std::chrono::microseconds(frame.utime - first_utime));
+    }
+    now_utime_ = frame.utime;
+    const int dropped = source.dropped_frames();
+    if (dropped > status_.dropped_frames) {
+      Event(plantscale_event_t::SEVERITY_WARNING, "frame_dropped",
+            std::to_string(dropped - status_.dropped_frames) +
+                " camera frame(s) dropped before frame " + std::to_string(frame.frame_index));
+    }
+    status_.dropped_frames = dropped;
+    status_.faults = source.faults(frame.utime);
+    ++status_.frames;
+    for (const std::unique_ptr<Stage>& stage : stages_) stage->Process(frame, status_, publisher_);
+    summary.seconds = 1e-6 * static_cast<double>(frame.utime - first_utime);
+  }
+  Event(plantscale_event_t::SEVERITY_INFO, "run_finished",
+        "run finished after " + std::to_string(status_.frames) + " frames");
+  summary.frames = status_.frames;
+  summary.dropped_frames = status_.dropped_frames;
+  return summary;
+}
+
+}  // namespace plantscale::telemetry

@@ -1,0 +1,104 @@
+#pragma once
+// The vehicle-side loop: takes frames from a FrameSource (the simulator
+// today; a camera for `plantscale run` later), paces them in real time or as
+// fast as possible, and passes each frame through a list of Stages that
+// publish what they know. The engine plugs in the same way: the grid tracker
+// (issue 5) becomes a Stage publishing PLANTSCALE_GRID, classification and
+// treatment (issue 6) Stages publishing plants, map tiles and nozzles, and
+// they report fail-safe state and faults through RunStatus.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/sim/simulator.h"
+#include "telemetry/publisher.h"
+
+namespace plantscale::telemetry {
+
+struct VehicleFrame {
+  int64_t utime = 0;  // capture time on the message clock (epoch microseconds)
+  int frame_index = 0;
+  cv::Mat image;
+  std::vector<sim::OdometrySample> odometry;  // since the previous frame, utime as above
+  const sim::FrameTruth* truth = nullptr;     // simulator only: never feed it to the engine
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual bool Next(VehicleFrame& frame) = 0;  // false at the end
+  virtual int dropped_frames() const = 0;      // lost so far by the source
+  virtual std::string name() const = 0;        // "simulate", "run"
+  // Faults of the source (camera, odometry input), reported in the heartbeat.
+  virtual std::vector<std::string> faults(int64_t /*now_utime*/) const { return {}; }
+};
+
+// The simulator as a frame source; times are shifted to `epoch_utime`.
+class SimFrameSource : public FrameSource {
+ public:
+  SimFrameSource(sim::Simulator& simulator, int64_t epoch_utime);
+  bool Next(VehicleFrame& frame) override;
+  int dropped_frames() const override { return simulator_.dropped_frames(); }
+  std::string name() const override { return "simulate"; }
+
+ private:
+  sim::Simulator& simulator_;
+  int64_t epoch_utime_;
+  sim::SimFrame frame_;
+  sim::FrameTruth truth_;
+};
+
+// What the stages know about the run; stages update it, HealthStage sends it.
+struct RunStatus {
+  std::string source;
+  int64_t boot_utime = 0;
+  int frames = 0;
+  int dropped_frames = 0;
+  double distance_m = 0.0;
+  bool failsafe = true;  // nozzles closed until a treatment stage says otherwise
+  std::vector<std::string> faults;
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  virtual std::string name() const = 0;
+  virtual void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) = 0;
+};
+
+struct RunnerOptions {
+  bool real_time = true;  // false: as fast as possible (--fast)
+};
+
+struct RunSummary {
+  int frames = 0;
+  int dropped_frames = 0;
+  double seconds = 0.0;  // message time from first to last frame
+};
+
+class VehicleRunner {
+ public:
+  VehicleRunner(Publisher& publisher, const RunnerOptions& options, int64_t boot_utime);
+  void AddStage(std::unique_ptr<Stage> stage);
+  // Runs until the source ends or `stop` becomes true. Publishes run_started,
+  // frame_dropped and run_finished events.
+  RunSummary Run(FrameSource& source, const std::atomic<bool>* stop = nullptr);
+  // The message clock: utime of the frame being processed (for the log).
+  int64_t now_utime() const { return now_utime_; }
+
+ private:
+  void Event(int8_t severity, const std::string& kind, const std::string& text);
+
+  Publisher& publisher_;
+  RunnerOptions options_;
+  RunStatus status_;
+  std::vector<std::unique_ptr<Stage>> stages_;
+  int64_t now_utime_;
+};
+
+}  // namespace plantscale::telemetry

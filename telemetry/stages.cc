@@ -1,0 +1,90 @@
+#include "telemetry/stages.h"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
+#include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
+
+#include "telemetry/channels.h"
+#include "telemetry/convert.h"
+
+namespace plantscale::telemetry {
+
+void HealthStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  constexpr size_t kWindow = 25;
+  frame_utimes_.push_back(frame.utime);
+  while (frame_utimes_.size() > kWindow) frame_utimes_.pop_front();
+  Health h;
+  h.source = status.source;
+  h.boot_utime = status.boot_utime;
+  const double span_s = 1e-6 * static_cast<double>(frame_utimes_.back() - frame_utimes_.front());
+  h.frame_rate_hz = span_s > 0 ? static_cast<double>(frame_utimes_.size() - 1) / span_s : 0.0;
+  h.frames = status.frames;
+  h.dropped_frames = status.dropped_frames;
+  h.distance_m = status.distance_m;
+  h.failsafe = status.failsafe;
+  h.faults = status.faults;
+  h.telemetry_dropped = publisher.total_dropped();
+  publisher.Publish(channels::kHealth, ToLcm(h, frame.utime));
+}
+
+OptionErrors ThumbnailOptions::Validate() const {
+  OptionErrors errors;
+  RequireInRange(errors, "width_px", width_px, 16, 1024);
+  RequireInRange(errors, "jpeg_quality", jpeg_quality, 1, 100);
+  return errors;
+}
+
+ThumbnailStage::ThumbnailStage(const ThumbnailOptions& options) : options_(options) {
+  ThrowIfInvalid("thumbnail options", options_.Validate());
+}
+
+void ThumbnailStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& publisher) {
+  if (frame.image.empty() || !publisher.Due(channels::kThumbnail, frame.utime)) return;
+  const double scale = static_cast<double>(options_.width_px) / frame.image.cols;
+  cv::Mat small;
+  cv::resize(frame.image, small, cv::Size(), scale, scale, cv::INTER_AREA);
+  plantscale_thumbnail_t m{};
+  m.utime = frame.utime;
+  m.frame_index = frame.frame_index;
+  m.source_width = static_cast<int16_t>(frame.image.cols);
+  m.source_height = static_cast<int16_t>(frame.image.rows);
+  m.width = static_cast<int16_t>(small.cols);
+  m.height = static_cast<int16_t>(small.rows);
+  cv::imencode(".jpg", small, m.jpeg, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality});
+  m.jpeg_size = static_cast<int32_t>(m.jpeg.size());
+  // Blobs stay empty until segmentation (issue 4) runs as a stage before
+  // this one and hands its blob list over.
+  m.num_blobs = 0;
+  publisher.Publish(channels::kThumbnail, std::move(m));
+}
+
+void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  for (const sim::OdometrySample& s : frame.odometry) {
+    if (last_utime_ >= 0) {
+      status.distance_m +=
+          0.5 * (s.left_m_s + s.right_m_s) * 1e-6 * static_cast<double>(s.utime - last_utime_);
+    }
+    last_utime_ = s.utime;
+  }
+  if (frame.odometry.empty()) return;
+  const sim::OdometrySample& latest = frame.odometry.back();
+  plantscale_odometry_t m{};
+  m.utime = latest.utime;
+  m.left_m_s = latest.left_m_s;
+  m.right_m_s = latest.right_m_s;
+  m.distance_m = status.distance_m;
+  m.valid = 1;
+  publisher.Publish(channels::kOdometry, m);
+}
+
+void SimTruthStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& publisher) {
+  if (!frame.truth) return;
+  publisher.Publish(channels::kSimTruth,
+                    TruthToLcm(frame.truth->grid, frame.utime, frame.frame_index));
+  const sim::Pose2& p = frame.truth->pose;
+  publisher.Publish(channels::kSimTruthPose,
+                    ToLcm(Pose{p.x_m, p.y_m, p.heading_rad, Eigen::Matrix3d::Zero()}, frame.utime));
+}
+
+}  // namespace plantscale::telemetry

@@ -1,0 +1,60 @@
+#pragma once
+// The stages that publish what exists today: heartbeat, camera thumbnails,
+// odometry, and the simulator's ground truth on its own channels.
+
+#include <deque>
+
+#include "engine/common/options.h"
+#include "telemetry/runner.h"
+
+namespace plantscale::telemetry {
+
+// Heartbeat (PLANTSCALE_HEALTH, every frame offered; the publisher's rate
+// sends 2 Hz). Frame rate over the last `window` frames of message time.
+class HealthStage : public Stage {
+ public:
+  std::string name() const override { return "health"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+
+ private:
+  std::deque<int64_t> frame_utimes_;
+};
+
+struct ThumbnailOptions {
+  int width_px = 160;  // height keeps the aspect ratio
+  int jpeg_quality = 60;
+
+  OptionErrors Validate() const;
+};
+
+// Downscaled JPEG of the camera frame (PLANTSCALE_THUMBNAIL, 2 Hz). Encodes
+// only when the channel's rate slot is due.
+class ThumbnailStage : public Stage {
+ public:
+  explicit ThumbnailStage(const ThumbnailOptions& options);
+  std::string name() const override { return "thumbnail"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+
+ private:
+  ThumbnailOptions options_;
+};
+
+// Latest wheel odometry with the integrated distance (PLANTSCALE_ODOMETRY).
+class OdometryStage : public Stage {
+ public:
+  std::string name() const override { return "odometry"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+
+ private:
+  int64_t last_utime_ = -1;
+};
+
+// Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on
+// PLANTSCALE_SIM_TRUTH_POSE; never on the tracker's channels.
+class SimTruthStage : public Stage {
+ public:
+  std::string name() const override { return "sim_truth"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+};
+
+}  // namespace plantscale::telemetry

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Command-line contract of the telemetry commands (issue 8): a simulated run
+# published over memq:// with a log, telemetry-stats on it within the
+# 250 kbit/s budget, replay, lcm-logplayer reading the log unchanged, and bad
+# input (not a log, a truncated log, options without --publish) exiting 2
+# with a message naming the file and offset.
+set -uo pipefail
+plantscale="$1"
+work="$2"
+rm -rf "$work" && mkdir -p "$work"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+expect() {  # expect CODE PATTERN -- command...
+  local code="$1" pattern="$2"
+  shift 3
+  local output status
+  output=$("$@" 2>&1)
+  status=$?
+  if [[ $status -ne $code ]]; then
+    fail "'$*' exited $status, expected $code"; echo "$output" | tail -5; return
+  fi
+  if ! grep -qE -- "$pattern" <<<"$output"; then
+    fail "'$*' output lacks /$pattern/"; echo "$output" | tail -5; return
+  fi
+  echo "ok: $* -> $status"
+}
+
+log="$work/run.lcmlog"
+expect 0 "PLANTSCALE_SIM_TRUTH +[0-9]+" -- "$plantscale" simulate --preset testbed --length-m 4 --seed 2 \
+  --publish --fast --lcm-url memq:// --log "$log"
+"$plantscale" telemetry-stats "$log" --json >"$work/stats.json" || fail "telemetry-stats exited $?"
+for key in '"total_kbit_s"' '"PLANTSCALE_SIM_TRUTH"' '"PLANTSCALE_THUMBNAIL"' '"PLANTSCALE_HEALTH"' \
+  '"messages"' '"rate_hz"' '"kbit_s"'; do
+  grep -q "$key" "$work/stats.json" || fail "stats.json lacks $key"
+done
+total=$(grep -oE '"total_kbit_s": [0-9.e+-]+' "$work/stats.json" | awk '{print $2}')
+awk -v t="$total" 'BEGIN { exit !(t > 10 && t <= 250) }' || fail "total_kbit_s $total not in (10, 250]"
+echo "ok: total_kbit_s $total <= 250"
+grep -q '"PLANTSCALE_GRID"' "$work/stats.json" && fail "truth leaked onto the tracker channel"
+
+expect 0 "republished" -- "$plantscale" replay "$log" --speed 100 --lcm-url memq:// --channels 'PLANTSCALE_HEALTH'
+if command -v lcm-logplayer >/dev/null; then
+  expect 0 "PLANTSCALE_SIM_TRUTH" -- lcm-logplayer -v -s 1000 -l memq:// "$log"
+else
+  echo "skip: lcm-logplayer not installed (liblcm-bin)"
+fi
+
+printf 'not a log at all\n' >"$work/text.lcmlog"
+expect 2 "text.lcmlog: not an LCM log.*byte offset 0" -- "$plantscale" telemetry-stats "$work/text.lcmlog" --json
+size=$(stat -c %s "$log")
+head -c $((size - 7)) "$log" >"$work/cut.lcmlog"
+expect 2 "cut.lcmlog: event cut off or corrupt at byte offset [0-9]+" -- "$plantscale" telemetry-stats "$work/cut.lcmlog"
+expect 2 "cut.lcmlog: event cut off" -- "$plantscale" replay "$work/cut.lcmlog" --speed 1000 --lcm-url memq://
+expect 1 "absent.lcmlog: cannot open" -- "$plantscale" replay "$work/absent.lcmlog" --lcm-url memq://
+expect 2 "speed: must be > 0" -- "$plantscale" replay "$log" --speed 0 --lcm-url memq://
+expect 2 "only with --publish" -- "$plantscale" simulate --preset testbed --fast --out "$work/x"
+expect 2 "excludes" -- "$plantscale" simulate --preset testbed --publish --out "$work/x"
+expect 1 "LCM URL 'nosuch://': cannot start" -- "$plantscale" simulate --preset testbed --publish --lcm-url nosuch://
+
+# plantscale run on a folder of images (frames written by simulate).
+"$plantscale" simulate --preset testbed --length-m 1 --seed 4 --quiet --out "$work/frames_run" >/dev/null ||
+  fail "simulate --out for run's frames"
+expect 0 "plantscale run: camera .*frames" -- "$plantscale" run --camera "$work/frames_run/frames" --fast \
+  --lcm-url memq:// --log "$work/run_camera.lcmlog"
+"$plantscale" telemetry-stats "$work/run_camera.lcmlog" >"$work/run_camera.txt"
+grep -q "^PLANTSCALE_THUMBNAIL" "$work/run_camera.txt" || fail "run published no thumbnails"
+grep -q "^PLANTSCALE_HEALTH" "$work/run_camera.txt" || fail "run published no heartbeat"
+grep -q "SIM_TRUTH" "$work/run_camera.txt" && fail "run published simulator truth"
+expect 1 "video99: cannot open the camera" -- "$plantscale" run --camera /dev/video99 --lcm-url memq://
+mkdir -p "$work/empty"
+expect 1 "empty: no images" -- "$plantscale" run --camera "$work/empty" --lcm-url memq://
+
+echo "$failures failure(s)"
+exit $((failures > 0))
