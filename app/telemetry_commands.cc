@@ -82,7 +82,10 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   clock = &runner;
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
-  runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}));
+  auto segmentation = std::make_unique<tm::SegmentationStage>();
+  const tm::SegmentationStage* blobs = segmentation.get();
+  runner.AddStage(std::move(segmentation));
+  runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
   if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
   g_stop = false;
   std::signal(SIGINT, OnSignal);

@@ -41,7 +41,10 @@ Published RunFast() {
   VehicleRunner runner(publisher, RunnerOptions{false}, 1'700'000'000'000'000);
   runner.AddStage(std::make_unique<HealthStage>());
   runner.AddStage(std::make_unique<OdometryStage>());
-  runner.AddStage(std::make_unique<ThumbnailStage>(ThumbnailOptions{80, 60}));
+  auto segmentation = std::make_unique<SegmentationStage>();
+  const SegmentationStage* blobs = segmentation.get();
+  runner.AddStage(std::move(segmentation));
+  runner.AddStage(std::make_unique<ThumbnailStage>(ThumbnailOptions{80, 60}, blobs));
   runner.AddStage(std::make_unique<SimTruthStage>());
   Published p;
   p.summary = runner.Run(source);
@@ -70,6 +73,17 @@ TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {
   const cv::Mat jpeg = cv::imdecode(p.snap.thumbnail->jpeg, cv::IMREAD_UNCHANGED);
   EXPECT_EQ(jpeg.cols, 80);
   EXPECT_EQ(jpeg.rows, 60);
+  // The segmentation stage's blobs ride along, in full-size pixels.
+  const plantscale_thumbnail_t& th = *p.snap.thumbnail;
+  ASSERT_GT(th.num_blobs, 0);
+  ASSERT_EQ(th.blobs.size(), static_cast<size_t>(th.num_blobs));
+  for (const plantscale_blob_t& b : th.blobs) {
+    EXPECT_GE(b.u, 0.0f);
+    EXPECT_LE(b.u, static_cast<float>(th.source_width));
+    EXPECT_GE(b.v, 0.0f);
+    EXPECT_LE(b.v, static_cast<float>(th.source_height));
+    EXPECT_GE(b.area_px, 1);
+  }
   ASSERT_TRUE(p.snap.health.has_value());
   EXPECT_NEAR(p.snap.health->frame_rate_hz, 12.5, 0.5);  // preset frame rate, jitter ±4 %
   EXPECT_EQ(p.snap.health->source, "simulate");

@@ -35,7 +35,22 @@ OptionErrors ThumbnailOptions::Validate() const {
   return errors;
 }
 
-ThumbnailStage::ThumbnailStage(const ThumbnailOptions& options) : options_(options) {
+SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options)
+    : segmenter_(options) {}
+
+void SegmentationStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher&) {
+  blobs_ = {};
+  if (frame.image.empty()) return;
+  try {
+    blobs_ = segmenter_.Process(frame.image).blobs;
+  } catch (const DataError& e) {
+    status.faults.push_back(std::string("segmentation: ") + e.what());
+  }
+}
+
+ThumbnailStage::ThumbnailStage(const ThumbnailOptions& options,
+                               const SegmentationStage* segmentation)
+    : options_(options), segmentation_(segmentation) {
   ThrowIfInvalid("thumbnail options", options_.Validate());
 }
 
@@ -53,9 +68,17 @@ void ThumbnailStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& p
   m.height = static_cast<int16_t>(small.rows);
   cv::imencode(".jpg", small, m.jpeg, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality});
   m.jpeg_size = static_cast<int32_t>(m.jpeg.size());
-  // Blobs stay empty until segmentation (issue 4) runs as a stage before
-  // this one and hands its blob list over.
-  m.num_blobs = 0;
+  if (segmentation_ != nullptr) {
+    for (const vision::Blob& b : segmentation_->blobs()) {
+      plantscale_blob_t blob{};
+      blob.u = static_cast<float>(b.centroid_px.x());
+      blob.v = static_cast<float>(b.centroid_px.y());
+      blob.area_px = b.area_px;
+      blob.cls = 0;  // CLS_UNKNOWN until the classifier (issue 6) runs
+      m.blobs.push_back(blob);
+    }
+  }
+  m.num_blobs = static_cast<int32_t>(m.blobs.size());
   publisher.Publish(channels::kThumbnail, std::move(m));
 }
 

@@ -5,6 +5,7 @@
 #include <deque>
 
 #include "engine/common/options.h"
+#include "engine/vision/segmenter.h"
 #include "telemetry/runner.h"
 
 namespace plantscale::telemetry {
@@ -27,16 +28,33 @@ struct ThumbnailOptions {
   OptionErrors Validate() const;
 };
 
-// Downscaled JPEG of the camera frame (PLANTSCALE_THUMBNAIL, 2 Hz). Encodes
-// only when the channel's rate slot is due.
+// Plant segmentation of every frame (engine/vision): keeps the latest blob
+// list for the stages after it (thumbnail now; tracker and classifier next).
+class SegmentationStage : public Stage {
+ public:
+  explicit SegmentationStage(const vision::SegmenterOptions& options = {});
+  std::string name() const override { return "segmentation"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+  std::span<const vision::Blob> blobs() const { return blobs_; }
+
+ private:
+  vision::Segmenter segmenter_;
+  std::span<const vision::Blob> blobs_;
+};
+
+// Downscaled JPEG of the camera frame (PLANTSCALE_THUMBNAIL, 2 Hz) with the
+// blobs of `segmentation` when given. Encodes only when the channel's rate
+// slot is due.
 class ThumbnailStage : public Stage {
  public:
-  explicit ThumbnailStage(const ThumbnailOptions& options);
+  explicit ThumbnailStage(const ThumbnailOptions& options,
+                          const SegmentationStage* segmentation = nullptr);
   std::string name() const override { return "thumbnail"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
 
  private:
   ThumbnailOptions options_;
+  const SegmentationStage* segmentation_;
 };
 
 // Latest wheel odometry with the integrated distance (PLANTSCALE_ODOMETRY).
