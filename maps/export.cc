@@ -1,6 +1,7 @@
 #include "maps/export.h"
 
 #include <algorithm>
+#include <charconv>
 
 #include "maps/map_file.h"
 #include "maps/staged_output.h"
@@ -8,6 +9,12 @@
 
 namespace plantscale::maps {
 namespace fs = std::filesystem;
+
+std::string ExactText(double value) {
+  char buf[32];
+  const auto result = std::to_chars(buf, buf + sizeof buf, value);
+  return std::string(buf, result.ptr);
+}
 
 OptionErrors IsoxmlOptions::Validate() const {
   OptionErrors errors;
@@ -60,9 +67,9 @@ const char* FileOf(const std::string& format) {
 CropMap WithAnchor(const CropMap& map, const Georeference& georef) {
   CropMap copy = map;
   const GeoAnchorOptions& a = georef.options();
-  copy.SetMetadata("origin_lat_deg", std::to_string(a.latitude_deg));
-  copy.SetMetadata("origin_lon_deg", std::to_string(a.longitude_deg));
-  copy.SetMetadata("heading_deg", std::to_string(a.heading_deg));
+  copy.SetMetadata("origin_lat_deg", ExactText(a.latitude_deg));
+  copy.SetMetadata("origin_lon_deg", ExactText(a.longitude_deg));
+  copy.SetMetadata("heading_deg", ExactText(a.heading_deg));
   return copy;
 }
 

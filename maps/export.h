@@ -31,6 +31,9 @@ struct IsoxmlOptions {
   OptionErrors Validate() const;
 };
 
+// Shortest text that reads back as exactly `value` (metadata numbers).
+std::string ExactText(double value);
+
 // Names accepted by ExportOptions::formats, in export order.
 const std::vector<std::string>& AllExportFormats();
 // Formats that need a georeference (all but png and map).

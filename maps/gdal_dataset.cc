@@ -1,33 +1,71 @@
 #include "maps/gdal_dataset.h"
 
+#include <cpl_vsi.h>
+
+#include <atomic>
+#include <fstream>
+
 #include "maps/gdal_util.h"
 #include "maps/map_errors.h"
 
 namespace plantscale::maps {
 
-DatasetPtr CreateDataset(const char* driver_name, const std::filesystem::path& path, int cols,
-                         int rows, int bands, GDALDataType type,
-                         const std::vector<std::string>& options) {
+namespace {
+
+DatasetPtr Create(const char* driver_name, const std::string& path, const std::string& name,
+                  int cols, int rows, int bands, GDALDataType type,
+                  const std::vector<std::string>& options) {
   EnsureGdalRegistered();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(driver_name);
-  if (driver == nullptr) {
-    throw MapIoError(path.string(), std::string("GDAL has no ") + driver_name + " driver");
-  }
+  if (driver == nullptr) throw MapIoError(name, std::string("GDAL has no ") + driver_name + " driver");
   CPLStringList opts;
   for (const std::string& o : options) opts.AddString(o.c_str());
-  DatasetPtr ds(driver->Create(path.string().c_str(), cols, rows, bands, type, opts.List()));
-  if (!ds) ThrowGdal(path, std::string("cannot create ") + driver_name + " file");
+  DatasetPtr ds(driver->Create(path.c_str(), cols, rows, bands, type, opts.List()));
+  if (!ds) ThrowGdal(name, std::string("cannot create ") + driver_name + " file");
   return ds;
 }
 
-void CloseChecked(DatasetPtr& dataset, const std::filesystem::path& path) {
+}  // namespace
+
+MemoryFile::MemoryFile(const std::filesystem::path& disk_path) : disk_path_(disk_path) {
+  static std::atomic<int> counter{0};
+  vsi_path_ = "/vsimem/plantscale_" + std::to_string(++counter) + "/" +
+              disk_path.filename().string();
+  VSIMkdir(std::filesystem::path(vsi_path_).parent_path().c_str(), 0755);  // CSV wants a folder
+}
+
+MemoryFile::~MemoryFile() {
+  VSIUnlink(vsi_path_.c_str());
+  VSIRmdirRecursive(std::filesystem::path(vsi_path_).parent_path().c_str());
+}
+
+void MemoryFile::CopyToDisk() const {
+  vsi_l_offset size = 0;
+  const GByte* data = VSIGetMemFileBuffer(vsi_path_.c_str(), &size, FALSE);
+  if (data == nullptr) throw MapIoError(disk_path_.string(), "GDAL wrote nothing");
+  std::ofstream out(disk_path_, std::ios::binary);
+  if (!out) throw MapIoError(disk_path_.string(), "cannot be created");
+  out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  out.close();
+  if (!out) throw MapIoError(disk_path_.string(), "write failed (disk full?)");
+}
+
+DatasetPtr CreateDataset(const char* driver_name, const MemoryFile& file, int cols, int rows,
+                         int bands, GDALDataType type, const std::vector<std::string>& options) {
+  return Create(driver_name, file.vsi_path(), file.vsi_path(), cols, rows, bands, type, options);
+}
+
+DatasetPtr CreateMemRaster(int cols, int rows, int bands, GDALDataType type) {
+  return Create("MEM", "", "memory raster", cols, rows, bands, type, {});
+}
+
+void CloseAndCopy(DatasetPtr& dataset, const MemoryFile& file) {
   if (dataset) dataset->FlushCache(true);
   dataset.reset();
   if (CPLGetLastErrorType() == CE_Failure || CPLGetLastErrorType() == CE_Fatal) {
-    ThrowGdal(path, "write failed (disk full or folder not writable?)");
+    ThrowGdal(file.vsi_path(), "GDAL failed to write");
   }
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw MapIoError(path.string(), "was not written");
+  file.CopyToDisk();
 }
 
 OGRSpatialReference ProjectedSrs(const Georeference& georef) {

@@ -19,14 +19,35 @@ struct DatasetCloser {
 };
 using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
 
+// GDAL drivers do not all report failed writes (GeoJSON ignores a full
+// disk), so every dataset is written into GDAL's memory file system
+// (/vsimem/) and then copied to disk with checked writes.
+class MemoryFile {
+ public:
+  explicit MemoryFile(const std::filesystem::path& disk_path);
+  ~MemoryFile();  // unlinks the memory file
+  MemoryFile(const MemoryFile&) = delete;
+  MemoryFile& operator=(const MemoryFile&) = delete;
+
+  const std::string& vsi_path() const { return vsi_path_; }
+  // Writes the memory file to disk_path; throws MapIoError (disk full, ...).
+  void CopyToDisk() const;
+
+ private:
+  std::filesystem::path disk_path_;
+  std::string vsi_path_;
+};
+
 // Creates a dataset with `driver` (raster when bands > 0, else vector).
 // Throws MapIoError naming the path with GDAL's reason.
-DatasetPtr CreateDataset(const char* driver, const std::filesystem::path& path, int cols = 0,
+DatasetPtr CreateDataset(const char* driver, const MemoryFile& file, int cols = 0,
                          int rows = 0, int bands = 0, GDALDataType type = GDT_Unknown,
                          const std::vector<std::string>& options = {});
-// Closes the dataset; throws MapIoError if GDAL reported a failure since
-// `scope` began (e.g. a write error on a full disk).
-void CloseChecked(DatasetPtr& dataset, const std::filesystem::path& path);
+// Closes the dataset, checks GDAL reported no failure, then copies the
+// memory file to disk. Throws MapIoError naming the disk path.
+void CloseAndCopy(DatasetPtr& dataset, const MemoryFile& file);
+// A dataset on nothing but memory (MEM driver) for intermediate rasters.
+DatasetPtr CreateMemRaster(int cols, int rows, int bands, GDALDataType type);
 
 // The export CRS as an OSR object (traditional GIS axis order).
 OGRSpatialReference ProjectedSrs(const Georeference& georef);

@@ -19,6 +19,9 @@ constexpr int kScaleBarHeight = 56;
 const cv::Vec3b kSoil{70, 105, 140}, kCrop{60, 170, 40}, kWeed{40, 40, 220}, kUnknown{150, 150, 150};
 const cv::Vec3b kTreated{230, 120, 20};
 
+// Treated cells: the class colour tinted towards blue.
+cv::Vec3b Tinted(const cv::Vec3b& colour) { return 0.45 * colour + 0.55 * kTreated; }
+
 cv::Vec3b ColourOf(CellClass c) {
   switch (c) {
     case CellClass::kSoil: return kSoil;
@@ -35,7 +38,7 @@ cv::Mat CellImage(const CropMap& map) {
   for (size_t i = 0; i < g.size(); ++i) {
     const Cell c = g.CellOf(i);
     cv::Vec3b colour = ColourOf(static_cast<CellClass>(map.layers().cls[i]));
-    if (map.layers().treated[i] != 0) colour = 0.45 * colour + 0.55 * kTreated;
+    if (map.layers().treated[i] != 0) colour = Tinted(colour);
     image.at<cv::Vec3b>(g.rows() - 1 - c.row, c.col) = colour;  // +y up
   }
   return image;
@@ -84,18 +87,23 @@ void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* geo
   Text(img, "plantscale crop map", {x, y}, 0.6);
   const std::pair<const char*, cv::Vec3b> keys[] = {
       {"soil", kSoil}, {"crop", kCrop}, {"weed", kWeed}, {"unknown (not seen)", kUnknown},
-      {"treated (sprayed)", kTreated}};
+      {"weed, treated", Tinted(kWeed)}, {"crop, treated", Tinted(kCrop)},
+      {"soil, treated", Tinted(kSoil)}};
   for (const auto& [name, colour] : keys) {
     y += 28;
     cv::rectangle(img, cv::Rect(x, y - 14, 22, 18), cv::Scalar(colour), cv::FILLED);
     cv::rectangle(img, cv::Rect(x, y - 14, 22, 18), cv::Scalar(20, 20, 20));
     Text(img, name, {x + 32, y});
   }
-  int crops = 0, weeds = 0;
-  for (const MapPlant& p : map.plants()) (p.kind == PlantKind::kCrop ? crops : weeds) += 1;
+  int crops = 0, weeds = 0, unknown = 0;
+  for (const MapPlant& p : map.plants()) {
+    (p.kind == PlantKind::kCrop ? crops : p.kind == PlantKind::kWeed ? weeds : unknown) += 1;
+  }
   const auto src = map.metadata().find("source");
   y += 40;
-  Text(img, std::to_string(crops) + " crops, " + std::to_string(weeds) + " other", {x, y}, 0.45);
+  Text(img, std::to_string(crops) + " crops, " + std::to_string(weeds) + " weeds" +
+                (unknown > 0 ? ", " + std::to_string(unknown) + " unclassified" : ""),
+       {x, y}, 0.45);
   Text(img, "cell " + Metres(map.grid().resolution_m()), {x, y += 22}, 0.45);
   if (src != map.metadata().end()) Text(img, "source: " + src->second, {x, y += 22}, 0.45);
   Text(img, "up = field +y (along rows)", {x, y += 22}, 0.45);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "maps/export.h"
 #include "maps/gdal_dataset.h"
 #include "maps/gdal_util.h"
 #include "maps/map_errors.h"
@@ -72,22 +73,23 @@ void WriteGeoTiff(const CropMap& map, const Georeference& georef,
                   const std::filesystem::path& file) {
   GdalErrorScope scope;
   const MapGrid& g = map.grid();
-  DatasetPtr ds = CreateDataset("GTiff", file, g.cols(), g.rows(), 4, GDT_UInt16,
+  MemoryFile mem(file);
+  DatasetPtr ds = CreateDataset("GTiff", mem, g.cols(), g.rows(), 4, GDT_UInt16,
                                 {"COMPRESS=DEFLATE", "TILED=YES", "INTERLEAVE=BAND"});
   SetGeoreference(*ds, map, georef, file);
   for (int b = 0; b < 4; ++b) WriteBand(*ds, map, b, file);
   ds->SetMetadataItem("CLASS_CODES", "0=soil,1=crop,2=weed,65535=unknown (nodata)");
   ds->SetMetadataItem("RASTER_ORDER", "line 0 = largest field y; column 0 = smallest field x");
-  ds->SetMetadataItem("RESOLUTION_M", std::to_string(g.resolution_m()).c_str());
+  ds->SetMetadataItem("RESOLUTION_M", ExactText(g.resolution_m()).c_str());
   for (const auto& [k, v] : map.metadata()) ds->SetMetadataItem(k.c_str(), v.c_str(), "PLANTSCALE");
   BuildOverviews(*ds, g, file);
-  CloseChecked(ds, file);
+  CloseAndCopy(ds, mem);
 }
 
 void WriteTreatedPolygons(const CropMap& map, const Georeference& georef, OGRLayer& layer,
                           const std::filesystem::path& path) {
   const MapGrid& g = map.grid();
-  DatasetPtr mem = CreateDataset("MEM", "", g.cols(), g.rows(), 1, GDT_UInt16);
+  DatasetPtr mem = CreateMemRaster(g.cols(), g.rows(), 1, GDT_UInt16);
   SetGeoreference(*mem, map, georef, path);
   GDALRasterBand* band = mem->GetRasterBand(1);
   std::vector<uint16_t> treated = BandValues(map, 3);

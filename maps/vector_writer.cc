@@ -3,6 +3,7 @@
 #include <functional>
 #include <map>
 
+#include "maps/export.h"
 #include "maps/gdal_dataset.h"
 #include "maps/gdal_util.h"
 #include "maps/map_errors.h"
@@ -62,11 +63,11 @@ void WriteMetadataTable(GDALDataset& ds, const CropMap& map, const Georeference&
   AddField(layer, "value", OFTString, file);
   std::map<std::string, std::string> rows = map.metadata();
   const GeoAnchorOptions& a = georef.options();
-  rows["origin_lat_deg"] = std::to_string(a.latitude_deg);
-  rows["origin_lon_deg"] = std::to_string(a.longitude_deg);
-  rows["heading_deg"] = std::to_string(a.heading_deg);
+  rows["origin_lat_deg"] = ExactText(a.latitude_deg);
+  rows["origin_lon_deg"] = ExactText(a.longitude_deg);
+  rows["heading_deg"] = ExactText(a.heading_deg);
   rows["export_epsg"] = std::to_string(georef.epsg());
-  rows["resolution_m"] = std::to_string(map.grid().resolution_m());
+  rows["resolution_m"] = ExactText(map.grid().resolution_m());
   rows["plants"] = std::to_string(map.plants().size());
   for (const auto& [k, v] : rows) {
     OGRFeature f(layer.GetLayerDefn());
@@ -86,7 +87,8 @@ void InTransaction(GDALDataset& ds, const fs::path& file, const std::function<vo
 
 void WriteGeoPackage(const CropMap& map, const Georeference& georef, const fs::path& file) {
   GdalErrorScope scope;
-  DatasetPtr ds = CreateDataset("GPKG", file);
+  MemoryFile mem(file);
+  DatasetPtr ds = CreateDataset("GPKG", mem);
   const OGRSpatialReference srs = ProjectedSrs(georef);
   InTransaction(*ds, file, [&] {
     OGRLayer& plants = MakeLayer(*ds, "plants", &srs, wkbPoint, file);
@@ -100,29 +102,31 @@ void WriteGeoPackage(const CropMap& map, const Georeference& georef, const fs::p
     WriteTreatedPolygons(map, georef, treated, file);
   });
   InTransaction(*ds, file, [&] { WriteMetadataTable(*ds, map, georef, file); });
-  CloseChecked(ds, file);
+  CloseAndCopy(ds, mem);
 }
 
 void WriteGeoJson(const CropMap& map, const Georeference& georef, const fs::path& file) {
   GdalErrorScope scope;
-  DatasetPtr ds = CreateDataset("GeoJSON", file);
+  MemoryFile mem(file);
+  DatasetPtr ds = CreateDataset("GeoJSON", mem);
   const OGRSpatialReference wgs84 = Wgs84Srs();
   // RFC 7946: WGS84 lon/lat; 9 decimals ≈ 0.1 mm (the default 7 is ≈ 1 cm).
   OGRLayer& layer = MakeLayer(*ds, "plants", &wgs84, wkbPoint, file,
                               {"RFC7946=YES", "COORDINATE_PRECISION=9", "WRITE_NAME=YES"});
   AddPlantFields(layer, file);
   WritePlantFeatures(layer, map, georef, true, file);
-  CloseChecked(ds, file);
+  CloseAndCopy(ds, mem);
 }
 
 void WritePlantsCsv(const CropMap& map, const Georeference& georef, const fs::path& file) {
   GdalErrorScope scope;
-  DatasetPtr ds = CreateDataset("CSV", file);
+  MemoryFile mem(file);
+  DatasetPtr ds = CreateDataset("CSV", mem);
   const OGRSpatialReference srs = ProjectedSrs(georef);
-  OGRLayer& layer = MakeLayer(*ds, "plants", &srs, wkbPoint, file, {"GEOMETRY=AS_XY"});
+  OGRLayer& layer = MakeLayer(*ds, "plants", &srs, wkbPoint, file, {"GEOMETRY=AS_XY", "STRING_QUOTING=IF_NEEDED"});
   AddPlantFields(layer, file);
   WritePlantFeatures(layer, map, georef, false, file);
-  CloseChecked(ds, file);
+  CloseAndCopy(ds, mem);
 }
 
 }  // namespace plantscale::maps
