@@ -11,6 +11,7 @@ cd "$(dirname "$0")"
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libopencv-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libspdlog-dev
+  libgdal-dev gdal-bin
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )
