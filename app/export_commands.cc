@@ -24,6 +24,7 @@ struct ExportArgs {
   int epsg = 0;
   double resolution_m = 0.02;
   double rate_l_per_ha = 200.0;
+  double isoxml_cell_m = 0.0;
   bool quiet = false;
 };
 
@@ -88,6 +89,7 @@ maps::ExportOptions MakeOptions(const ExportArgs& args, const maps::CropMap& map
     o.anchor->epsg = args.epsg;
   }
   o.isoxml.rate_l_per_ha = args.rate_l_per_ha;
+  o.isoxml.cell_size_m = args.isoxml_cell_m;
   return o;
 }
 
@@ -149,6 +151,9 @@ void AddExportCommands(CommandRegistry& registry) {
   cmd->add_option("--rate-l-ha", args.rate_l_per_ha, "ISOXML setpoint of treated cells, L/ha")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--isoxml-cell-m", args.isoxml_cell_m,
+                  "ISOXML grid cell size, metres (default: the map's resolution)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet", args.quiet, "no progress");
 }
 
