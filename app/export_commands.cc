@@ -94,9 +94,9 @@ maps::ExportOptions MakeOptions(const ExportArgs& args, const maps::CropMap& map
 }
 
 void PrintResult(const maps::CropMap& map, const maps::ExportResult& r) {
-  std::cout << "plantscale export: " << map.plants().size() << " plants, "
-            << map.grid().cols() << " x " << map.grid().rows() << " cells of "
-            << map.grid().resolution_m() << " m, " << map.treated_cells() << " treated cells";
+  std::cout << "plantscale export: " << map.plants().size() << " plants, " << map.grid().cols()
+            << " x " << map.grid().rows() << " cells of " << map.grid().resolution_m() << " m, "
+            << map.treated_cells() << " treated cells";
   if (r.epsg != 0) {
     std::cout << "; EPSG:" << r.epsg << ", raster georeference within " << std::setprecision(2)
               << 1000.0 * r.geotransform_error_m << " mm of exact";
@@ -112,10 +112,8 @@ int Export(const ExportArgs& args) {
   const maps::ExportOptions options = MakeOptions(args, map);
   ThrowIfInvalid("command line (--format, --origin, --heading, --epsg)", options.Validate());
   ProgressBar bar(std::cerr, "export", static_cast<int>(options.formats.size()), !args.quiet);
-  const maps::ExportResult result =
-      maps::ExportMap(map, args.out, options, [&bar](int done, int, const std::string&) {
-        bar.Update(done);
-      });
+  const maps::ExportResult result = maps::ExportMap(
+      map, args.out, options, [&bar](int done, int, const std::string&) { bar.Update(done); });
   bar.Finish();
   PrintResult(map, result);
   return 0;

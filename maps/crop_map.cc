@@ -9,19 +9,26 @@ namespace plantscale::maps {
 
 const char* ToString(CellClass c) {
   switch (c) {
-    case CellClass::kSoil: return "soil";
-    case CellClass::kCrop: return "crop";
-    case CellClass::kWeed: return "weed";
-    case CellClass::kUnknown: return "unknown";
+    case CellClass::kSoil:
+      return "soil";
+    case CellClass::kCrop:
+      return "crop";
+    case CellClass::kWeed:
+      return "weed";
+    case CellClass::kUnknown:
+      return "unknown";
   }
   return "unknown";
 }
 
 const char* ToString(PlantKind k) {
   switch (k) {
-    case PlantKind::kCrop: return "crop";
-    case PlantKind::kWeed: return "weed";
-    case PlantKind::kUnknown: return "unknown";
+    case PlantKind::kCrop:
+      return "crop";
+    case PlantKind::kWeed:
+      return "weed";
+    case PlantKind::kUnknown:
+      return "unknown";
   }
   return "unknown";
 }
@@ -35,10 +42,14 @@ PlantKind ParsePlantKind(const std::string& text, const std::string& what) {
 
 int Priority(CellClass c) {
   switch (c) {
-    case CellClass::kUnknown: return 0;
-    case CellClass::kSoil: return 1;
-    case CellClass::kCrop: return 2;
-    case CellClass::kWeed: return 3;
+    case CellClass::kUnknown:
+      return 0;
+    case CellClass::kSoil:
+      return 1;
+    case CellClass::kCrop:
+      return 2;
+    case CellClass::kWeed:
+      return 3;
   }
   return 0;
 }

@@ -39,10 +39,10 @@ struct MapRow {
 };
 
 struct MapLayers {
-  std::vector<uint8_t> cls;           // CellClass
-  std::vector<uint16_t> crop_count;   // crop roots in the cell (saturates)
-  std::vector<uint16_t> weed_count;   // weed roots in the cell (saturates)
-  std::vector<uint8_t> treated;       // 1: sprayed
+  std::vector<uint8_t> cls;          // CellClass
+  std::vector<uint16_t> crop_count;  // crop roots in the cell (saturates)
+  std::vector<uint16_t> weed_count;  // weed roots in the cell (saturates)
+  std::vector<uint8_t> treated;      // 1: sprayed
 };
 
 class CropMap {

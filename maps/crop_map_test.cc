@@ -50,7 +50,8 @@ TEST(MapMerge, CountsAddAndPlantsMergeByIdAndPosition) {
   CropMap b(MapGrid({0.02, {-0.5, 1.5}, 50, 50}));  // overlaps a, 25 × 50 cells offset
   b.MarkObserved({-0.5, 1.5}, {0.5, 2.5});
   b.AddPlant({1000, {0.22, 2.11}, PlantKind::kWeed, 0.95, 0.03, false, "seen again"});  // same id
-  b.AddPlant({77, {0.0, 2.01}, PlantKind::kCrop, 0.99, 0.08, false, "crop"});  // id 77 ≠ 15, same place
+  b.AddPlant(
+      {77, {0.0, 2.01}, PlantKind::kCrop, 0.99, 0.08, false, "crop"});  // id 77 ≠ 15, same place
   b.AddPlant({5, {0.4, 2.4}, PlantKind::kWeed, 0.6, 0.02, true, "new weed"});  // id 5 taken
   const CropMap m = MergeMaps({a, b});
   EXPECT_EQ(m.grid(), a.grid());  // b lies inside a

@@ -24,7 +24,7 @@ OptionErrors IsoxmlOptions::Validate() const {
 }
 
 const std::vector<std::string>& AllExportFormats() {
-  static const std::vector<std::string> all{"gtiff", "gpkg", "geojson", "csv",
+  static const std::vector<std::string> all{"gtiff", "gpkg",   "geojson", "csv",
                                             "png",   "isoxml", "map"};
   return all;
 }

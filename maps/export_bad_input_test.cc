@@ -1,11 +1,11 @@
 // Bad input for exports: unknown EPSG, origin out of range, unwritable
 // folder, a disk that fills. Each gives a typed error naming what and where,
 // and no half-written file replaces a good one.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
 
 #include <fstream>
-#include <gtest/gtest.h>
 
 #include "maps/export.h"
 #include "maps/map_errors.h"
@@ -129,8 +129,8 @@ TEST(ExportBadInput, FullDiskFailsEachFormatAndKeepsThePreviousFiles) {
     bool big = false;  // the format's output would not fit
     for (const auto& [path, bytes] : before) {
       const auto rel = fs::relative(path, dir.path()).string();
-      const bool mine = rel.find(format == "isoxml" ? std::string("TASKDATA")
-                                                    : std::string(".")) != std::string::npos;
+      const bool mine = rel.find(format == "isoxml" ? std::string("TASKDATA") : std::string(".")) !=
+                        std::string::npos;
       big = big || (mine && bytes.size() > limit && good.files.size() > 0);
     }
     if (threw) ++failed;

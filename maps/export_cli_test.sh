@@ -44,6 +44,8 @@ grep -q '<GRD A="' "$out/TASKDATA/TASKDATA.XML" || fail "TASKDATA.XML lacks a GR
 expect 0 "EPSG:32630" -- "$plantscale" export "$out/map.psmap" --out "$work/again" --format gtiff,csv --quiet
 expect 0 "plants" -- "$plantscale" export "$out/map.psmap" "$work/sim" --out "$work/merged" --format gpkg --quiet
 expect 0 "wrote .*map.png" -- "$plantscale" export "$work/sim" --out "$work/png" --format png --quiet
+expect 0 "wrote .*TASKDATA" -- "$plantscale" export "$work/sim" --out "$work/iso" --format isoxml --origin 52,-0.4 --isoxml-cell-m 0.1 --quiet
+grep -q "C=\"0.00000089" "$work/iso/TASKDATA/TASKDATA.XML" || fail "10 cm ISOXML cells are not 0.0000009 deg north"
 
 # Bad input: exit 2 naming the key; I/O failures exit 1 naming the path.
 expect 2 "epsg: unknown EPSG code 999999" -- "$plantscale" export "$work/sim" --out "$work/bad" --origin 52,-0.4 --epsg 999999

@@ -59,6 +59,17 @@ TEST_F(ExportTest, WritesEveryFileAndNoTemporaries) {
   EXPECT_EQ(result_.epsg, 32630);
 }
 
+TEST_F(ExportTest, ExportingAgainReplacesFilesAndTheTaskFolder) {
+  const auto before = fs::last_write_time(dir_.path() / "TASKDATA" / "TASKDATA.XML");
+  ExportOptions options;
+  options.anchor = TestAnchor(45.0);
+  const ExportResult again = ExportMap(map_, dir_.path(), options);
+  EXPECT_EQ(again.files.size(), 7u);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_.path()), {}), 7);  // no staging, no .old
+  EXPECT_GE(fs::last_write_time(dir_.path() / "TASKDATA" / "TASKDATA.XML"), before);
+  EXPECT_EQ(std::stod(LoadMap(dir_.path() / "map.psmap").metadata().at("heading_deg")), 45.0);
+}
+
 TEST_F(ExportTest, GeoTiffHasIdenticalCellsCrsGeotransformOverviewsAndNodata) {
   Dataset ds = Open(dir_.path() / "map.tif", GDAL_OF_RASTER);
   ASSERT_TRUE(ds);
@@ -70,7 +81,8 @@ TEST_F(ExportTest, GeoTiffHasIdenticalCellsCrsGeotransformOverviewsAndNodata) {
   std::array<double, 6> gt{};
   ds->GetGeoTransform(gt.data());
   const std::array<double, 6> expected = Georeference(anchor_).GeoTransform(g);
-  for (int i = 0; i < 6; ++i) EXPECT_NEAR(gt[static_cast<size_t>(i)], expected[static_cast<size_t>(i)], 1e-9);
+  for (int i = 0; i < 6; ++i)
+    EXPECT_NEAR(gt[static_cast<size_t>(i)], expected[static_cast<size_t>(i)], 1e-9);
   const std::vector<const std::vector<uint16_t>*> counts{&map_.layers().crop_count,
                                                          &map_.layers().weed_count};
   for (int b = 1; b <= 4; ++b) {
@@ -81,11 +93,14 @@ TEST_F(ExportTest, GeoTiffHasIdenticalCellsCrsGeotransformOverviewsAndNodata) {
     EXPECT_GE(band->GetOverviewCount(), 3);  // 2×, 4×, 8× at least for 300 rows
     std::vector<uint16_t> v(g.size());
     ASSERT_EQ(band->RasterIO(GF_Read, 0, 0, g.cols(), g.rows(), v.data(), g.cols(), g.rows(),
-                             GDT_UInt16, 0, 0, nullptr), CE_None);
+                             GDT_UInt16, 0, 0, nullptr),
+              CE_None);
     for (size_t i = 0; i < g.size(); ++i) {
       const Cell c = g.CellOf(i);
-      const uint16_t got = v[static_cast<size_t>(g.rows() - 1 - c.row) * static_cast<size_t>(g.cols()) + static_cast<size_t>(c.col)];
-      const uint16_t want = b == 1 ? map_.layers().cls[i]
+      const uint16_t got =
+          v[static_cast<size_t>(g.rows() - 1 - c.row) * static_cast<size_t>(g.cols()) +
+            static_cast<size_t>(c.col)];
+      const uint16_t want = b == 1   ? map_.layers().cls[i]
                             : b == 4 ? map_.layers().treated[i]
                                      : (*counts[static_cast<size_t>(b - 2)])[i];
       ASSERT_EQ(got, want) << "band " << b << " cell " << c.col << "," << c.row;
@@ -108,8 +123,12 @@ TEST_F(ExportTest, AKnownPlantFallsInItsRasterCell) {
   EXPECT_NEAR(px - std::floor(px), 0.5, 1e-4);
   EXPECT_NEAR(ln - std::floor(ln), 0.5, 1e-4);
   uint16_t weeds = 0, treated = 0;
-  ASSERT_EQ(ds->GetRasterBand(3)->RasterIO(GF_Read, static_cast<int>(px), static_cast<int>(ln), 1, 1, &weeds, 1, 1, GDT_UInt16, 0, 0, nullptr), CE_None);
-  ASSERT_EQ(ds->GetRasterBand(4)->RasterIO(GF_Read, static_cast<int>(px), static_cast<int>(ln), 1, 1, &treated, 1, 1, GDT_UInt16, 0, 0, nullptr), CE_None);
+  ASSERT_EQ(ds->GetRasterBand(3)->RasterIO(GF_Read, static_cast<int>(px), static_cast<int>(ln), 1,
+                                           1, &weeds, 1, 1, GDT_UInt16, 0, 0, nullptr),
+            CE_None);
+  ASSERT_EQ(ds->GetRasterBand(4)->RasterIO(GF_Read, static_cast<int>(px), static_cast<int>(ln), 1,
+                                           1, &treated, 1, 1, GDT_UInt16, 0, 0, nullptr),
+            CE_None);
   EXPECT_EQ(weeds, 1);
   EXPECT_EQ(treated, 1);
 }
@@ -129,10 +148,13 @@ void ExpectPlants(OGRLayer& layer, const CropMap& map, const GeoAnchorOptions& a
     EXPECT_NEAR(f->GetFieldAsDouble("radius_m"), p->radius_m, 1e-9);
     const OGRPoint* pt = f->GetGeometryRef()->toPoint();
     const Eigen::Vector2d got(pt->getX(), pt->getY());
-    worst_m = std::max(worst_m, lon_lat ? GeodesicDistanceM(got, GeodesicLonLat(a, p->position_m))
-                                        : (got - ExpectedProjected(a, p->position_m, 32630)).norm());
+    worst_m =
+        std::max(worst_m, lon_lat ? GeodesicDistanceM(got, GeodesicLonLat(a, p->position_m))
+                                  : (got - ExpectedProjected(a, p->position_m, 32630)).norm());
   }
   EXPECT_LT(worst_m, 1e-3);  // 1 mm
+  ::testing::Test::RecordProperty(lon_lat ? "worst_lonlat_error_um" : "worst_projected_error_um",
+                                  std::to_string(worst_m * 1e6));
 }
 
 TEST_F(ExportTest, GeoPackagePlantsRowsTreatedAreasAndMetadata) {
@@ -183,6 +205,7 @@ TEST_F(ExportTest, CsvHasProjectedXYAndAttributes) {
     EXPECT_STREQ(f->GetFieldAsString("class"), ToString(p->kind));
   }
   EXPECT_LT(worst, 1e-3);  // 1 mm (CSV keeps ~15 significant digits)
+  RecordProperty("worst_csv_error_um", std::to_string(worst * 1e6));
 }
 
 TEST_F(ExportTest, PngShowsClassesAndLegend) {
@@ -204,8 +227,10 @@ TEST_F(ExportTest, IsoxmlGridIsReadableAndMarksTheTreatedWeed) {
   ASSERT_NE(root, nullptr);
   const CPLXMLNode* grd = CPLGetXMLNode(root, "=ISO11783_TaskData.TSK.GRD");
   ASSERT_NE(grd, nullptr);
-  const double min_lat = CPLAtof(CPLGetXMLValue(grd, "A", "")), min_lon = CPLAtof(CPLGetXMLValue(grd, "B", ""));
-  const double dlat = CPLAtof(CPLGetXMLValue(grd, "C", "")), dlon = CPLAtof(CPLGetXMLValue(grd, "D", ""));
+  const double min_lat = CPLAtof(CPLGetXMLValue(grd, "A", "")),
+               min_lon = CPLAtof(CPLGetXMLValue(grd, "B", ""));
+  const double dlat = CPLAtof(CPLGetXMLValue(grd, "C", "")),
+               dlon = CPLAtof(CPLGetXMLValue(grd, "D", ""));
   const int cols = atoi(CPLGetXMLValue(grd, "E", "0")), rows = atoi(CPLGetXMLValue(grd, "F", "0"));
   EXPECT_STREQ(CPLGetXMLValue(grd, "I", ""), "2");
   EXPECT_STREQ(CPLGetXMLValue(grd, "G", ""), "GRD00001");
@@ -218,13 +243,15 @@ TEST_F(ExportTest, IsoxmlGridIsReadableAndMarksTheTreatedWeed) {
   EXPECT_NEAR(GeodesicDistanceM({min_lon, min_lat}, {min_lon, min_lat + dlat}), 0.02, 1e-6);
   EXPECT_NEAR(GeodesicDistanceM({min_lon, min_lat}, {min_lon + dlon, min_lat}), 0.02, 1e-6);
   std::vector<int32_t> cells(static_cast<size_t>(cols) * static_cast<size_t>(rows));
-  std::ifstream(folder / "GRD00001.BIN", std::ios::binary).read(reinterpret_cast<char*>(cells.data()), static_cast<std::streamsize>(bytes));
+  std::ifstream(folder / "GRD00001.BIN", std::ios::binary)
+      .read(reinterpret_cast<char*>(cells.data()), static_cast<std::streamsize>(bytes));
   auto at = [&](const Eigen::Vector2d& ll) {
-    const int c = static_cast<int>((ll.x() - min_lon) / dlon), r = static_cast<int>((ll.y() - min_lat) / dlat);
+    const int c = static_cast<int>((ll.x() - min_lon) / dlon),
+              r = static_cast<int>((ll.y() - min_lat) / dlat);
     return cells[static_cast<size_t>(r) * static_cast<size_t>(cols) + static_cast<size_t>(c)];
   };
   EXPECT_EQ(at(GeodesicLonLat(anchor_, {0.21, 2.11})), 20000);  // 200 L/ha = 20000 mm³/m²
-  EXPECT_EQ(at(GeodesicLonLat(anchor_, {0.0, 1.0})), 0);         // a crop
+  EXPECT_EQ(at(GeodesicLonLat(anchor_, {0.0, 1.0})), 0);        // a crop
   const long treated = std::count(cells.begin(), cells.end(), 20000);
   EXPECT_NEAR(static_cast<double>(treated), 9.0, 4.0);  // 9 map cells, resampled on a rotated grid
 }
@@ -239,6 +266,7 @@ TEST_F(ExportTest, NativeMapKeepsTheAnchorForTheNextExport) {
 
 TEST_F(ExportTest, RasterGeoreferenceIsWithinAMicrometreOfExact) {
   EXPECT_LT(result_.geotransform_error_m, 1e-6);
+  RecordProperty("geotransform_error_um", std::to_string(result_.geotransform_error_m * 1e6));
 }
 
 }  // namespace

@@ -17,7 +17,8 @@ DatasetPtr Create(const char* driver_name, const std::string& path, const std::s
                   const std::vector<std::string>& options) {
   EnsureGdalRegistered();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName(driver_name);
-  if (driver == nullptr) throw MapIoError(name, std::string("GDAL has no ") + driver_name + " driver");
+  if (driver == nullptr)
+    throw MapIoError(name, std::string("GDAL has no ") + driver_name + " driver");
   CPLStringList opts;
   for (const std::string& o : options) opts.AddString(o.c_str());
   DatasetPtr ds(driver->Create(path.c_str(), cols, rows, bands, type, opts.List()));
@@ -29,8 +30,8 @@ DatasetPtr Create(const char* driver_name, const std::string& path, const std::s
 
 MemoryFile::MemoryFile(const std::filesystem::path& disk_path) : disk_path_(disk_path) {
   static std::atomic<int> counter{0};
-  vsi_path_ = "/vsimem/plantscale_" + std::to_string(++counter) + "/" +
-              disk_path.filename().string();
+  vsi_path_ =
+      "/vsimem/plantscale_" + std::to_string(++counter) + "/" + disk_path.filename().string();
   VSIMkdir(std::filesystem::path(vsi_path_).parent_path().c_str(), 0755);  // CSV wants a folder
 }
 
@@ -84,14 +85,15 @@ OGRSpatialReference Wgs84Srs() {
 
 void AddPlantFields(OGRLayer& layer, const std::filesystem::path& path) {
   const std::pair<const char*, OGRFieldType> fields[] = {
-      {"plant_id", OFTInteger64}, {"class", OFTString},     {"confidence", OFTReal},
-      {"radius_m", OFTReal},      {"treated", OFTInteger},  {"why", OFTString},
-      {"field_x_m", OFTReal},     {"field_y_m", OFTReal},   {"lon_deg", OFTReal},
-      {"lat_deg", OFTReal},       {"easting_m", OFTReal},   {"northing_m", OFTReal}};
+      {"plant_id", OFTInteger64}, {"class", OFTString},    {"confidence", OFTReal},
+      {"radius_m", OFTReal},      {"treated", OFTInteger}, {"why", OFTString},
+      {"field_x_m", OFTReal},     {"field_y_m", OFTReal},  {"lon_deg", OFTReal},
+      {"lat_deg", OFTReal},       {"easting_m", OFTReal},  {"northing_m", OFTReal}};
   for (const auto& [name, type] : fields) {
     OGRFieldDefn defn(name, type);
     if (std::string(name) == "treated") defn.SetSubType(OFSTBoolean);
-    if (layer.CreateField(&defn) != OGRERR_NONE) ThrowGdal(path, std::string("cannot add field ") + name);
+    if (layer.CreateField(&defn) != OGRERR_NONE)
+      ThrowGdal(path, std::string("cannot add field ") + name);
   }
 }
 

@@ -40,8 +40,8 @@ class MemoryFile {
 
 // Creates a dataset with `driver` (raster when bands > 0, else vector).
 // Throws MapIoError naming the path with GDAL's reason.
-DatasetPtr CreateDataset(const char* driver, const MemoryFile& file, int cols = 0,
-                         int rows = 0, int bands = 0, GDALDataType type = GDT_Unknown,
+DatasetPtr CreateDataset(const char* driver, const MemoryFile& file, int cols = 0, int rows = 0,
+                         int bands = 0, GDALDataType type = GDT_Unknown,
                          const std::vector<std::string>& options = {});
 // Closes the dataset, checks GDAL reported no failure, then copies the
 // memory file to disk. Throws MapIoError naming the disk path.

@@ -14,8 +14,8 @@ namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-using TransformPtr = std::unique_ptr<OGRCoordinateTransformation,
-                                     decltype(&OGRCoordinateTransformation::DestroyCT)>;
+using TransformPtr =
+    std::unique_ptr<OGRCoordinateTransformation, decltype(&OGRCoordinateTransformation::DestroyCT)>;
 
 OGRSpatialReference Wgs84() {
   OGRSpatialReference srs;
@@ -41,14 +41,13 @@ OGRSpatialReference Projected(int epsg) {
   GdalErrorScope errors;
   OGRSpatialReference srs;
   if (srs.importFromEPSG(epsg) != OGRERR_NONE) {
-    throw InvalidOptionsError("georeference",
-                              {{"epsg", "unknown EPSG code " + std::to_string(epsg) +
-                                            errors.Suffix()}});
+    throw InvalidOptionsError(
+        "georeference", {{"epsg", "unknown EPSG code " + std::to_string(epsg) + errors.Suffix()}});
   }
   if (!srs.IsProjected()) {
-    throw InvalidOptionsError(
-        "georeference", {{"epsg", "EPSG:" + std::to_string(epsg) + " (" + srs.GetName() +
-                                      ") is not a projected CRS in metres"}});
+    throw InvalidOptionsError("georeference",
+                              {{"epsg", "EPSG:" + std::to_string(epsg) + " (" + srs.GetName() +
+                                            ") is not a projected CRS in metres"}});
   }
   srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);  // (easting, northing)
   return srs;
@@ -97,7 +96,7 @@ int UtmEpsg(double latitude_deg, double longitude_deg) {
   const double lat = latitude_deg;
   const double lon = longitude_deg;
   if (lat >= 56.0 && lat < 64.0 && lon >= 3.0 && lon < 12.0) zone = 32;  // south-west Norway
-  if (lat >= 72.0 && lat < 84.0 && lon >= 0.0 && lon < 42.0) {          // Svalbard
+  if (lat >= 72.0 && lat < 84.0 && lon >= 0.0 && lon < 42.0) {           // Svalbard
     zone = lon < 9.0 ? 31 : lon < 21.0 ? 33 : lon < 33.0 ? 35 : 37;
   }
   return (lat >= 0.0 ? 32600 : 32700) + zone;
@@ -115,8 +114,8 @@ struct Georeference::Impl {
 Georeference::Georeference(const GeoAnchorOptions& options) : options_(options) {
   ThrowIfInvalid("georeference (--origin, --heading, --epsg)", options_.Validate());
   EnsureGdalRegistered();
-  epsg_ = options_.epsg != 0 ? options_.epsg
-                             : UtmEpsg(options_.latitude_deg, options_.longitude_deg);
+  epsg_ =
+      options_.epsg != 0 ? options_.epsg : UtmEpsg(options_.latitude_deg, options_.longitude_deg);
   impl_ = std::make_unique<Impl>();
   impl_->wgs84 = Wgs84();
   impl_->local = LocalTmerc(options_);
@@ -181,8 +180,7 @@ std::vector<Eigen::Vector2d> Georeference::Wgs84ToField(
   return out;
 }
 
-std::array<double, 6> Georeference::GeoTransform(const MapGrid& grid,
-                                                 double* max_error_m) const {
+std::array<double, 6> Georeference::GeoTransform(const MapGrid& grid, double* max_error_m) const {
   // Raster pixel (P, L) ↔ field (x0 + P·res, y0 + (rows − L)·res).
   auto field_of = [&](double p, double l) {
     return Eigen::Vector2d(grid.origin_m().x() + p * grid.resolution_m(),

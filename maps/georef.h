@@ -53,8 +53,8 @@ class Georeference {
 
   Eigen::Vector2d FieldToLocal(const Eigen::Vector2d& field_m) const;  // (E, N) local tmerc
   Eigen::Vector2d LocalToField(const Eigen::Vector2d& local_m) const;
-  Eigen::Vector2d FieldToProjected(const Eigen::Vector2d& field_m) const;   // (E, N), metres
-  Eigen::Vector2d FieldToWgs84(const Eigen::Vector2d& field_m) const;       // (lon, lat), deg
+  Eigen::Vector2d FieldToProjected(const Eigen::Vector2d& field_m) const;  // (E, N), metres
+  Eigen::Vector2d FieldToWgs84(const Eigen::Vector2d& field_m) const;      // (lon, lat), deg
   Eigen::Vector2d Wgs84ToField(const Eigen::Vector2d& lon_lat_deg) const;
   // Batch form (one PROJ call) for grids of points.
   std::vector<Eigen::Vector2d> Wgs84ToField(const std::vector<Eigen::Vector2d>& lon_lat_deg) const;

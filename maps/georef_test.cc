@@ -31,7 +31,7 @@ TEST(Georeference, FieldLocalRoundTripIsExact) {
     for (int k = 0; k < 200; ++k) {
       const Eigen::Vector2d p(u(rng), u(rng));
       ASSERT_LT((g.LocalToField(g.FieldToLocal(p)) - p).norm(), 1e-9);  // 1 nm
-      EXPECT_NEAR(g.FieldToLocal(p).norm(), p.norm(), 1e-9);           // a rotation
+      EXPECT_NEAR(g.FieldToLocal(p).norm(), p.norm(), 1e-9);            // a rotation
     }
   }
 }
@@ -46,6 +46,7 @@ TEST(Georeference, FieldWgs84RoundTripWithinAMicrometre) {
     worst = std::max(worst, (g.Wgs84ToField(g.FieldToWgs84(p)) - p).norm());
   }
   EXPECT_LT(worst, 1e-6);
+  RecordProperty("worst_roundtrip_error_um", std::to_string(worst * 1e6));
 }
 
 TEST(Georeference, HeadingIsTheBearingOfFieldPlusYClockwiseFromTrueNorth) {
@@ -76,6 +77,7 @@ TEST(Georeference, FieldPointsLandWhereAnIndependentGeodesicPutsThem) {
     EXPECT_LT(GeodesicDistanceM(g.FieldToWgs84(p), GeodesicLonLat(a, p)), 1e-3);
   }
   EXPECT_LT(worst, 1e-3);
+  RecordProperty("worst_projected_error_um", std::to_string(worst * 1e6));
 }
 
 TEST(Georeference, AnyProjectedEpsg) {

@@ -43,8 +43,9 @@ struct IsoGrid {
 
 IsoGrid BoundingGrid(const MapGrid& g, const Georeference& georef, double cell_m) {
   double lat0 = 90.0, lat1 = -90.0, lon0 = 180.0, lon1 = -180.0;
-  for (const Eigen::Vector2d& c : {g.origin_m(), g.max_m(), Eigen::Vector2d(g.origin_m().x(), g.max_m().y()),
-                                   Eigen::Vector2d(g.max_m().x(), g.origin_m().y())}) {
+  for (const Eigen::Vector2d& c :
+       {g.origin_m(), g.max_m(), Eigen::Vector2d(g.origin_m().x(), g.max_m().y()),
+        Eigen::Vector2d(g.max_m().x(), g.origin_m().y())}) {
     const Eigen::Vector2d ll = georef.FieldToWgs84(c);
     lon0 = std::min(lon0, ll.x()), lon1 = std::max(lon1, ll.x());
     lat0 = std::min(lat0, ll.y()), lat1 = std::max(lat1, ll.y());
@@ -95,11 +96,16 @@ size_t WriteBinary(const fs::path& file, const std::vector<int32_t>& values) {
 std::string Escape(const std::string& text) {
   std::string out;
   for (char ch : text) {
-    if (ch == '&') out += "&amp;";
-    else if (ch == '<') out += "&lt;";
-    else if (ch == '>') out += "&gt;";
-    else if (ch == '"') out += "&quot;";
-    else out += ch;
+    if (ch == '&')
+      out += "&amp;";
+    else if (ch == '<')
+      out += "&lt;";
+    else if (ch == '>')
+      out += "&gt;";
+    else if (ch == '"')
+      out += "&quot;";
+    else
+      out += ch;
   }
   return out;
 }
@@ -109,8 +115,7 @@ std::string TaskXml(const CropMap& map, const IsoGrid& g, int32_t rate, size_t b
   const std::string name =
       "plantscale treated area" + (src != map.metadata().end() ? " (" + src->second + ")" : "");
   std::ostringstream x;
-  x << std::fixed << std::setprecision(9)
-    << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+  x << std::fixed << std::setprecision(9) << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     << "<ISO11783_TaskData VersionMajor=\"4\" VersionMinor=\"2\" "
        "ManagementSoftwareManufacturer=\"plantscale\" ManagementSoftwareVersion=\"0.1.0\" "
        "DataTransferOrigin=\"1\">\n"

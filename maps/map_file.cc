@@ -32,9 +32,14 @@ std::vector<uint16_t> FromU16Bytes(const Bytes& b) {
 }
 
 Json PlantJson(const MapPlant& p) {
-  return {{"id", p.id},         {"x_m", p.position_m.x()}, {"y_m", p.position_m.y()},
-          {"class", ToString(p.kind)}, {"confidence", p.confidence}, {"radius_m", p.radius_m},
-          {"treated", p.treated}, {"why", p.why}};
+  return {{"id", p.id},
+          {"x_m", p.position_m.x()},
+          {"y_m", p.position_m.y()},
+          {"class", ToString(p.kind)},
+          {"confidence", p.confidence},
+          {"radius_m", p.radius_m},
+          {"treated", p.treated},
+          {"why", p.why}};
 }
 
 Json RowJson(const MapRow& r) {
@@ -55,10 +60,14 @@ Json MapJson(const CropMap& map) {
   Json rows = Json::array();
   for (const MapRow& r : map.rows()) rows.push_back(RowJson(r));
   return {{"grid",
-           {{"resolution_m", g.resolution_m()}, {"origin_x_m", g.origin_m().x()},
-            {"origin_y_m", g.origin_m().y()}, {"cols", g.cols()}, {"rows", g.rows()}}},
+           {{"resolution_m", g.resolution_m()},
+            {"origin_x_m", g.origin_m().x()},
+            {"origin_y_m", g.origin_m().y()},
+            {"cols", g.cols()},
+            {"rows", g.rows()}}},
           {"layers",
-           {{"class", Json::binary(l.cls)}, {"crop_count", Json::binary(U16Bytes(l.crop_count))},
+           {{"class", Json::binary(l.cls)},
+            {"crop_count", Json::binary(U16Bytes(l.crop_count))},
             {"weed_count", Json::binary(U16Bytes(l.weed_count))},
             {"treated", Json::binary(l.treated)}}},
           {"plants", plants},
@@ -126,9 +135,9 @@ CropMap MapFrom(const Json& j, const std::string& name) {
   const size_t n = map.grid().size();
   const Json layers = Get<Json>(j, "layers", name);
   const std::string lw = name + ": layers";
-  map.SetLayers({Layer(layers, "class", n, lw), FromU16Bytes(Layer(layers, "crop_count", 2 * n, lw)),
-                 FromU16Bytes(Layer(layers, "weed_count", 2 * n, lw)),
-                 Layer(layers, "treated", n, lw)});
+  map.SetLayers(
+      {Layer(layers, "class", n, lw), FromU16Bytes(Layer(layers, "crop_count", 2 * n, lw)),
+       FromU16Bytes(Layer(layers, "weed_count", 2 * n, lw)), Layer(layers, "treated", n, lw)});
   std::vector<MapPlant> plants;
   const Json list = Get<Json>(j, "plants", name);
   for (size_t i = 0; i < list.size(); ++i) {

@@ -88,9 +88,12 @@ TEST(MapFile, CorruptInputIsRefusedWithTheReason) {
 
 TEST(MapFile, WellFormedButIncompleteContentNamesTheField) {
   // A valid header and checksum around CBOR that lacks the layers.
-  const std::vector<uint8_t> cbor = nlohmann::json::to_cbor(
-      nlohmann::json{{"grid", {{"resolution_m", 0.02}, {"origin_x_m", 0.0}, {"origin_y_m", 0.0},
-                               {"cols", 2}, {"rows", 2}}}});
+  const std::vector<uint8_t> cbor = nlohmann::json::to_cbor(nlohmann::json{{"grid",
+                                                                            {{"resolution_m", 0.02},
+                                                                             {"origin_x_m", 0.0},
+                                                                             {"origin_y_m", 0.0},
+                                                                             {"cols", 2},
+                                                                             {"rows", 2}}}});
   char crc[9];
   std::snprintf(crc, sizeof crc, "%08x", Crc32(cbor.data(), cbor.size()));
   const std::string bytes = "plantscale-map 1 " + std::to_string(cbor.size()) + " " + crc + "\n" +

@@ -24,10 +24,10 @@ struct Cell {
 };
 
 struct MapGridOptions {
-  double resolution_m = 0.02;              // edge of a square cell
-  Eigen::Vector2d origin_m{0.0, 0.0};      // field-frame corner of cell (0, 0)
-  int cols = 1;                            // cells along x
-  int rows = 1;                            // cells along y
+  double resolution_m = 0.02;          // edge of a square cell
+  Eigen::Vector2d origin_m{0.0, 0.0};  // field-frame corner of cell (0, 0)
+  int cols = 1;                        // cells along x
+  int rows = 1;                        // cells along y
 
   OptionErrors Validate() const;
 };

@@ -36,7 +36,8 @@ TEST(MapGrid, WorldToCellToWorldIsWithinHalfACell) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   double worst = 0.0;
   for (int k = 0; k < 10000; ++k) {
-    const Eigen::Vector2d p = g.origin_m() + g.extent_m().cwiseProduct(Eigen::Vector2d(u(rng), u(rng)));
+    const Eigen::Vector2d p =
+        g.origin_m() + g.extent_m().cwiseProduct(Eigen::Vector2d(u(rng), u(rng)));
     const auto cell = g.FindCell(p);
     ASSERT_TRUE(cell.has_value());
     worst = std::max(worst, (g.CellCentre(*cell) - p).cwiseAbs().maxCoeff());

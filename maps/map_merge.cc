@@ -46,7 +46,8 @@ void AddLayers(const CropMap& from, const MapGrid& grid, MapLayers& into) {
   for (size_t i = 0; i < g.size(); ++i) {
     const Cell c = g.CellOf(i);
     const size_t j = grid.Index({c.col + dc, c.row + dr});
-    if (Priority(static_cast<CellClass>(l.cls[i])) > Priority(static_cast<CellClass>(into.cls[j]))) {
+    if (Priority(static_cast<CellClass>(l.cls[i])) >
+        Priority(static_cast<CellClass>(into.cls[j]))) {
       into.cls[j] = l.cls[i];
     }
     into.crop_count[j] = add(into.crop_count[j], l.crop_count[i]);
@@ -68,7 +69,8 @@ class Registry {
       return;
     }
     MapPlant copy = p;
-    if (std::any_of(plants_.begin(), plants_.end(), [&](const MapPlant& q) { return q.id == p.id; })) {
+    if (std::any_of(plants_.begin(), plants_.end(),
+                    [&](const MapPlant& q) { return q.id == p.id; })) {
       copy.id = max_id_ + 1;
     }
     max_id_ = std::max(max_id_, copy.id);

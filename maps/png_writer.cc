@@ -16,7 +16,8 @@ namespace {
 constexpr int kMargin = 24;
 constexpr int kLegendWidth = 250;
 constexpr int kScaleBarHeight = 56;
-const cv::Vec3b kSoil{70, 105, 140}, kCrop{60, 170, 40}, kWeed{40, 40, 220}, kUnknown{150, 150, 150};
+const cv::Vec3b kSoil{70, 105, 140}, kCrop{60, 170, 40}, kWeed{40, 40, 220},
+    kUnknown{150, 150, 150};
 const cv::Vec3b kTreated{230, 120, 20};
 
 // Treated cells: the class colour tinted towards blue.
@@ -24,10 +25,14 @@ cv::Vec3b Tinted(const cv::Vec3b& colour) { return 0.45 * colour + 0.55 * kTreat
 
 cv::Vec3b ColourOf(CellClass c) {
   switch (c) {
-    case CellClass::kSoil: return kSoil;
-    case CellClass::kCrop: return kCrop;
-    case CellClass::kWeed: return kWeed;
-    case CellClass::kUnknown: return kUnknown;
+    case CellClass::kSoil:
+      return kSoil;
+    case CellClass::kCrop:
+      return kCrop;
+    case CellClass::kWeed:
+      return kWeed;
+    case CellClass::kUnknown:
+      return kUnknown;
   }
   return kUnknown;
 }
@@ -54,8 +59,10 @@ void Text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.5) 
 
 std::string Metres(double m) {
   char buf[32];
-  if (m < 1.0) std::snprintf(buf, sizeof buf, "%.0f cm", m * 100.0);
-  else std::snprintf(buf, sizeof buf, "%g m", m);
+  if (m < 1.0)
+    std::snprintf(buf, sizeof buf, "%.0f cm", m * 100.0);
+  else
+    std::snprintf(buf, sizeof buf, "%g m", m);
   return buf;
 }
 
@@ -85,10 +92,13 @@ void DrawNorthArrow(cv::Mat& img, cv::Point centre, double heading_deg) {
 void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* georef) {
   int y = kMargin + 14;
   Text(img, "plantscale crop map", {x, y}, 0.6);
-  const std::pair<const char*, cv::Vec3b> keys[] = {
-      {"soil", kSoil}, {"crop", kCrop}, {"weed", kWeed}, {"unknown (not seen)", kUnknown},
-      {"weed, treated", Tinted(kWeed)}, {"crop, treated", Tinted(kCrop)},
-      {"soil, treated", Tinted(kSoil)}};
+  const std::pair<const char*, cv::Vec3b> keys[] = {{"soil", kSoil},
+                                                    {"crop", kCrop},
+                                                    {"weed", kWeed},
+                                                    {"unknown (not seen)", kUnknown},
+                                                    {"weed, treated", Tinted(kWeed)},
+                                                    {"crop, treated", Tinted(kCrop)},
+                                                    {"soil, treated", Tinted(kSoil)}};
   for (const auto& [name, colour] : keys) {
     y += 28;
     cv::rectangle(img, cv::Rect(x, y - 14, 22, 18), cv::Scalar(colour), cv::FILLED);
@@ -101,8 +111,9 @@ void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* geo
   }
   const auto src = map.metadata().find("source");
   y += 40;
-  Text(img, std::to_string(crops) + " crops, " + std::to_string(weeds) + " weeds" +
-                (unknown > 0 ? ", " + std::to_string(unknown) + " unclassified" : ""),
+  Text(img,
+       std::to_string(crops) + " crops, " + std::to_string(weeds) + " weeds" +
+           (unknown > 0 ? ", " + std::to_string(unknown) + " unclassified" : ""),
        {x, y}, 0.45);
   Text(img, "cell " + Metres(map.grid().resolution_m()), {x, y += 22}, 0.45);
   if (src != map.metadata().end()) Text(img, "source: " + src->second, {x, y += 22}, 0.45);

@@ -23,8 +23,8 @@ std::vector<uint16_t> BandValues(const CropMap& map, int b) {
   for (int line = 0; line < g.rows(); ++line) {
     for (int col = 0; col < g.cols(); ++col) {
       const size_t i = g.Index({col, g.rows() - 1 - line});
-      const size_t o = static_cast<size_t>(line) * static_cast<size_t>(g.cols()) +
-                       static_cast<size_t>(col);
+      const size_t o =
+          static_cast<size_t>(line) * static_cast<size_t>(g.cols()) + static_cast<size_t>(col);
       const bool unknown = l.cls[i] == static_cast<uint8_t>(CellClass::kUnknown);
       const uint16_t v = b == 0   ? l.cls[i]
                          : b == 1 ? l.crop_count[i]
@@ -37,7 +37,7 @@ std::vector<uint16_t> BandValues(const CropMap& map, int b) {
 }
 
 void SetGeoreference(GDALDataset& ds, const CropMap& map, const Georeference& georef,
-                  const std::filesystem::path& file) {
+                     const std::filesystem::path& file) {
   std::array<double, 6> gt = georef.GeoTransform(map.grid());
   const OGRSpatialReference srs = ProjectedSrs(georef);
   if (ds.SetGeoTransform(gt.data()) != CE_None || ds.SetSpatialRef(&srs) != CE_None) {
@@ -51,8 +51,7 @@ void WriteBand(GDALDataset& ds, const CropMap& map, int b, const std::filesystem
   band->SetDescription(kBandNames[b]);
   band->SetNoDataValue(kNoData);
   if (band->RasterIO(GF_Write, 0, 0, map.grid().cols(), map.grid().rows(), values.data(),
-                     map.grid().cols(), map.grid().rows(), GDT_UInt16, 0, 0,
-                     nullptr) != CE_None) {
+                     map.grid().cols(), map.grid().rows(), GDT_UInt16, 0, 0, nullptr) != CE_None) {
     ThrowGdal(file, std::string("cannot write band ") + kBandNames[b]);
   }
 }

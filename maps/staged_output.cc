@@ -14,8 +14,8 @@ void MakeFolder(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
-    throw MapIoError(dir.string(), "cannot create folder: " +
-                                       (ec ? ec.message() : std::string("not a folder")));
+    throw MapIoError(dir.string(),
+                     "cannot create folder: " + (ec ? ec.message() : std::string("not a folder")));
   }
 }
 

@@ -123,7 +123,8 @@ void WritePlantsCsv(const CropMap& map, const Georeference& georef, const fs::pa
   MemoryFile mem(file);
   DatasetPtr ds = CreateDataset("CSV", mem);
   const OGRSpatialReference srs = ProjectedSrs(georef);
-  OGRLayer& layer = MakeLayer(*ds, "plants", &srs, wkbPoint, file, {"GEOMETRY=AS_XY", "STRING_QUOTING=IF_NEEDED"});
+  OGRLayer& layer = MakeLayer(*ds, "plants", &srs, wkbPoint, file,
+                              {"GEOMETRY=AS_XY", "STRING_QUOTING=IF_NEEDED"});
   AddPlantFields(layer, file);
   WritePlantFeatures(layer, map, georef, false, file);
   CloseAndCopy(ds, mem);

@@ -16,12 +16,14 @@ struct IsoxmlOptions;
 
 // Bands 1..4: class, crop_count, weed_count, treated (UInt16, nodata 65535
 // where the class is unknown), DEFLATE, tiled, internal overviews.
-void WriteGeoTiff(const CropMap& map, const Georeference& georef, const std::filesystem::path& file);
+void WriteGeoTiff(const CropMap& map, const Georeference& georef,
+                  const std::filesystem::path& file);
 // Layers plants (points), rows (lines), treated_areas (polygons), run_metadata (table).
 void WriteGeoPackage(const CropMap& map, const Georeference& georef,
                      const std::filesystem::path& file);
 // Plants as RFC 7946 GeoJSON (WGS84 lon/lat).
-void WriteGeoJson(const CropMap& map, const Georeference& georef, const std::filesystem::path& file);
+void WriteGeoJson(const CropMap& map, const Georeference& georef,
+                  const std::filesystem::path& file);
 // Plants as CSV: X, Y in the export CRS, then the plant attributes.
 void WritePlantsCsv(const CropMap& map, const Georeference& georef,
                     const std::filesystem::path& file);
