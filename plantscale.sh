@@ -12,6 +12,7 @@ PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libopencv-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libspdlog-dev
   liblcm-dev liblcm-bin libglib2.0-dev
+  libgdal-dev gdal-bin
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )

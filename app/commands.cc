@@ -1,5 +1,6 @@
 #include "app/commands.h"
 
+#include "app/export_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
@@ -10,6 +11,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddSimulateCommands(registry_);
   AddSegmentCommands(registry_);
   AddTelemetryCommands(registry_);
+  AddExportCommands(registry_);
 }
 
 }  // namespace plantscale::app
