@@ -39,10 +39,16 @@ OptionErrors SegmenterOptions::Validate() const {
   return e;
 }
 
-Segmenter::Segmenter(const SegmenterOptions& options)
-    : options_(options), blobs_(options.blobs), local_(options.local) {
-  ThrowIfInvalid("segmenter options", options_.Validate());
+namespace {
+// Validated before any member is built, so every error is reported at once.
+const SegmenterOptions& Validated(const SegmenterOptions& options) {
+  ThrowIfInvalid("segmenter options", options.Validate());
+  return options;
 }
+}  // namespace
+
+Segmenter::Segmenter(const SegmenterOptions& options)
+    : options_(Validated(options)), blobs_(options.blobs), local_(options.local) {}
 
 void Segmenter::Threshold(const cv::Mat& image) {
   if (image.empty() || (image.type() != CV_8UC1 && image.type() != CV_8UC3)) {

@@ -1,0 +1,64 @@
+#include "engine/vision/segmenter.h"
+
+#include <gtest/gtest.h>
+
+#include "engine/geometry/test_cameras.h"
+#include "engine/sim/simulator.h"
+
+namespace plantscale::vision {
+namespace {
+
+TEST(Segmenter, RejectsImagesItCannotSegment) {
+  Segmenter segmenter({});
+  EXPECT_THROW(segmenter.Process(cv::Mat()), DataError);
+  EXPECT_THROW(segmenter.Process(cv::Mat(10, 10, CV_16UC1, cv::Scalar(0))), DataError);
+  EXPECT_THROW(segmenter.Process(cv::Mat(10, 10, CV_8UC2, cv::Scalar(0))), DataError);
+  SegmenterOptions bad;
+  bad.adaptive_gain = -1.0;
+  bad.local.opening_cells = 4;
+  try {
+    Segmenter s(bad);
+    FAIL() << "invalid options accepted";
+  } catch (const InvalidOptionsError& e) {
+    ASSERT_EQ(e.errors().size(), 2u);
+    EXPECT_EQ(e.errors()[0].key, "adaptive_gain");
+    EXPECT_EQ(e.errors()[1].key, "local.opening_cells");
+  }
+}
+
+// On a simulated 6-week frame (leaf shadows, plant shadows) the default
+// segmentation finds most plant pixels with little soil, and one blob per
+// sizeable plant in view.
+TEST(Segmenter, SimulatedFrameAgainstLabels) {
+  sim::SimulatorOptions o;
+  o.camera = geometry::testing::ThesisCamera();
+  o.field.crop_radius_m = 0.14;
+  o.render.leaf_shadow_fraction = 0.2;
+  o.render.plant_shadow_depth = 0.2;
+  o.seed = 4;
+  sim::Simulator simulator(o);
+  sim::SimFrame frame;
+  for (int i = 0; i < 20; ++i) ASSERT_TRUE(simulator.Next(frame));
+  Segmenter segmenter({});
+  const Segmentation& s = segmenter.Process(frame.rendered.image, simulator.camera());
+  const cv::Mat plant = frame.rendered.labels != 0;
+  const double tp = cv::countNonZero(s.mask & plant);
+  const double fp = cv::countNonZero(s.mask & ~plant);
+  const double recall = tp / cv::countNonZero(plant);
+  const double precision = tp / (tp + fp);
+  EXPECT_GT(recall, 0.85);
+  EXPECT_GT(precision, 0.95);
+  int big_crops = 0;
+  for (const sim::PlantTruth& p : frame.truth.plants) {
+    if (p.cls == sim::PlantClass::kCrop && p.area_px > 400) ++big_crops;
+  }
+  int big_blobs = 0;
+  for (const Blob& b : s.blobs) {
+    if (b.area_px > 300) ++big_blobs;
+    EXPECT_TRUE(b.on_ground);
+  }
+  EXPECT_NEAR(big_blobs, big_crops, 2);
+}
+
+}  // namespace
+}  // namespace plantscale::vision

@@ -1,0 +1,107 @@
+#include "engine/vision/threshold.h"
+
+#include <gtest/gtest.h>
+
+#include "engine/vision/colour_index.h"
+#include "engine/vision/local_threshold.h"
+
+namespace plantscale::vision {
+namespace {
+
+TEST(Threshold, FixedIsGreaterOrEqualAsEquation214) {
+  cv::Mat grey = (cv::Mat_<uint8_t>(1, 4) << 99, 100, 101, 255);
+  cv::Mat mask;
+  FixedThreshold(grey, 100.0, mask);
+  EXPECT_EQ(mask.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(mask.at<uint8_t>(0, 1), 255);  // I == τ is plant
+  EXPECT_EQ(mask.at<uint8_t>(0, 3), 255);
+  FixedThreshold(grey, 100.5, mask);  // fractional τ: 100 < 100.5
+  EXPECT_EQ(mask.at<uint8_t>(0, 1), 0);
+  EXPECT_EQ(mask.at<uint8_t>(0, 2), 255);
+}
+
+TEST(Threshold, OtsuSplitsTwoModes) {
+  cv::Mat grey(10, 100, CV_8UC1, cv::Scalar(60));
+  grey.colRange(70, 100).setTo(180);
+  cv::Mat mask;
+  const double tau = OtsuThreshold(grey, mask);
+  EXPECT_GT(tau, 60.0);
+  EXPECT_LE(tau, 180.0);
+  EXPECT_EQ(cv::countNonZero(mask), 300);
+}
+
+TEST(Threshold, AdaptiveMeansInterpolateThroughTheHalfCentres) {
+  // Top half 40, bottom half 80: μ(v) passes 40 at v = h/4 and 80 at 3h/4.
+  cv::Mat grey(100, 10, CV_8UC1, cv::Scalar(40));
+  grey.rowRange(50, 100).setTo(80);
+  const InterpolatedMean m = ComputeInterpolatedMean(grey);
+  EXPECT_NEAR(m.top, 40.0, 1e-12);
+  EXPECT_NEAR(m.bottom, 80.0, 1e-12);
+  EXPECT_NEAR(m.At(24) + m.At(25), 80.0, 1e-9);     // centres 24.5, 25.5 straddle 25
+  EXPECT_NEAR(m.At(74) + m.At(75), 160.0, 1e-9);
+  EXPECT_NEAR(m.At(0), 40.0 - 40.0 * 24.5 / 50.0, 1e-9);  // extrapolated above
+}
+
+TEST(Threshold, AdaptiveMaskMatchesEquation215PixelByPixel) {
+  cv::Mat grey(64, 48, CV_8UC1);
+  cv::randu(grey, 0, 256);
+  const double alpha = 1.37;
+  cv::Mat mask;
+  AdaptiveInterpolatingThreshold(grey, alpha, mask);
+  const InterpolatedMean m = ComputeInterpolatedMean(grey);
+  for (int v = 0; v < grey.rows; ++v) {
+    for (int u = 0; u < grey.cols; ++u) {
+      const bool plant = grey.at<uint8_t>(v, u) >= alpha * m.At(v);
+      ASSERT_EQ(mask.at<uint8_t>(v, u), plant ? 255 : 0) << u << "," << v;
+    }
+  }
+}
+
+// A hard shadow over the bottom quarter: soil 60 / plants 150 in sun, soil
+// 22 / plants 55 in shadow. The local soil level finds every plant and no soil
+// on both sides; one interpolated gradient cannot.
+TEST(LocalThreshold, ShadowedAndSunlitPlantsBothFound) {
+  cv::Mat grey(240, 320, CV_8UC1, cv::Scalar(60));
+  grey.rowRange(180, 240).setTo(22);
+  cv::Mat truth(grey.size(), CV_8UC1, cv::Scalar(0));
+  for (int k = 0; k < 8; ++k) {
+    const cv::Rect sun(20 + 36 * k, 40, 12, 12), shade(20 + 36 * k, 205, 12, 12);
+    grey(sun).setTo(150);
+    grey(shade).setTo(55);
+    truth(sun).setTo(255);
+    truth(shade).setTo(255);
+  }
+  LocalThreshold local;
+  cv::Mat mask;
+  local.Apply(grey, mask);
+  cv::Mat wrong = mask != truth;
+  wrong.rowRange(172, 188).setTo(0);  // one cell either side of the edge
+  EXPECT_EQ(cv::countNonZero(wrong), 0);
+  cv::Mat adaptive;
+  AdaptiveInterpolatingThreshold(grey, 1.6, adaptive);
+  // Hague's threshold misses the shadowed plants (8 × 144 pixels).
+  EXPECT_GE(cv::countNonZero(adaptive != truth), 8 * 144);
+}
+
+TEST(ColourIndex, GreenIsBrightSoilIsDarkGreyIsNeutral) {
+  // BGR: green leaf, brown soil, grey.
+  cv::Mat bgr(1, 3, CV_8UC3);
+  bgr.at<cv::Vec3b>(0, 0) = {40, 150, 60};
+  bgr.at<cv::Vec3b>(0, 1) = {60, 90, 120};
+  bgr.at<cv::Vec3b>(0, 2) = {100, 100, 100};
+  for (ColourIndex index : {ColourIndex::kExG, ColourIndex::kExGR, ColourIndex::kCIVE}) {
+    cv::Mat out;
+    ComputeColourIndex(bgr, index, out);
+    EXPECT_GT(out.at<uint8_t>(0, 0), out.at<uint8_t>(0, 1) + 20) << Name(index);
+  }
+  cv::Mat exg;
+  ComputeColourIndex(bgr, ColourIndex::kExG, exg);
+  // Leaf: r = .24, g = .6, b = .16 → ExG = 0.8 → 127.5 + 102 = 229.5.
+  EXPECT_NEAR(exg.at<uint8_t>(0, 0), 229.5, 1.0);
+  EXPECT_NEAR(exg.at<uint8_t>(0, 2), 127.5, 0.6);  // grey: ExG = 0
+  EXPECT_EQ(ParseColourIndex("exgr"), ColourIndex::kExGR);
+  EXPECT_FALSE(ParseColourIndex("ndvi").has_value());
+}
+
+}  // namespace
+}  // namespace plantscale::vision
