@@ -68,6 +68,39 @@ void PrintTable(const SegmentationEvaluation& e, std::ostream& out) {
   }
 }
 
+// Southall's published figures (tables 2.1 and 2.2) for the sequence of the
+// same name, printed beside ours with --baseline thesis.
+void PrintThesisFigures(const std::string& preset, std::ostream& out) {
+  struct Row {
+    const char* name;
+    double fixed_auc, adaptive_auc, tpr, fpr;
+  };
+  static const Row kRows[] = {{"A", 0.9958, 0.9957, 0.95623, 0.00311},
+                              {"B", 0.9749, 0.9779, 0.82434, 0.00073},
+                              {"C", 0.9816, 0.9846, 0.83421, 0.00409},
+                              {"D", 0.8835, 0.9241, 0.28627, 0.00135}};
+  for (const Row& r : kRows) {
+    if (preset != r.name) continue;
+    out << std::setprecision(4) << "  thesis, published  fixed AUC " << r.fixed_auc
+        << ", adaptive AUC " << r.adaptive_auc << ", adaptive at Φ = 3.644: recall " << r.tpr
+        << ", FPR " << r.fpr << " (tables 2.1, 2.2)\n";
+    return;
+  }
+  out << "  thesis, published  no sequence named " << preset << " (tables 2.1/2.2 have A-D)\n";
+}
+
+void WriteRocCsv(const std::string& path, const SegmentationEvaluation& e) {
+  std::ofstream out(path);
+  out << "method,threshold,tpr,fpr\n";
+  for (const MethodEvaluation* m : {&e.ours, &e.thesis_fixed, &e.thesis_adaptive}) {
+    const std::string name = m == &e.ours ? "ours_" + m->method : "thesis_" + m->method;
+    for (const vision::RocPoint& p : m->curve.points) {
+      out << name << ',' << p.threshold << ',' << p.tpr << ',' << p.fpr << '\n';
+    }
+  }
+  if (!out.flush()) throw std::runtime_error("cannot write ROC curve to " + path);
+}
+
 int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& global) {
   SegmentationEvalOptions o;
   o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
@@ -78,13 +111,19 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   o.frames_per_seed = a.frames;
   o.costs_ratio = a.costs_ratio;
   o.segmenter.method = *vision::ParseThresholdMethod(a.method);
-  if (a.gain > 0) { o.segmenter.local.gain = a.gain; o.segmenter.adaptive_gain = a.gain; o.segmenter.fixed_threshold = a.gain; }
+  if (a.gain > 0) {
+    o.segmenter.local.gain = a.gain;
+    o.segmenter.adaptive_gain = a.gain;
+    o.segmenter.fixed_threshold = a.gain;
+  }
   if (a.smoothing_px >= 0) o.segmenter.smoothing_px = a.smoothing_px;
   const SegmentationEvaluation e = EvaluateSegmentation(o);
+  if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';
   } else {
     PrintTable(e, std::cout);
+    if (a.baseline == "thesis") PrintThesisFigures(e.preset, std::cout);
   }
   return 0;
 }
@@ -155,9 +194,11 @@ void AddSegmentCommands(CommandRegistry& registry) {
   cmd->add_option("--costs-ratio", ev.costs_ratio, "Φ of thesis eq. 2.23 for baselines")
       ->capture_default_str();
   cmd->add_flag("--json", ev.json, "print one JSON object");
-  cmd->add_option("--method", ev.method, "threshold method")->check(CLI::IsMember({"fixed", "otsu", "adaptive", "local"}));
-  cmd->add_option("--gain", ev.gain, "gain");
-  cmd->add_option("--smoothing-px", ev.smoothing_px, "smoothing");
+  cmd->add_option("--method", ev.method, "the method evaluated as ours")
+      ->check(CLI::IsMember({"fixed", "otsu", "adaptive", "local"}))
+      ->capture_default_str();
+  cmd->add_option("--gain", ev.gain, "its operating parameter (α, or τ for fixed)");
+  cmd->add_option("--smoothing-px", ev.smoothing_px, "its smoothing sigma, pixels");
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
   cmd->add_option("--baseline", ev.baseline, "also report the thesis's baselines")
       ->check(CLI::IsMember({"thesis"}));
