@@ -12,7 +12,7 @@ namespace {
 struct Published {
   const char* preset;
   double fixed_auc, adaptive_auc, adaptive_tpr;
-  double ours_min_auc;  // ≥ 0.99 where our conditions allow (D: see README)
+  double ours_min_auc;  // the 0.99
 };
 
 class SegmentationCalibration : public testing::TestWithParam<Published> {};
@@ -36,7 +36,7 @@ INSTANTIATE_TEST_SUITE_P(Presets, SegmentationCalibration,
                          testing::Values(Published{"A", 0.9958, 0.9957, 0.95623, 0.99},
                                          Published{"B", 0.9749, 0.9779, 0.82434, 0.99},
                                          Published{"C", 0.9816, 0.9846, 0.83421, 0.99},
-                                         Published{"D", 0.8835, 0.9241, 0.28627, 0.985}),
+                                         Published{"D", 0.8835, 0.9241, 0.28627, 0.99}),
                          [](const auto& p) { return std::string(p.param.preset); });
 
 }  // namespace
