@@ -15,17 +15,14 @@ namespace plantscale::app {
 namespace fs = std::filesystem;
 namespace {
 
-bool IsImageFile(const fs::path& p) {
+std::string LowerExtension(const fs::path& p) {
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
 }
-
-bool IsJpeg(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".jpg" || ext == ".jpeg";
-}
+bool IsJpeg(const fs::path& p) { return LowerExtension(p) == ".jpg" || LowerExtension(p) == ".jpeg"; }
+bool IsImageFile(const fs::path& p) { return IsJpeg(p) || LowerExtension(p) == ".png"; }
 
 // libjpeg decodes a truncated file into a grey-filled image with only a
 // warning; a complete JPEG ends with the EOI marker FF D9.
