@@ -53,10 +53,9 @@ struct Confusion {
   }
 };
 
+// Pixel rates at a point of the curve, from the same counts as Confusion.
 PixelRates RatesAt(const vision::RocPoint& p, const vision::RocCurve& c) {
-  const double fp = static_cast<double>(p.fp), tp = static_cast<double>(p.tp);
-  return {p.tpr, tp + fp > 0 ? tp / (tp + fp) : 0.0, 1.0 - p.fpr, p.fpr};
-  (void)c;
+  return Confusion{p.tp, p.fp, c.negatives - p.fp, c.positives - p.tp}.Rates();
 }
 
 struct Accumulators {

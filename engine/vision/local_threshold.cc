@@ -93,12 +93,6 @@ void LocalThreshold::Apply(const cv::Mat& grey, cv::Mat& mask) {
   }
 }
 
-const cv::Mat& LocalThreshold::ThresholdImage(cv::Size size) {
-  opened_.convertTo(threshold_cells_, CV_8U, options_.gain);
-  cv::resize(threshold_cells_, threshold_, size, 0.0, 0.0, cv::INTER_LINEAR);
-  return threshold_;
-}
-
 void LocalThreshold::Score(const cv::Mat& grey, cv::Mat& score) {
   PLANTSCALE_CHECK(!opened_.empty(), "Score after Estimate");
   cv::resize(opened_, level_, grey.size(), 0.0, 0.0, cv::INTER_LINEAR);

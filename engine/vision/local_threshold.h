@@ -44,8 +44,6 @@ class LocalThreshold {
   // Score I / B (CV_32FC1) of the last estimated image: thresholding it at
   // `gain` gives the mask (for ROC curves over the gain).
   void Score(const cv::Mat& grey, cv::Mat& score);
-  // α·B at full size (CV_8UC1), made on demand: Apply does not need it.
-  const cv::Mat& ThresholdImage(cv::Size size);
   // α·B on the cell grid (CV_8UC1) of the last Apply.
   const cv::Mat& cell_thresholds() const { return threshold_cells_; }
   const LocalThresholdOptions& options() const { return options_; }
@@ -54,7 +52,7 @@ class LocalThreshold {
   LocalThresholdOptions options_;
   void ExpandThresholdRows(int width);
 
-  cv::Mat cells_, opened_, kernel_, level_, threshold_cells_, threshold_;
+  cv::Mat cells_, opened_, kernel_, level_, threshold_cells_;
   cv::Mat expanded_;  // CV_8UC1: α·B per cell row, interpolated along u
   struct Column {
     int c0, c1, w;  // neighbouring cell columns and the weight of c1 (/256)

@@ -87,13 +87,4 @@ void AdaptiveScore(const cv::Mat& grey, const InterpolatedMean& mean, cv::Mat& s
   }
 }
 
-void RowThreshold(const cv::Mat& grey, const double* thresholds, cv::Mat& mask) {
-  CheckGrey(grey);
-  mask.create(grey.size(), CV_8UC1);
-  for (int v = 0; v < grey.rows; ++v) {
-    ThresholdRow(grey.ptr<uint8_t>(v), mask.ptr<uint8_t>(v), grey.cols,
-                 IntegerThreshold(thresholds[v]));
-  }
-}
-
 }  // namespace plantscale::vision

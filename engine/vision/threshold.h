@@ -36,8 +36,5 @@ void AdaptiveInterpolatingThreshold(const cv::Mat& grey, const InterpolatedMean&
 // The score the adaptive threshold compares with α: I / μ(v) (CV_32FC1).
 void AdaptiveScore(const cv::Mat& grey, const InterpolatedMean& mean, cv::Mat& score);
 
-// Row-wise threshold: O(u, v) = 255 where I(u, v) >= thresholds[v]. The
-// building block of the two above; thresholds may be fractional.
-void RowThreshold(const cv::Mat& grey, const double* thresholds, cv::Mat& mask);
 
 }  // namespace plantscale::vision
