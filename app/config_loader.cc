@@ -153,6 +153,8 @@ void ReadField(MapReader& r, sim::FieldOptions& o) {
   r.Get("rows", o.rows);
   r.Get("row_spacing_m", o.row_spacing_m);
   r.Get("plant_spacing_m", o.plant_spacing_m);
+  r.Get("nominal_row_spacing_m", o.nominal_row_spacing_m);
+  r.Get("nominal_plant_spacing_m", o.nominal_plant_spacing_m);
   r.Get("spacing_drift_fraction", o.spacing_drift_fraction);
   r.Get("spacing_drift_wavelength_m", o.spacing_drift_wavelength_m);
   r.Get("planting_jitter_m", o.planting_jitter_m);

@@ -41,6 +41,8 @@ OptionErrors FieldOptions::Validate() const {
   if (rows < 1 || rows > 15 || rows % 2 == 0) e.push_back({"rows", "must be odd, 1..15"});
   RequirePositive(e, "row_spacing_m", row_spacing_m);
   RequirePositive(e, "plant_spacing_m", plant_spacing_m);
+  RequireNonNegative(e, "nominal_row_spacing_m", nominal_row_spacing_m);
+  RequireNonNegative(e, "nominal_plant_spacing_m", nominal_plant_spacing_m);
   RequireInRange(e, "spacing_drift_fraction", spacing_drift_fraction, 0.0, 0.2);
   RequirePositive(e, "spacing_drift_wavelength_m", spacing_drift_wavelength_m);
   RequireNonNegative(e, "planting_jitter_m", planting_jitter_m);

@@ -47,6 +47,18 @@ struct FieldOptions {
   int rows = 3;                          // rows in the bed (odd: a central row)
   double row_spacing_m = 0.475;          // r̄ (thesis test footage ≈ 475 mm)
   double plant_spacing_m = 0.45;         // l̄ (≈ 450 mm)
+  // The spacings the grower set on the planter, which is all a tracker that
+  // does not estimate them is told; 0: the same as planted. A planter's
+  // ground wheel slips, so the planted l̄ is often a few per cent longer
+  // (thesis §8.1.1: the fixed-grid tracker under-read distance by 3–4 %).
+  double nominal_row_spacing_m = 0.0;
+  double nominal_plant_spacing_m = 0.0;
+  double NominalRowSpacing() const {
+    return nominal_row_spacing_m > 0.0 ? nominal_row_spacing_m : row_spacing_m;
+  }
+  double NominalPlantSpacing() const {
+    return nominal_plant_spacing_m > 0.0 ? nominal_plant_spacing_m : plant_spacing_m;
+  }
   double spacing_drift_fraction = 0.01;  // amplitude of the slow drift of r̄ and l̄
   double spacing_drift_wavelength_m = 25.0;
   double planting_jitter_m = 0.012;  // per-plant placement error (sd)

@@ -1,0 +1,160 @@
+#include "app/tracking_commands.h"
+
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "app/config_loader.h"
+#include "app/segment_commands.h"
+#include "app/tracking_eval.h"
+
+namespace plantscale::app {
+namespace {
+
+struct TrackingArgs {
+  std::string preset = "long";
+  int seeds = 10;
+  std::optional<int64_t> seed;
+  std::optional<double> length_m;
+  double spacing_offset_mm = 25.0;
+  std::string baseline;
+  bool json = false;
+};
+
+nlohmann::json MetricsJson(const TrackingMetrics& m) {
+  return {
+      {"lateral_rmse_m", m.lateral_rmse_m},
+      {"lateral_mean_m", m.lateral_mean_m},
+      {"bearing_rmse_deg", m.bearing_rmse_deg},
+      {"forward_drift_cm_per_m", m.forward_drift_cm_per_m},
+      {"forward_drift_abs_max_cm_per_m", m.forward_drift_abs_max_cm_per_m},
+      {"row_spacing_error_m", m.row_spacing_error_m},
+      {"plant_spacing_error_m", m.plant_spacing_error_m},
+      {"nees_in_bounds_fraction", m.nees_in_bounds_fraction},
+      {"nees_mean", m.nees_mean},
+      {"lateral_sd_mean_m", m.lateral_sd_mean_m},
+      {"init_success_rate", m.init_success_rate},
+      {"init_frames_p95", m.init_frames_p95},
+      {"init_trials", m.init_trials},
+      {"frames_scored", m.frames},
+      {"frames_tracking", m.frames_tracking},
+      {"updates", m.updates},
+      {"losses", m.losses},
+      {"mean_matched", m.mean_matched},
+      {"run_lateral_rmse_m", m.run_lateral_rmse_m},
+      {"run_forward_drift_cm_per_m", m.run_forward_drift_cm_per_m},
+  };
+}
+
+// The thesis's own figures for its tracker (tables 5.22, 8.1, 8.2; §8.1.1).
+struct ThesisFigure {
+  const char* key;
+  const char* text;
+};
+constexpr ThesisFigure kThesis[] = {
+    {"lateral_rmse_m", "15.3 mm field (table 8.1), 5.8-7.3 mm test bed (table 5.22)"},
+    {"bearing_rmse_deg", "not measured"},
+    {"forward_drift_cm_per_m", "-3.0 to -4.1 cm/m field (table 8.2)"},
+    {"row_spacing_error_m", "fixed grid"},
+    {"plant_spacing_error_m", "fixed grid"},
+    {"nees_in_bounds_fraction", "about 2x overconfident (table 5.22)"},
+    {"lateral_sd_mean_m", "2.25 mm field, 3.1 mm test bed (§8.1.1)"},
+    {"init_success_rate", "hand start fails ~5 % (ch. 6)"},
+};
+
+void PrintTable(const TrackingEvaluation& e, std::ostream& out) {
+  out << "evaluate tracking: preset " << e.preset << ", " << e.seeds << " seed(s), "
+      << e.distance_m << " m per run\n";
+  const auto row = [&](const char* name, double ours, std::optional<double> thesis_run,
+                       const char* key, double scale, const char* unit) {
+    char buffer[256];
+    std::snprintf(buffer, sizeof buffer, "  %-26s %10.3f %-6s", name, ours * scale, unit);
+    out << buffer;
+    if (thesis_run) {
+      std::snprintf(buffer, sizeof buffer, " | thesis tracker here %10.3f", *thesis_run * scale);
+      out << buffer;
+    }
+    for (const ThesisFigure& f : kThesis) {
+      if (std::string(f.key) == key) out << " | thesis: " << f.text;
+    }
+    out << '\n';
+  };
+  const auto t = [&](double TrackingMetrics::*field) -> std::optional<double> {
+    if (!e.thesis) return std::nullopt;
+    return (*e.thesis).*field;
+  };
+  row("lateral RMSE", e.ours.lateral_rmse_m, t(&TrackingMetrics::lateral_rmse_m),
+      "lateral_rmse_m", 1000.0, "mm");
+  row("filter sigma(t_x), mean", e.ours.lateral_sd_mean_m, t(&TrackingMetrics::lateral_sd_mean_m),
+      "lateral_sd_mean_m", 1000.0, "mm");
+  row("bearing RMSE", e.ours.bearing_rmse_deg, t(&TrackingMetrics::bearing_rmse_deg),
+      "bearing_rmse_deg", 1.0, "deg");
+  row("forward drift (mean)", e.ours.forward_drift_cm_per_m,
+      t(&TrackingMetrics::forward_drift_cm_per_m), "forward_drift_cm_per_m", 1.0, "cm/m");
+  row("forward drift (worst run)", e.ours.forward_drift_abs_max_cm_per_m,
+      t(&TrackingMetrics::forward_drift_abs_max_cm_per_m), "", 1.0, "cm/m");
+  row("row spacing error", e.ours.row_spacing_error_m, t(&TrackingMetrics::row_spacing_error_m),
+      "row_spacing_error_m", 1000.0, "mm");
+  row("plant spacing error", e.ours.plant_spacing_error_m,
+      t(&TrackingMetrics::plant_spacing_error_m), "plant_spacing_error_m", 1000.0, "mm");
+  row("NEES in 95 % bounds", e.ours.nees_in_bounds_fraction,
+      t(&TrackingMetrics::nees_in_bounds_fraction), "nees_in_bounds_fraction", 1.0, "");
+  row("NEES mean (3 ideal)", e.ours.nees_mean, t(&TrackingMetrics::nees_mean), "", 1.0, "");
+  row("init success rate", e.ours.init_success_rate, t(&TrackingMetrics::init_success_rate),
+      "init_success_rate", 1.0, "");
+  row("init frames, p95", e.ours.init_frames_p95, t(&TrackingMetrics::init_frames_p95), "", 1.0,
+      "frames");
+  out << "  init trials " << e.ours.init_trials << ", losses " << e.ours.losses
+      << ", mean matched " << e.ours.mean_matched << " per frame\n";
+}
+
+int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) {
+  TrackingEvalOptions o;
+  o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
+  if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
+  if (a.length_m) o.sim.length_m = *a.length_m;
+  o.seeds = a.seeds;
+  o.spacing_offset_m = a.spacing_offset_mm / 1000.0;
+  o.baseline_thesis = a.baseline == "thesis";
+  const TrackingEvaluation e = EvaluateTracking(o);
+  if (a.json) {
+    nlohmann::json j = MetricsJson(e.ours);
+    j["preset"] = e.preset;
+    j["seeds"] = e.seeds;
+    j["distance_m"] = e.distance_m;
+    j["spacing_offset_m"] = o.spacing_offset_m;
+    if (e.thesis) j["baseline_thesis"] = MetricsJson(*e.thesis);
+    std::cout << j.dump(2) << '\n';
+  } else {
+    PrintTable(e, std::cout);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void AddTrackingCommands(CommandRegistry& registry) {
+  const GlobalOptions& global = registry.global();
+  TrackingArgs& args = registry.Keep(TrackingArgs{});
+  CLI::App* cmd = registry.Add(
+      "tracking", "crop-grid tracker accuracy, consistency and initialisation against truth",
+      [&args, &global] { return EvaluateTrackingCommand(args, global); },
+      EvaluateCommand(registry));
+  cmd->add_option("--preset", args.preset, "preset name or YAML file")->capture_default_str();
+  cmd->add_option("--seeds", args.seeds, "number of seeds")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--seed", args.seed, "first seed (default: the preset's)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--length-m", args.length_m, "distance driven per run (default: the preset's)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--spacing-offset-mm", args.spacing_offset_mm,
+                  "start the estimated spacings this far off the planted ones")
+      ->capture_default_str();
+  cmd->add_option("--baseline", args.baseline, "also run the thesis's tracker")
+      ->check(CLI::IsMember({"thesis"}));
+  cmd->add_flag("--json", args.json, "print one JSON object");
+}
+
+}  // namespace plantscale::app

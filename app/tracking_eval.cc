@@ -1,0 +1,286 @@
+#include "app/tracking_eval.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "engine/tracking/blob_features.h"
+
+namespace plantscale::app {
+
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+// Two-sided 95 % interval of χ² with 3 degrees of freedom.
+constexpr double kNeesLow = 0.2158;
+constexpr double kNeesHigh = 9.3484;
+
+int RowsEachSide(const sim::SimulatorOptions& s) { return (s.field.rows - 1) / 2; }
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const size_t i = static_cast<size_t>(std::floor(pos));
+  const size_t j = std::min(i + 1, v.size() - 1);
+  return v[i] + (pos - static_cast<double>(i)) * (v[j] - v[i]);
+}
+
+// One tracker under test on one run, with its error sums.
+struct Scorer {
+  tracking::GridTracker tracker;
+  vision::Segmenter segmenter;
+  const TrackingEvalOptions& options;
+  std::vector<tracking::Feature> features;
+  bool ever_tracked = false;
+  double init_distance_m = 0.0;
+  int start_frame = 0;
+  // Sums.
+  double lat2 = 0.0, lat = 0.0, bear2 = 0.0, sd = 0.0, nees = 0.0;
+  int scored = 0, nees_in = 0;
+  double row2 = 0.0, plant2 = 0.0;
+  int spacing_scored = 0;
+  int tracking_frames = 0, updates = 0, losses = 0;
+  double matched = 0.0;
+  std::vector<double> init_frames;
+  int init_trials = 0, init_successes = 0;
+
+  Scorer(const sim::Simulator& sim, const tracking::TrackerOptions& tracker_options,
+         const vision::SegmenterOptions& segmenter_options, const TrackingEvalOptions& o)
+      : tracker(sim.camera(), tracker_options), segmenter(segmenter_options), options(o) {}
+
+  void Frame(const sim::SimFrame& frame, int index, const geometry::CameraModel& camera) {
+    const auto& seg = segmenter.Process(frame.rendered.image, camera);
+    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features);
+    const bool was_tracking = tracker.mode() == tracking::TrackerMode::kTracking;
+    const tracking::FrameReport r = tracker.ProcessFrame(
+        frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
+    const geometry::GridState est = tracker.state();
+    const geometry::GridState& truth = frame.truth.grid;
+    if (r.initialised_now && !ever_tracked) {
+      ever_tracked = true;
+      init_distance_m = frame.truth.distance_m;
+      ++init_trials;
+      init_frames.push_back(index - start_frame + 1);
+      if (InitCorrect(est, truth)) ++init_successes;
+    }
+    if (was_tracking && tracker.mode() == tracking::TrackerMode::kLost) ++losses;
+    if (tracker.mode() != tracking::TrackerMode::kTracking) return;
+    ++tracking_frames;
+    if (r.updated) ++updates;
+    matched += r.matched;
+    const double past = frame.truth.distance_m - init_distance_m;
+    if (past < options.settle_m) return;
+    const double e_lat = est.offset_m - truth.offset_m;
+    const double e_bear = est.bearing_rad - truth.bearing_rad;
+    const double e_fwd = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
+    lat += e_lat;
+    lat2 += e_lat * e_lat;
+    bear2 += e_bear * e_bear;
+    const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
+    sd += std::sqrt(p(0, 0));
+    const Eigen::Vector3d e(e_lat, e_fwd, e_bear);
+    const double n = e.dot(p.ldlt().solve(e));
+    nees += n;
+    if (n >= kNeesLow && n <= kNeesHigh) ++nees_in;
+    ++scored;
+    if (past >= options.spacing_settle_m) {
+      row2 += std::pow(est.row_spacing_m - truth.row_spacing_m, 2);
+      plant2 += std::pow(est.plant_spacing_m - truth.plant_spacing_m, 2);
+      ++spacing_scored;
+    }
+  }
+
+  static bool InitCorrect(const geometry::GridState& est, const geometry::GridState& truth) {
+    return std::abs(est.offset_m - truth.offset_m) < 0.25 * truth.row_spacing_m &&
+           std::abs(std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m)) <
+               0.25 * truth.plant_spacing_m &&
+           std::abs(est.bearing_rad - truth.bearing_rad) < 0.035;
+  }
+};
+
+// Fresh initialisations at intervals along the run: frames to initialise
+// and whether the grid it started on was the right one.
+struct InitProbe {
+  tracking::GridTracker tracker;
+  bool active = false;
+  int start = 0;
+  double next_at_m = 0.0;
+
+  InitProbe(const sim::Simulator& sim, const tracking::TrackerOptions& o)
+      : tracker(sim.camera(), o) {}
+};
+
+void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMetrics& m,
+                std::vector<double>& init_frames, int& init_trials, int& init_successes) {
+  m.frames += s.scored;
+  m.frames_tracking += s.tracking_frames;
+  m.updates += s.updates;
+  m.losses += s.losses;
+  m.lateral_rmse_m += s.lat2;  // sums until Finish
+  m.lateral_mean_m += s.lat;
+  m.bearing_rmse_deg += s.bear2;
+  m.lateral_sd_mean_m += s.sd;
+  m.nees_mean += s.nees;
+  m.nees_in_bounds_fraction += s.nees_in;
+  m.row_spacing_error_m += s.row2;
+  m.plant_spacing_error_m += s.plant2;
+  m.mean_matched += s.matched;
+  m.run_lateral_rmse_m.push_back(s.scored > 0 ? std::sqrt(s.lat2 / s.scored) : std::nan(""));
+  m.run_forward_drift_cm_per_m.push_back(driven_m > 0 ? 100.0 * (estimated_m - driven_m) / driven_m
+                                                      : std::nan(""));
+  init_frames.insert(init_frames.end(), s.init_frames.begin(), s.init_frames.end());
+  init_trials += s.init_trials;
+  init_successes += s.init_successes;
+}
+
+void Finish(TrackingMetrics& m, int spacing_frames, const std::vector<double>& init_frames,
+            int init_trials, int init_successes) {
+  const double n = std::max(1, m.frames);
+  m.lateral_rmse_m = std::sqrt(m.lateral_rmse_m / n);
+  m.lateral_mean_m /= n;
+  m.bearing_rmse_deg = std::sqrt(m.bearing_rmse_deg / n) * kDeg;
+  m.lateral_sd_mean_m /= n;
+  m.nees_mean /= n;
+  m.nees_in_bounds_fraction /= n;
+  m.row_spacing_error_m = std::sqrt(m.row_spacing_error_m / std::max(1, spacing_frames));
+  m.plant_spacing_error_m = std::sqrt(m.plant_spacing_error_m / std::max(1, spacing_frames));
+  m.mean_matched /= std::max(1, m.frames_tracking);
+  double sum = 0.0;
+  double worst = 0.0;
+  for (double d : m.run_forward_drift_cm_per_m) {
+    sum += d;
+    worst = std::max(worst, std::abs(d));
+  }
+  m.forward_drift_cm_per_m = m.run_forward_drift_cm_per_m.empty()
+                                 ? 0.0
+                                 : sum / static_cast<double>(m.run_forward_drift_cm_per_m.size());
+  m.forward_drift_abs_max_cm_per_m = worst;
+  m.init_trials = init_trials;
+  m.init_success_rate = init_trials > 0 ? static_cast<double>(init_successes) / init_trials : 0.0;
+  m.init_frames_p95 = Percentile(init_frames, 0.95);
+}
+
+}  // namespace
+
+OptionErrors TrackingEvalOptions::Validate() const {
+  OptionErrors e = Prefixed("sim", sim.Validate());
+  if (seeds < 1) e.push_back({"seeds", "must be >= 1"});
+  RequireInRange(e, "spacing_offset_m", spacing_offset_m, -0.1, 0.1);
+  RequireNonNegative(e, "settle_m", settle_m);
+  RequireNonNegative(e, "spacing_settle_m", spacing_settle_m);
+  RequirePositive(e, "init_probe_interval_m", init_probe_interval_m);
+  if (init_probe_max_frames < 1) e.push_back({"init_probe_max_frames", "must be >= 1"});
+  return e;
+}
+
+tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, double offset) {
+  tracking::TrackerOptions o;
+  o.rows_each_side = RowsEachSide(s);
+  o.row_spacing_m = s.field.row_spacing_m + offset;
+  o.plant_spacing_m = s.field.plant_spacing_m + offset;
+  o.track_width_m = s.vehicle.track_width_m;
+  return o;
+}
+
+tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
+  tracking::TrackerOptions o;
+  o.estimate_spacing = false;
+  o.plant_offsets = false;
+  o.space = tracking::ObservationSpace::kImage;
+  o.rows_each_side = RowsEachSide(s);
+  o.row_spacing_m = s.field.NominalRowSpacing();
+  o.plant_spacing_m = s.field.NominalPlantSpacing();
+  o.track_width_m = s.vehicle.track_width_m;
+  o.feature_sd_m = 0.01;
+  o.pixel_sd_px = 0.0;
+  o.forward_sd_per_sqrt_m = 0.0;
+  o.lateral_sd_per_sqrt_m = 0.0;
+  o.bearing_sd_per_sqrt_m = 0.0;
+  o.frame_offset_sd_m = 0.002;
+  o.frame_forward_sd_m = 0.004;
+  o.frame_bearing_sd_rad = 0.002;
+  o.edge_margin_px = 0.0;
+  return o;
+}
+
+TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
+  ThrowIfInvalid("evaluate tracking", options.Validate());
+  TrackingEvaluation result;
+  result.preset = options.sim.preset;
+  result.seeds = options.seeds;
+  vision::SegmenterOptions ours_seg;
+  vision::SegmenterOptions thesis_seg;
+  thesis_seg.method = vision::ThresholdMethod::kAdaptive;
+
+  std::vector<double> init_frames_ours, init_frames_thesis;
+  int trials_ours = 0, successes_ours = 0, trials_thesis = 0, successes_thesis = 0;
+  int spacing_ours = 0, spacing_thesis = 0;
+  TrackingMetrics thesis_metrics;
+  for (int k = 0; k < options.seeds; ++k) {
+    sim::SimulatorOptions so = options.sim;
+    so.seed = options.sim.seed + static_cast<uint64_t>(k);
+    sim::Simulator simulator(so);
+    const tracking::TrackerOptions ours_options = OurTrackerOptions(so, options.spacing_offset_m);
+    Scorer ours(simulator, ours_options, ours_seg, options);
+    std::optional<Scorer> thesis;
+    if (options.baseline_thesis) thesis.emplace(simulator, ThesisTrackerOptions(so), thesis_seg, options);
+    InitProbe probe(simulator, ours_options);
+    probe.next_at_m = options.init_probe_interval_m;
+
+    sim::SimFrame frame;
+    int index = 0;
+    double last_distance = 0.0;
+    while (simulator.Next(frame)) {
+      for (const sim::OdometrySample& o : frame.odometry) {
+        ours.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+        if (thesis) thesis->tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+        probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+      }
+      ours.Frame(frame, index, simulator.camera());
+      if (thesis) thesis->Frame(frame, index, simulator.camera());
+      // The initialisation probe reuses ours's features of this frame.
+      if (!probe.active && frame.truth.distance_m >= probe.next_at_m) {
+        probe.tracker.Reset();
+        probe.active = true;
+        probe.start = index;
+        probe.next_at_m += options.init_probe_interval_m;
+      }
+      if (probe.active) {
+        const tracking::FrameReport r = probe.tracker.ProcessFrame(
+            frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, ours.features);
+        const int frames = index - probe.start + 1;
+        if (r.initialised_now) {
+          ++trials_ours;
+          init_frames_ours.push_back(frames);
+          if (Scorer::InitCorrect(probe.tracker.state(), frame.truth.grid)) ++successes_ours;
+          probe.active = false;
+        } else if (frames >= options.init_probe_max_frames) {
+          ++trials_ours;  // a failure
+          probe.active = false;
+        }
+      }
+      last_distance = frame.truth.distance_m;
+      ++index;
+    }
+    result.distance_m = last_distance;
+    Accumulate(ours, last_distance - ours.init_distance_m, ours.tracker.forward_distance_m(),
+               result.ours, init_frames_ours, trials_ours, successes_ours);
+    spacing_ours += ours.spacing_scored;
+    if (thesis) {
+      Accumulate(*thesis, last_distance - thesis->init_distance_m,
+                 thesis->tracker.forward_distance_m(), thesis_metrics, init_frames_thesis,
+                 trials_thesis, successes_thesis);
+      spacing_thesis += thesis->spacing_scored;
+    }
+  }
+  Finish(result.ours, spacing_ours, init_frames_ours, trials_ours, successes_ours);
+  if (options.baseline_thesis) {
+    Finish(thesis_metrics, spacing_thesis, init_frames_thesis, trials_thesis, successes_thesis);
+    result.thesis = thesis_metrics;
+  }
+  return result;
+}
+
+}  // namespace plantscale::app

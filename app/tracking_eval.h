@@ -1,0 +1,71 @@
+#pragma once
+// `plantscale evaluate tracking`: drives a simulator preset, segments every
+// frame, feeds odometry at its own rate and the blobs at the frame rate to
+// the grid tracker, and scores it against the simulator's grid truth.
+// The thesis's own tracker (3-state fixed grid, image-plane update with
+// R projected from the ground, constant process noise per frame, adaptive
+// threshold segmentation) runs on the same frames as the baseline
+// (SIMULATOR.md: calibrated presets).
+
+#include <string>
+#include <vector>
+
+#include "engine/sim/simulator.h"
+#include "engine/tracking/grid_tracker.h"
+#include "engine/vision/segmenter.h"
+
+namespace plantscale::app {
+
+struct TrackingEvalOptions {
+  sim::SimulatorOptions sim;
+  int seeds = 10;                  // sim.seed, sim.seed + 1, ...
+  double spacing_offset_m = 0.025; // ours starts with both spacings this far off the planted ones
+  bool baseline_thesis = false;
+  double settle_m = 1.0;           // errors count from this far past initialisation
+  double spacing_settle_m = 5.0;   // spacing errors count from this far
+  double init_probe_interval_m = 5.0;  // a fresh initialisation is tried this often
+  int init_probe_max_frames = 25;
+
+  OptionErrors Validate() const;
+};
+
+// The product's tracker options for a simulated vehicle and field.
+tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& sim,
+                                           double spacing_offset_m);
+// The thesis's on-line tracker (§4.6, ch. 8) with its noise settings.
+tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& sim);
+
+struct TrackingMetrics {
+  int frames = 0;           // frames scored (tracking, past settle_m)
+  int frames_tracking = 0;  // frames in which the filter was tracking
+  int updates = 0;
+  int losses = 0;
+  double lateral_rmse_m = 0.0;
+  double lateral_mean_m = 0.0;
+  double bearing_rmse_deg = 0.0;
+  double forward_drift_cm_per_m = 0.0;      // mean over runs, signed
+  double forward_drift_abs_max_cm_per_m = 0.0;
+  double row_spacing_error_m = 0.0;    // RMS past spacing_settle_m
+  double plant_spacing_error_m = 0.0;
+  double nees_in_bounds_fraction = 0.0;  // (t_x, Y, Ψ) inside the two-sided 95 % χ²₃ interval
+  double nees_mean = 0.0;
+  double lateral_sd_mean_m = 0.0;        // the filter's own σ(t_x)
+  double init_success_rate = 0.0;
+  double init_frames_p95 = 0.0;
+  int init_trials = 0;
+  double mean_matched = 0.0;
+  std::vector<double> run_lateral_rmse_m;
+  std::vector<double> run_forward_drift_cm_per_m;
+};
+
+struct TrackingEvaluation {
+  std::string preset;
+  int seeds = 0;
+  double distance_m = 0.0;  // driven per run
+  TrackingMetrics ours;
+  std::optional<TrackingMetrics> thesis;
+};
+
+TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options);
+
+}  // namespace plantscale::app

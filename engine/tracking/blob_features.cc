@@ -1,0 +1,20 @@
+#include "engine/tracking/blob_features.h"
+
+namespace plantscale::tracking {
+
+void FeaturesFromBlobs(std::span<const vision::Blob> blobs, int width, int height,
+                       std::vector<Feature>& out) {
+  out.clear();
+  for (const vision::Blob& b : blobs) {
+    if (!b.on_ground) continue;
+    Feature f;
+    f.ground_m = b.ground_m;
+    f.image_px = b.centroid_px;
+    f.area_m2 = b.ground_area_m2;
+    f.clipped = b.bbox_px.x <= 0 || b.bbox_px.y <= 0 || b.bbox_px.x + b.bbox_px.width >= width ||
+                b.bbox_px.y + b.bbox_px.height >= height;
+    out.push_back(f);
+  }
+}
+
+}  // namespace plantscale::tracking

@@ -1,0 +1,557 @@
+#include "engine/tracking/grid_tracker.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "engine/tracking/observation_model.h"
+
+namespace plantscale::tracking {
+
+using geometry::GridState;
+using geometry::Matrix5d;
+
+const char* ToString(TrackerMode mode) {
+  switch (mode) {
+    case TrackerMode::kInitialising: return "initialising";
+    case TrackerMode::kTracking: return "tracking";
+    case TrackerMode::kLost: return "lost";
+  }
+  return "unknown";
+}
+
+OptionErrors TrackerOptions::Validate() const {
+  OptionErrors e;
+  if (rows_each_side < 0 || rows_each_side > 10) e.push_back({"rows_each_side", "must be in [0, 10]"});
+  RequirePositive(e, "row_spacing_m", row_spacing_m);
+  RequirePositive(e, "plant_spacing_m", plant_spacing_m);
+  RequireNonNegative(e, "row_spacing_sd_m", row_spacing_sd_m);
+  RequireNonNegative(e, "plant_spacing_sd_m", plant_spacing_sd_m);
+  RequireNonNegative(e, "spacing_step_sd_m", spacing_step_sd_m);
+  RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
+  RequirePositive(e, "feature_sd_m", feature_sd_m);
+  RequireNonNegative(e, "pixel_sd_px", pixel_sd_px);
+  RequirePositive(e, "track_width_m", track_width_m);
+  RequireNonNegative(e, "wheel_sd_fraction", wheel_sd_fraction);
+  RequireNonNegative(e, "forward_sd_per_sqrt_m", forward_sd_per_sqrt_m);
+  RequireNonNegative(e, "lateral_sd_per_sqrt_m", lateral_sd_per_sqrt_m);
+  RequireNonNegative(e, "bearing_sd_per_sqrt_m", bearing_sd_per_sqrt_m);
+  RequireNonNegative(e, "frame_offset_sd_m", frame_offset_sd_m);
+  RequireNonNegative(e, "frame_forward_sd_m", frame_forward_sd_m);
+  RequireNonNegative(e, "frame_bearing_sd_rad", frame_bearing_sd_rad);
+  RequirePositive(e, "gate_chi2", gate_chi2);
+  RequireNonNegative(e, "edge_margin_px", edge_margin_px);
+  RequirePositive(e, "max_wheel_speed_m_s", max_wheel_speed_m_s);
+  RequirePositive(e, "max_odometry_gap_s", max_odometry_gap_s);
+  RequirePositive(e, "max_frame_lag_s", max_frame_lag_s);
+  RequirePositive(e, "lost_offset_sd_m", lost_offset_sd_m);
+  RequirePositive(e, "max_coast_s", max_coast_s);
+  for (auto& error : init.Validate()) e.push_back({"init." + error.key, error.reason});
+  return e;
+}
+
+namespace {
+
+geometry::GridModelOptions ModelOptions(const TrackerOptions& o) {
+  geometry::GridModelOptions m;
+  m.rows_each_side = o.rows_each_side;
+  m.in_view_margin_px = o.edge_margin_px;
+  return m;
+}
+
+bool Finite(const Feature& f) {
+  return std::isfinite(f.ground_m.x()) && std::isfinite(f.ground_m.y()) &&
+         std::isfinite(f.image_px.x()) && std::isfinite(f.image_px.y()) &&
+         std::isfinite(f.area_m2);
+}
+
+std::string Seconds(double s) {
+  std::ostringstream out;
+  out.precision(3);
+  out << s << " s";
+  return out.str();
+}
+
+}  // namespace
+
+GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptions& options)
+    : camera_(camera),
+      options_(options),
+      model_(camera, ModelOptions(options)),
+      initialiser_(options.init, options.row_spacing_m, options.plant_spacing_m,
+                   options.rows_each_side, options.track_width_m) {
+  ThrowIfInvalid("grid tracker", options.Validate());
+  Reset();
+}
+
+void GridTracker::Reset() {
+  mode_ = TrackerMode::kInitialising;
+  x_ = Eigen::VectorXd::Zero(core());
+  x_(GridState::kForward) = options_.plant_spacing_m;
+  if (options_.estimate_spacing) {
+    x_(GridState::kRowSpacing) = options_.row_spacing_m;
+    x_(GridState::kPlantSpacing) = options_.plant_spacing_m;
+  }
+  p_ = Eigen::MatrixXd::Zero(core(), core());
+  offsets_.clear();
+  initialiser_.Reset();
+  since_frame_ = {};
+  lines_in_view_ = -1;
+  lines_passed_ = 0;
+  passed_m_ = 0.0;
+  initial_forward_m_ = x_(GridState::kForward);
+  dr_since_loss_m_ = 0.0;
+  distance_at_loss_m_ = 0.0;
+  was_lost_ = false;
+}
+
+GridState GridTracker::state() const {
+  GridState s;
+  s.offset_m = x_(GridState::kOffset);
+  s.forward_m = x_(GridState::kForward);
+  s.bearing_rad = x_(GridState::kBearing);
+  s.row_spacing_m = options_.estimate_spacing ? x_(GridState::kRowSpacing) : options_.row_spacing_m;
+  s.plant_spacing_m =
+      options_.estimate_spacing ? x_(GridState::kPlantSpacing) : options_.plant_spacing_m;
+  return s;
+}
+
+Matrix5d GridTracker::covariance() const {
+  Matrix5d c = Matrix5d::Zero();
+  c.topLeftCorner(core(), core()) = p_.topLeftCorner(core(), core());
+  return c;
+}
+
+void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& covariance) {
+  const double distance_before = was_lost_ ? distance_at_loss_m_ + dr_since_loss_m_ : 0.0;
+  offsets_.clear();
+  x_ = Eigen::VectorXd::Zero(core());
+  x_(GridState::kOffset) = s.offset_m;
+  x_(GridState::kForward) = s.forward_m;
+  x_(GridState::kBearing) = s.bearing_rad;
+  if (options_.estimate_spacing) {
+    x_(GridState::kRowSpacing) = s.row_spacing_m;
+    x_(GridState::kPlantSpacing) = s.plant_spacing_m;
+  }
+  p_ = covariance.topLeftCorner(core(), core());
+  mode_ = TrackerMode::kTracking;
+  if (utime_ < 0 || utime > utime_) utime_ = utime;
+  last_update_utime_ = utime;
+  lines_in_view_ = -1;
+  // Keep the distance driven continuous across a loss of lock: the lines
+  // passed while lost are bridged by dead reckoning.
+  initial_forward_m_ = x_(GridState::kForward);
+  passed_m_ = distance_before;
+  dr_since_loss_m_ = 0.0;
+  was_lost_ = false;
+  FrameReport ignored;
+  ShiftReference(ignored);
+}
+
+InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double right_m_s) {
+  InputStatus status;
+  std::string problem;
+  if (!std::isfinite(left_m_s) || !std::isfinite(right_m_s)) {
+    problem = "wheel speed is not a number";
+  } else if (std::abs(left_m_s) > options_.max_wheel_speed_m_s ||
+             std::abs(right_m_s) > options_.max_wheel_speed_m_s) {
+    std::ostringstream out;
+    out << "wheel speed (" << left_m_s << ", " << right_m_s << ") m/s beyond "
+        << options_.max_wheel_speed_m_s << " m/s";
+    problem = out.str();
+  }
+  if (utime_ < 0) {
+    utime_ = utime;
+    if (problem.empty()) {
+      left_m_s_ = left_m_s;
+      right_m_s_ = right_m_s;
+      have_speeds_ = true;
+    }
+    return problem.empty() ? status : InputStatus{false, "odometry refused: " + problem};
+  }
+  if (utime <= utime_) {
+    return {false, "odometry refused: time " + std::to_string(utime) +
+                       " us is not after the state's " + std::to_string(utime_) + " us"};
+  }
+  const double dt = (utime - utime_) * 1e-6;
+  if (dt > options_.max_odometry_gap_s && problem.empty()) {
+    problem = "gap of " + Seconds(dt) + " in odometry";
+  }
+  if (!problem.empty()) {
+    // Bridge the period with the last speeds we trust and a wheel
+    // uncertainty of half of a brisk walking pace: the pose stays usable,
+    // its covariance says how much less.
+    const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
+    const double sd = 0.5 * std::max({std::abs(left_m_s_), std::abs(right_m_s_), 0.5}) * dt;
+    Predict(u, sd, sd);
+    utime_ = utime;
+    if (std::isfinite(left_m_s) && std::isfinite(right_m_s) &&
+        std::abs(left_m_s) <= options_.max_wheel_speed_m_s &&
+        std::abs(right_m_s) <= options_.max_wheel_speed_m_s) {
+      left_m_s_ = left_m_s;
+      right_m_s_ = right_m_s;
+      have_speeds_ = true;
+    }
+    return {false, "odometry refused: " + problem + "; bridged by dead reckoning"};
+  }
+  left_m_s_ = left_m_s;
+  right_m_s_ = right_m_s;
+  have_speeds_ = true;
+  const WheelIncrement u{left_m_s * dt, right_m_s * dt};
+  Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
+          options_.wheel_sd_fraction * std::abs(u.right_m));
+  utime_ = utime;
+  return status;
+}
+
+void GridTracker::PredictTo(int64_t utime) {
+  if (utime_ < 0) {
+    utime_ = utime;
+    return;
+  }
+  if (utime <= utime_ || !have_speeds_) {
+    if (utime > utime_) utime_ = utime;
+    return;
+  }
+  const double dt = (utime - utime_) * 1e-6;
+  const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
+  Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
+          options_.wheel_sd_fraction * std::abs(u.right_m));
+  utime_ = utime;
+}
+
+void GridTracker::Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m) {
+  since_frame_.left_m += u.left_m;
+  since_frame_.right_m += u.right_m;
+  const double distance = std::abs(0.5 * (u.left_m + u.right_m));
+  if (mode_ != TrackerMode::kTracking) {
+    dr_since_loss_m_ += 0.5 * (u.left_m + u.right_m);
+    return;
+  }
+  const int c = core();
+  const MotionPrediction f = PredictGridMotion(state(), u, options_.track_width_m);
+  const Eigen::MatrixXd a = f.d_state.topLeftCorner(c, c);
+  const Eigen::MatrixXd g = f.d_wheels.topRows(c);
+  Eigen::MatrixXd q = g * Eigen::Vector2d(left_sd_m * left_sd_m, right_sd_m * right_sd_m)
+                              .asDiagonal() * g.transpose();
+  q(GridState::kOffset, GridState::kOffset) +=
+      options_.lateral_sd_per_sqrt_m * options_.lateral_sd_per_sqrt_m * distance;
+  q(GridState::kForward, GridState::kForward) +=
+      options_.forward_sd_per_sqrt_m * options_.forward_sd_per_sqrt_m * distance;
+  q(GridState::kBearing, GridState::kBearing) +=
+      options_.bearing_sd_per_sqrt_m * options_.bearing_sd_per_sqrt_m * distance;
+
+  x_(GridState::kOffset) = f.state.offset_m;
+  x_(GridState::kForward) = f.state.forward_m;
+  x_(GridState::kBearing) = f.state.bearing_rad;
+  const int n = static_cast<int>(x_.size());
+  const Eigen::MatrixXd pcc = p_.topLeftCorner(c, c);
+  p_.topLeftCorner(c, c) = a * pcc * a.transpose() + q;
+  if (n > c) {
+    const Eigen::MatrixXd pcl = a * p_.topRightCorner(c, n - c);
+    p_.topRightCorner(c, n - c) = pcl;
+    p_.bottomLeftCorner(n - c, c) = pcl.transpose();
+  }
+}
+
+void GridTracker::ShiftReference(FrameReport& report) {
+  GridState s = state();
+  const int k = model_.ShiftReference(s);
+  if (k == 0) return;
+  const double l = s.plant_spacing_m;
+  if (options_.estimate_spacing) {
+    const int n = static_cast<int>(x_.size());
+    Eigen::MatrixXd a = Eigen::MatrixXd::Identity(n, n);
+    a(GridState::kForward, GridState::kPlantSpacing) = k;  // eq. 4.8
+    x_ = a * x_;
+    p_ = a * p_ * a.transpose();
+  } else {
+    x_(GridState::kForward) = s.forward_m;  // eq. 4.7: a control input
+  }
+  passed_m_ += k * l;
+  lines_passed_ += k;
+  for (PlantOffset& o : offsets_) o.m -= k;
+  report.lines_shifted += k;
+}
+
+void GridTracker::AddSpacingNoise(int lines_changed) {
+  if (!options_.estimate_spacing || lines_changed <= 0) return;
+  const double q = options_.spacing_step_sd_m * options_.spacing_step_sd_m * lines_changed;
+  p_(GridState::kRowSpacing, GridState::kRowSpacing) += q;
+  p_(GridState::kPlantSpacing, GridState::kPlantSpacing) += q;
+}
+
+int GridTracker::OffsetIndex(int m, int n) const {
+  for (const PlantOffset& o : offsets_) {
+    if (o.m == m && o.n == n) return o.index;
+  }
+  return -1;
+}
+
+int GridTracker::AddOffset(int m, int n) {
+  const int old = static_cast<int>(x_.size());
+  x_.conservativeResize(old + 2);
+  x_.tail<2>().setZero();
+  Eigen::MatrixXd p = Eigen::MatrixXd::Zero(old + 2, old + 2);
+  p.topLeftCorner(old, old) = p_;
+  p.bottomRightCorner<2, 2>() =
+      options_.plant_offset_sd_m * options_.plant_offset_sd_m * Eigen::Matrix2d::Identity();
+  p_ = std::move(p);
+  offsets_.push_back({m, n, old});
+  return old;
+}
+
+void GridTracker::DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& in_view) {
+  std::vector<int> keep;
+  for (int i = 0; i < core(); ++i) keep.push_back(i);
+  std::vector<PlantOffset> kept;
+  for (const PlantOffset& o : offsets_) {
+    const bool visible = std::any_of(in_view.begin(), in_view.end(), [&](const auto& g) {
+      return g.m == o.m && g.n == o.n;
+    });
+    if (!visible) continue;  // marginalised: its rows and columns go
+    kept.push_back({o.m, o.n, static_cast<int>(keep.size())});
+    keep.push_back(o.index);
+    keep.push_back(o.index + 1);
+  }
+  if (kept.size() == offsets_.size()) return;
+  x_ = Eigen::VectorXd(x_(keep));
+  p_ = Eigen::MatrixXd(p_(keep, keep));
+  offsets_ = std::move(kept);
+}
+
+FrameReport GridTracker::ProcessFrame(int64_t utime, int width, int height,
+                                      std::span<const Feature> features) {
+  FrameReport report;
+  report.mode = mode_;
+  if (width != camera_.width() || height != camera_.height()) {
+    report.input = {false, "frame refused: it is " + std::to_string(width) + "x" +
+                               std::to_string(height) + " px, the camera model is " +
+                               std::to_string(camera_.width()) + "x" +
+                               std::to_string(camera_.height()) + " px"};
+    report.skipped_reason = report.input.reason;
+    return report;
+  }
+  if (utime_ >= 0 && (utime_ - utime) * 1e-6 > options_.max_frame_lag_s) {
+    report.input = {false, "frame refused: captured " + Seconds((utime_ - utime) * 1e-6) +
+                               " before the state's time"};
+    report.skipped_reason = report.input.reason;
+    return report;
+  }
+  PredictTo(utime);
+
+  std::vector<Feature> valid;
+  valid.reserve(features.size());
+  int invalid = 0;
+  for (const Feature& f : features) {
+    if (Finite(f)) {
+      valid.push_back(f);
+    } else {
+      ++invalid;
+    }
+  }
+  if (invalid > 0) {
+    report.input.reason = std::to_string(invalid) + " feature(s) with non-finite values ignored";
+  }
+
+  if (mode_ != TrackerMode::kTracking) {
+    const InitialiserResult init = initialiser_.Offer(valid, since_frame_);
+    since_frame_ = {};
+    if (!init.state) {
+      report.skipped_reason = "initialising: " + init.reason;
+      report.mode = mode_;
+      return report;
+    }
+    Matrix5d p0 = Matrix5d::Zero();
+    p0(0, 0) = std::pow(options_.init.offset_sd_m, 2);
+    p0(1, 1) = std::pow(options_.init.forward_sd_m, 2);
+    p0(2, 2) = std::pow(options_.init.bearing_sd_rad, 2);
+    p0(3, 3) = std::pow(options_.row_spacing_sd_m, 2);
+    p0(4, 4) = std::pow(options_.plant_spacing_sd_m, 2);
+    Initialise(utime, *init.state, p0);
+    report.initialised_now = true;
+  }
+  since_frame_ = {};
+
+  // Thesis eq. 4.2: constant process noise per frame.
+  p_(GridState::kOffset, GridState::kOffset) += std::pow(options_.frame_offset_sd_m, 2);
+  p_(GridState::kForward, GridState::kForward) += std::pow(options_.frame_forward_sd_m, 2);
+  p_(GridState::kBearing, GridState::kBearing) += std::pow(options_.frame_bearing_sd_rad, 2);
+  ShiftReference(report);
+  Update(valid, report);
+  CheckLost(utime, report);
+  report.mode = mode_;
+  return report;
+}
+
+void GridTracker::Update(std::span<const Feature> features, FrameReport& report) {
+  const GridState s = state();
+  const std::vector<geometry::GridPlant> in_view = model_.PlantsInView(s);
+  report.predicted = static_cast<int>(in_view.size());
+
+  // Process noise on r̄ and l̄ only when plant lines enter or leave the view.
+  if (!in_view.empty()) {
+    int first = in_view.front().m;
+    int last = in_view.front().m;
+    for (const auto& g : in_view) {
+      first = std::min(first, g.m);
+      last = std::max(last, g.m);
+    }
+    first += lines_passed_;
+    last += lines_passed_;
+    if (lines_in_view_ >= 0) {
+      AddSpacingNoise(std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_));
+    }
+    first_line_in_view_ = first;
+    lines_in_view_ = last;
+  }
+  DropOffsetsOutOfView(in_view);
+
+  ObservationModel h(camera_, options_);
+  struct Candidate {
+    int plant;
+    int feature;
+    double gamma2;
+  };
+  std::vector<Candidate> candidates;
+  for (int i = 0; i < static_cast<int>(in_view.size()); ++i) {
+    const auto& g = in_view[static_cast<size_t>(i)];
+    const int offset = OffsetIndex(g.m, g.n);
+    const Prediction pred = h.Predict(x_, s, g.m, g.n, offset);
+    // Covariance of the prediction: the filter's, plus the prior of a new
+    // plant's offset.
+    Eigen::Matrix2d hph = pred.jacobian * p_ * pred.jacobian.transpose();
+    if (offset < 0 && options_.plant_offsets) {
+      hph += pred.offset_jacobian * pred.offset_jacobian.transpose() *
+             (options_.plant_offset_sd_m * options_.plant_offset_sd_m);
+    }
+    for (int j = 0; j < static_cast<int>(features.size()); ++j) {
+      const Feature& f = features[static_cast<size_t>(j)];
+      if (f.clipped || (f.ground_m - g.ground_m).squaredNorm() > 0.16) continue;
+      const Measurement z = h.Measure(f);
+      const Eigen::Vector2d nu = z.value - pred.value;
+      const Eigen::Matrix2d innovation_cov = hph + z.covariance;
+      const double gamma2 = nu.dot(innovation_cov.ldlt().solve(nu));
+      if (gamma2 <= options_.gate_chi2) candidates.push_back({i, j, gamma2});
+    }
+  }
+  // Parallel validation (§6.2.2): every gate comes from the one prediction;
+  // then nearest neighbours, one feature per plant and one plant per feature.
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.gamma2 < b.gamma2; });
+  std::vector<bool> plant_taken(in_view.size(), false);
+  std::vector<bool> feature_taken(features.size(), false);
+  std::vector<Candidate> matches;
+  for (const Candidate& c : candidates) {
+    if (plant_taken[static_cast<size_t>(c.plant)] || feature_taken[static_cast<size_t>(c.feature)]) {
+      continue;
+    }
+    plant_taken[static_cast<size_t>(c.plant)] = true;
+    feature_taken[static_cast<size_t>(c.feature)] = true;
+    matches.push_back(c);
+  }
+  report.matched = static_cast<int>(matches.size());
+  for (const Candidate& c : matches) {
+    const auto& g = in_view[static_cast<size_t>(c.plant)];
+    report.associations.push_back({c.feature, g.m, g.n, c.gamma2});
+  }
+
+  // Observability (§4.5): two features fix (t_x, Y, Ψ); the spacings need a
+  // third that is not on the same row or the same line as the others.
+  std::vector<int> rows;
+  std::vector<int> lines;
+  for (const Candidate& c : matches) {
+    rows.push_back(in_view[static_cast<size_t>(c.plant)].n);
+    lines.push_back(in_view[static_cast<size_t>(c.plant)].m);
+  }
+  std::sort(rows.begin(), rows.end());
+  std::sort(lines.begin(), lines.end());
+  const int distinct_rows = static_cast<int>(std::unique(rows.begin(), rows.end()) - rows.begin());
+  const int distinct_lines =
+      static_cast<int>(std::unique(lines.begin(), lines.end()) - lines.begin());
+  const int needed = options_.estimate_spacing ? 3 : 2;
+  if (report.matched < needed ||
+      (options_.estimate_spacing && (distinct_rows < 2 || distinct_lines < 2))) {
+    std::ostringstream out;
+    out << "not observable: " << report.matched << " matched feature(s) of "
+        << report.predicted << " predicted plants";
+    if (options_.estimate_spacing && report.matched >= needed) {
+      out << ", all on one " << (distinct_rows < 2 ? "row" : "plant line");
+    } else {
+      out << " (" << needed << " needed)";
+    }
+    report.skipped_reason = out.str();
+    return;
+  }
+
+  // New plants get their offset states before the update.
+  if (options_.plant_offsets) {
+    for (const Candidate& c : matches) {
+      const auto& g = in_view[static_cast<size_t>(c.plant)];
+      if (OffsetIndex(g.m, g.n) < 0) AddOffset(g.m, g.n);
+    }
+  }
+  const int n = static_cast<int>(x_.size());
+  PseudoObservation compressed{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
+  Eigen::MatrixXd stacked_h(2 * matches.size(), n);
+  Eigen::VectorXd stacked_nu(2 * matches.size());
+  Eigen::MatrixXd stacked_r = Eigen::MatrixXd::Zero(2 * matches.size(), 2 * matches.size());
+  for (size_t k = 0; k < matches.size(); ++k) {
+    const auto& g = in_view[static_cast<size_t>(matches[k].plant)];
+    const Prediction pred = h.Predict(x_, s, g.m, g.n, OffsetIndex(g.m, g.n));
+    const Measurement z = h.Measure(features[static_cast<size_t>(matches[k].feature)]);
+    const Eigen::Matrix2d r_inv = z.covariance.inverse();
+    const Eigen::Vector2d nu = z.value - pred.value;
+    compressed.information += pred.jacobian.transpose() * r_inv * pred.jacobian;  // eq. 4.77
+    compressed.information_vector += pred.jacobian.transpose() * r_inv * nu;     // eq. 4.78
+    stacked_h.middleRows(2 * static_cast<Eigen::Index>(k), 2) = pred.jacobian;
+    stacked_nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = nu;
+    stacked_r.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) =
+        z.covariance;
+  }
+  const Eigen::MatrixXd stacked_s = stacked_h * p_ * stacked_h.transpose() + stacked_r;
+  report.nis = stacked_nu.dot(stacked_s.ldlt().solve(stacked_nu));
+  Apply(compressed);
+  report.updated = true;
+  last_update_utime_ = utime_;
+}
+
+void GridTracker::Apply(const PseudoObservation& z) {
+  // Eqs. 4.73–4.74 rearranged so that P need not be inverted:
+  //   P⁺ = (P⁻¹ + Ĩ)⁻¹ = (I + P Ĩ)⁻¹ P,   x⁺ = x⁻ + P⁺ ĩ.
+  const Eigen::Index n = x_.size();
+  const Eigen::MatrixXd m = Eigen::MatrixXd::Identity(n, n) + p_ * z.information;
+  Eigen::MatrixXd p = m.partialPivLu().solve(p_);
+  p = 0.5 * (p + p.transpose());
+  x_ += p * z.information_vector;
+  p_ = std::move(p);
+}
+
+void GridTracker::CheckLost(int64_t utime, FrameReport& report) {
+  const double sd = std::sqrt(std::max(0.0, p_(GridState::kOffset, GridState::kOffset)));
+  std::string reason;
+  if (!std::isfinite(sd) || !x_.allFinite()) {
+    reason = "the filter state is not finite";
+  } else if (sd > options_.lost_offset_sd_m) {
+    reason = "σ(t_x) grew to " + std::to_string(sd) + " m";
+  } else if ((utime - last_update_utime_) * 1e-6 > options_.max_coast_s) {
+    reason = "no update for " + Seconds((utime - last_update_utime_) * 1e-6);
+  }
+  if (reason.empty()) return;
+  distance_at_loss_m_ = std::isfinite(forward_distance_m()) ? forward_distance_m() : 0.0;
+  dr_since_loss_m_ = 0.0;
+  was_lost_ = true;
+  mode_ = TrackerMode::kLost;
+  offsets_.clear();
+  x_.conservativeResize(core());
+  p_.conservativeResize(core(), core());
+  if (!x_.allFinite() || !p_.allFinite()) {
+    x_.setZero();
+    p_.setZero();
+  }
+  initialiser_.Reset();
+  report.skipped_reason = "grid lost: " + reason;
+}
+
+}  // namespace plantscale::tracking

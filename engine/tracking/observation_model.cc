@@ -1,0 +1,79 @@
+#include "engine/tracking/observation_model.h"
+
+#include <cmath>
+
+#include "engine/tracking/grid_tracker.h"
+
+namespace plantscale::tracking {
+
+using geometry::GridState;
+
+Eigen::Vector2d PlantWithOffset(const GridState& s, int m, int n, const Eigen::Vector2d& d) {
+  const double c = std::cos(s.bearing_rad);
+  const double si = std::sin(s.bearing_rad);
+  const double gx = n * s.row_spacing_m + d.x();
+  const double gy = m * s.plant_spacing_m + s.forward_m + d.y();
+  return {c * gx + si * gy + s.offset_m, -si * gx + c * gy};
+}
+
+Eigen::Matrix<double, 2, 7> PlantWithOffsetJacobian(const GridState& s, int m, int n,
+                                                    const Eigen::Vector2d& d) {
+  const double c = std::cos(s.bearing_rad);
+  const double si = std::sin(s.bearing_rad);
+  const double gx = n * s.row_spacing_m + d.x();
+  const double gy = m * s.plant_spacing_m + s.forward_m + d.y();
+  Eigen::Matrix<double, 2, 7> j;
+  //     t_x  Y    Ψ                  r̄       l̄       δx   δy
+  j << 1.0, si, -si * gx + c * gy, c * n, si * m, c, si,  //
+      0.0, c, -c * gx - si * gy, -si * n, c * m, -si, c;
+  return j;
+}
+
+ObservationModel::ObservationModel(const geometry::CameraModel& camera,
+                                   const TrackerOptions& options)
+    : camera_(camera), options_(options) {}
+
+Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& s, int m, int n,
+                                     int offset_index) const {
+  const int core = options_.estimate_spacing ? 5 : 3;
+  const Eigen::Vector2d delta =
+      offset_index >= 0 ? Eigen::Vector2d(x.segment<2>(offset_index)) : Eigen::Vector2d::Zero();
+  const Eigen::Vector2d g = PlantWithOffset(s, m, n, delta);
+  const Eigen::Matrix<double, 2, 7> jg = PlantWithOffsetJacobian(s, m, n, delta);
+  Prediction p;
+  p.jacobian = Eigen::MatrixXd::Zero(2, x.size());
+  p.jacobian.leftCols(core) = jg.leftCols(core);
+  p.offset_jacobian = jg.rightCols<2>();
+  if (offset_index >= 0) p.jacobian.middleCols<2>(offset_index) = jg.rightCols<2>();
+  p.value = g;
+  if (options_.space == ObservationSpace::kImage) {
+    const Eigen::Vector3d ground(g.x(), g.y(), camera_.options().virtual_plane_height_m);
+    const auto uv = camera_.Project(ground);
+    const Eigen::Matrix2d d_uv = camera_.ProjectJacobian(ground).leftCols<2>();
+    p.value = uv ? *uv : Eigen::Vector2d(NAN, NAN);
+    p.jacobian = d_uv * p.jacobian;
+    p.offset_jacobian = d_uv * p.offset_jacobian;
+  }
+  return p;
+}
+
+Measurement ObservationModel::Measure(const Feature& f) const {
+  const double plane = camera_.options().virtual_plane_height_m;
+  const double rw = options_.feature_sd_m * options_.feature_sd_m;
+  const double rp = options_.pixel_sd_px * options_.pixel_sd_px;
+  Measurement z;
+  if (options_.space == ObservationSpace::kImage) {
+    // Thesis eq. 4.28: R_w projected into the image at the feature.
+    const Eigen::Matrix2d fw =
+        camera_.ProjectJacobian({f.ground_m.x(), f.ground_m.y(), plane}).leftCols<2>();
+    z.value = f.image_px;
+    z.covariance = rw * fw * fw.transpose() + rp * Eigen::Matrix2d::Identity();
+  } else {
+    const Eigen::Matrix2d jp = camera_.ImageToPlaneJacobian(f.image_px, plane);
+    z.value = f.ground_m;
+    z.covariance = rw * Eigen::Matrix2d::Identity() + rp * jp * jp.transpose();
+  }
+  return z;
+}
+
+}  // namespace plantscale::tracking

@@ -1,0 +1,51 @@
+#pragma once
+// Observation model of the grid tracker (thesis §4.2): where a grid plant
+// appears, on the virtual ground plane or in the image, and how uncertain a
+// measured centroid is there (eq. 4.28).
+
+#include <Eigen/Core>
+
+#include "engine/geometry/camera_model.h"
+#include "engine/geometry/grid_model.h"
+#include "engine/tracking/feature.h"
+
+namespace plantscale::tracking {
+
+struct TrackerOptions;
+
+// Plant (m, n) displaced by its own offset δ = (δ_across, δ_along) in grid
+// coordinates: (n r̄ + δ_x, m l̄ + Y + δ_y), rotated by Ψ and offset by t_x
+// into the vehicle frame (eqs. 2.1–2.2, A.1).
+Eigen::Vector2d PlantWithOffset(const geometry::GridState& state, int m, int n,
+                                const Eigen::Vector2d& offset);
+// d/d(t_x, Y, Ψ, r̄, l̄, δ_x, δ_y).
+Eigen::Matrix<double, 2, 7> PlantWithOffsetJacobian(const geometry::GridState& state, int m, int n,
+                                                    const Eigen::Vector2d& offset);
+
+struct Prediction {
+  Eigen::Vector2d value;
+  Eigen::MatrixXd jacobian;           // 2 × state size
+  Eigen::Matrix2d offset_jacobian;    // d value / d δ of this plant
+};
+
+struct Measurement {
+  Eigen::Vector2d value;
+  Eigen::Matrix2d covariance;
+};
+
+class ObservationModel {
+ public:
+  ObservationModel(const geometry::CameraModel& camera, const TrackerOptions& options);
+
+  // x: the filter state (core, then δ pairs); offset_index: where this
+  // plant's δ sits in x, or −1 when it has none.
+  Prediction Predict(const Eigen::VectorXd& x, const geometry::GridState& state, int m, int n,
+                     int offset_index) const;
+  Measurement Measure(const Feature& feature) const;
+
+ private:
+  const geometry::CameraModel& camera_;
+  const TrackerOptions& options_;
+};
+
+}  // namespace plantscale::tracking

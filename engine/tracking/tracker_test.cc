@@ -1,0 +1,227 @@
+#include "engine/tracking/grid_tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "engine/tracking/test_scene.h"
+
+namespace plantscale::tracking {
+namespace {
+
+using geometry::GridState;
+using geometry::Matrix5d;
+
+constexpr int64_t kFrameUs = 80000;  // 12.5 Hz
+constexpr int64_t kOdoUs = 20000;    // 50 Hz
+
+Matrix5d InitialCovariance() {
+  Matrix5d p = Matrix5d::Zero();
+  p.diagonal() << 0.02 * 0.02, 0.03 * 0.03, 0.02 * 0.02, 0.03 * 0.03, 0.03 * 0.03;
+  return p;
+}
+
+// Drives the scene at 0.7 m/s for `frames` frames, feeding odometry at 50 Hz
+// and the scene's features at 12.5 Hz.
+struct Drive {
+  testing::TestScene scene;
+  GridTracker tracker;
+  int64_t utime = 0;
+
+  explicit Drive(const TrackerOptions& options) : tracker(scene.camera, options) {}
+
+  FrameReport Frames(int frames, double left = 0.7, double right = 0.7) {
+    FrameReport last;
+    for (int f = 0; f < frames; ++f) {
+      for (int k = 0; k < kFrameUs / kOdoUs; ++k) {
+        utime += kOdoUs;
+        scene.Drive({left * kOdoUs * 1e-6, right * kOdoUs * 1e-6});
+        tracker.AddOdometry(utime, left, right);
+      }
+      const auto features = scene.Features();
+      last = tracker.ProcessFrame(utime, 640, 480, features);
+    }
+    return last;
+  }
+};
+
+// Volume of the pose uncertainty: det of the (t_x, Y, Ψ) covariance. One
+// variance may shrink through a correlation when the pose is predicted; the
+// volume may not.
+double PoseVolume(const GridTracker& t) {
+  return t.covariance().topLeftCorner<3, 3>().determinant();
+}
+
+double WrappedForwardError(const GridState& est, const GridState& truth) {
+  return std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
+}
+
+TEST(GridTracker, InitialisesAndTracksTheSyntheticGrid) {
+  Drive run(TrackerOptions{});
+  const FrameReport report = run.Frames(60, 0.69, 0.71);
+  ASSERT_EQ(run.tracker.mode(), TrackerMode::kTracking) << report.skipped_reason;
+  const GridState est = run.tracker.state();
+  EXPECT_NEAR(est.offset_m, run.scene.truth.offset_m, 0.005);
+  EXPECT_NEAR(est.bearing_rad, run.scene.truth.bearing_rad, 0.004);
+  EXPECT_NEAR(WrappedForwardError(est, run.scene.truth), 0.0, 0.01);
+  EXPECT_TRUE(report.updated);
+  EXPECT_GE(report.matched, 9);
+  EXPECT_GT(run.tracker.plant_offset_states(), 0);
+}
+
+TEST(GridTracker, EstimatesSpacingsStartedOff) {
+  TrackerOptions o;
+  o.row_spacing_m = 0.5;    // 25 mm off
+  o.plant_spacing_m = 0.475;
+  Drive run(o);
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  // Started by hand with the wrong spacings, so put them into the state.
+  GridState start = run.scene.truth;
+  start.row_spacing_m = 0.5;
+  start.plant_spacing_m = 0.475;
+  run.tracker.Initialise(0, start, InitialCovariance());
+  run.Frames(150);
+  const GridState est = run.tracker.state();
+  EXPECT_NEAR(est.row_spacing_m, 0.475, 0.005);
+  EXPECT_NEAR(est.plant_spacing_m, 0.45, 0.005);
+  // The distance driven along the rows: 150 frames at 0.7 m/s.
+  EXPECT_NEAR(run.tracker.forward_distance_m(), 150 * 0.08 * 0.7, 0.02);
+}
+
+TEST(GridTracker, FixedGridNeedsTwoFeaturesEstimatedNeedsThreeOffOneRow) {
+  testing::TestScene scene;
+  TrackerOptions fixed;
+  fixed.estimate_spacing = false;
+  GridTracker t3(scene.camera, fixed);
+  t3.Initialise(0, scene.truth, InitialCovariance());
+  auto features = scene.Features();
+  std::vector<Feature> one(features.begin(), features.begin() + 1);
+  FrameReport r = t3.ProcessFrame(0, 640, 480, one);
+  EXPECT_FALSE(r.updated);
+  EXPECT_NE(r.skipped_reason.find("not observable"), std::string::npos) << r.skipped_reason;
+
+  GridTracker t5(scene.camera, TrackerOptions{});
+  t5.Initialise(0, scene.truth, InitialCovariance());
+  // Three features on the central row only.
+  std::vector<Feature> one_row;
+  for (const auto& f : features) {
+    if (std::abs(f.ground_m.x() - scene.truth.offset_m) < 0.15) one_row.push_back(f);
+  }
+  ASSERT_GE(one_row.size(), 3u);
+  r = t5.ProcessFrame(0, 640, 480, one_row);
+  EXPECT_FALSE(r.updated);
+  EXPECT_NE(r.skipped_reason.find("one row"), std::string::npos) << r.skipped_reason;
+  r = t5.ProcessFrame(0, 640, 480, features);
+  EXPECT_TRUE(r.updated) << r.skipped_reason;
+}
+
+TEST(GridTracker, RefusesNanAndAbsurdOdometryAndGrowsUncertainty) {
+  Drive run(TrackerOptions{});
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(20);
+  const double before = PoseVolume(run.tracker);
+  const InputStatus nan = run.tracker.AddOdometry(run.utime + kOdoUs, NAN, 0.7);
+  EXPECT_FALSE(nan.accepted);
+  EXPECT_NE(nan.reason.find("not a number"), std::string::npos) << nan.reason;
+  const InputStatus absurd = run.tracker.AddOdometry(run.utime + 2 * kOdoUs, 40.0, 0.7);
+  EXPECT_FALSE(absurd.accepted);
+  EXPECT_NE(absurd.reason.find("beyond"), std::string::npos) << absurd.reason;
+  EXPECT_GT(PoseVolume(run.tracker), before);
+  EXPECT_TRUE(run.tracker.covariance().allFinite());
+  EXPECT_TRUE(run.tracker.state().AsVector().allFinite());
+  const InputStatus backwards = run.tracker.AddOdometry(run.utime, 0.7, 0.7);
+  EXPECT_FALSE(backwards.accepted);
+}
+
+TEST(GridTracker, LongGapIsBridgedWithGrowingUncertainty) {
+  Drive run(TrackerOptions{});
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(20);
+  const Matrix5d before = run.tracker.covariance();
+  const InputStatus gap = run.tracker.AddOdometry(run.utime + 2'000'000, 0.7, 0.7);
+  EXPECT_FALSE(gap.accepted);
+  EXPECT_NE(gap.reason.find("gap of 2 s"), std::string::npos) << gap.reason;
+  // σ of half of a 0.7 m/s·2 s increment per wheel: var(Y) grows by 0.7²/2.
+  EXPECT_NEAR(run.tracker.covariance()(1, 1) - before(1, 1), 0.245, 0.01);
+  EXPECT_TRUE(run.tracker.state().AsVector().allFinite());
+}
+
+TEST(GridTracker, FrameWithoutPlantsSkipsTheUpdateAndCoasts) {
+  Drive run(TrackerOptions{});
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(20);
+  const double before = PoseVolume(run.tracker);
+  run.utime += kFrameUs;
+  run.tracker.AddOdometry(run.utime, 0.7, 0.7);
+  const FrameReport r = run.tracker.ProcessFrame(run.utime, 640, 480, {});
+  EXPECT_TRUE(r.input.accepted);
+  EXPECT_FALSE(r.updated);
+  EXPECT_NE(r.skipped_reason.find("0 matched"), std::string::npos) << r.skipped_reason;
+  EXPECT_GT(PoseVolume(run.tracker), before);
+  EXPECT_EQ(run.tracker.mode(), TrackerMode::kTracking);
+}
+
+TEST(GridTracker, RefusesAFrameFromTheWrongCamera) {
+  Drive run(TrackerOptions{});
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  const FrameReport r = run.tracker.ProcessFrame(0, 1280, 960, run.scene.Features());
+  EXPECT_FALSE(r.input.accepted);
+  EXPECT_NE(r.input.reason.find("1280x960"), std::string::npos) << r.input.reason;
+  EXPECT_FALSE(r.updated);
+}
+
+TEST(GridTracker, NonFiniteFeaturesAreIgnoredNotUsed) {
+  Drive run(TrackerOptions{});
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  auto features = run.scene.Features();
+  features.push_back(Feature{{NAN, 1.0}, {320, 240}, 0.03, false});
+  const FrameReport r = run.tracker.ProcessFrame(0, 640, 480, features);
+  EXPECT_TRUE(r.updated);
+  EXPECT_NE(r.input.reason.find("1 feature(s) with non-finite"), std::string::npos);
+  EXPECT_TRUE(run.tracker.state().AsVector().allFinite());
+}
+
+TEST(GridTracker, LosesTheGridWhenItStopsSeeingItAndReinitialises) {
+  TrackerOptions o;
+  o.max_coast_s = 1.0;
+  Drive run(o);
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(10);
+  const double shift = run.scene.truth.offset_m;
+  run.scene.truth.offset_m = 5.0;  // the camera looks at bare soil
+  run.Frames(20);
+  EXPECT_EQ(run.tracker.mode(), TrackerMode::kLost);
+  run.scene.truth.offset_m = shift;
+  run.Frames(3);
+  EXPECT_EQ(run.tracker.mode(), TrackerMode::kTracking);
+  run.Frames(10);
+  EXPECT_NEAR(run.tracker.state().offset_m, run.scene.truth.offset_m, 0.005);
+}
+
+TEST(GridTracker, CovarianceIsConsistentOnTheSyntheticGrid) {
+  // NEES of (t_x, Y, Ψ) over many frames: mean near 3 for an honest filter.
+  TrackerOptions o;
+  o.plant_offset_sd_m = 0.01;
+  o.feature_sd_m = 0.004;
+  Drive run(o);
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(10);
+  double sum = 0.0;
+  int n = 0;
+  for (int f = 0; f < 300; ++f) {
+    run.Frames(1, 0.69 + 0.02 * std::sin(f * 0.05), 0.7);
+    const GridState est = run.tracker.state();
+    Eigen::Vector3d e(est.offset_m - run.scene.truth.offset_m,
+                      WrappedForwardError(est, run.scene.truth),
+                      est.bearing_rad - run.scene.truth.bearing_rad);
+    const Eigen::Matrix3d p = run.tracker.covariance().topLeftCorner<3, 3>();
+    sum += e.dot(p.ldlt().solve(e));
+    ++n;
+  }
+  EXPECT_GT(sum / n, 1.0);
+  EXPECT_LT(sum / n, 6.0);
+}
+
+}  // namespace
+}  // namespace plantscale::tracking
