@@ -34,6 +34,8 @@ nlohmann::json MetricsJson(const TrackingMetrics& m) {
       {"plant_spacing_error_m", m.plant_spacing_error_m},
       {"nees_in_bounds_fraction", m.nees_in_bounds_fraction},
       {"nees_mean", m.nees_mean},
+      {"normalised_error2", {{"offset", m.normalised_error2(0)}, {"forward", m.normalised_error2(1)},
+                             {"bearing", m.normalised_error2(2)}}},
       {"lateral_sd_mean_m", m.lateral_sd_mean_m},
       {"init_success_rate", m.init_success_rate},
       {"init_frames_p95", m.init_frames_p95},

@@ -38,6 +38,7 @@ struct Scorer {
   int start_frame = 0;
   // Sums.
   double lat2 = 0.0, lat = 0.0, bear2 = 0.0, sd = 0.0, nees = 0.0;
+  Eigen::Vector3d normalised2 = Eigen::Vector3d::Zero();
   int scored = 0, nees_in = 0;
   double row2 = 0.0, plant2 = 0.0;
   int spacing_scored = 0;
@@ -83,6 +84,7 @@ struct Scorer {
     const Eigen::Vector3d e(e_lat, e_fwd, e_bear);
     const double n = e.dot(p.ldlt().solve(e));
     nees += n;
+    normalised2 += e.cwiseAbs2().cwiseQuotient(p.diagonal());
     if (n >= kNeesLow && n <= kNeesHigh) ++nees_in;
     ++scored;
     if (past >= options.spacing_settle_m) {
@@ -123,6 +125,7 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   m.bearing_rmse_deg += s.bear2;
   m.lateral_sd_mean_m += s.sd;
   m.nees_mean += s.nees;
+  m.normalised_error2 += s.normalised2;
   m.nees_in_bounds_fraction += s.nees_in;
   m.row_spacing_error_m += s.row2;
   m.plant_spacing_error_m += s.plant2;
@@ -143,6 +146,7 @@ void Finish(TrackingMetrics& m, int spacing_frames, const std::vector<double>& i
   m.bearing_rmse_deg = std::sqrt(m.bearing_rmse_deg / n) * kDeg;
   m.lateral_sd_mean_m /= n;
   m.nees_mean /= n;
+  m.normalised_error2 /= n;
   m.nees_in_bounds_fraction /= n;
   m.row_spacing_error_m = std::sqrt(m.row_spacing_error_m / std::max(1, spacing_frames));
   m.plant_spacing_error_m = std::sqrt(m.plant_spacing_error_m / std::max(1, spacing_frames));
@@ -188,6 +192,7 @@ tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
   tracking::TrackerOptions o;
   o.estimate_spacing = false;
   o.plant_offsets = false;
+  o.model_bounce = false;
   o.space = tracking::ObservationSpace::kImage;
   o.rows_each_side = RowsEachSide(s);
   o.row_spacing_m = s.field.NominalRowSpacing();

@@ -49,6 +49,7 @@ struct TrackingMetrics {
   double plant_spacing_error_m = 0.0;
   double nees_in_bounds_fraction = 0.0;  // (t_x, Y, Ψ) inside the two-sided 95 % χ²₃ interval
   double nees_mean = 0.0;
+  Eigen::Vector3d normalised_error2 = Eigen::Vector3d::Zero();  // mean e²/σ² of t_x, Y, Ψ (1 ideal)
   double lateral_sd_mean_m = 0.0;        // the filter's own σ(t_x)
   double init_success_rate = 0.0;
   double init_frames_p95 = 0.0;

@@ -32,6 +32,9 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "pixel_sd_px", pixel_sd_px);
+  RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
+  RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
+  RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   RequirePositive(e, "track_width_m", track_width_m);
   RequireNonNegative(e, "wheel_sd_fraction", wheel_sd_fraction);
   RequireNonNegative(e, "forward_sd_per_sqrt_m", forward_sd_per_sqrt_m);
@@ -409,6 +412,9 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   DropOffsetsOutOfView(in_view);
 
   ObservationModel h(camera_, options_);
+  const Eigen::Vector3d bounce_prior(options_.camera_pitch_sd_rad * options_.camera_pitch_sd_rad,
+                                     options_.camera_roll_sd_rad * options_.camera_roll_sd_rad,
+                                     options_.camera_height_sd_m * options_.camera_height_sd_m);
   struct Candidate {
     int plant;
     int feature;
@@ -425,6 +431,9 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     if (offset < 0 && options_.plant_offsets) {
       hph += pred.offset_jacobian * pred.offset_jacobian.transpose() *
              (options_.plant_offset_sd_m * options_.plant_offset_sd_m);
+    }
+    if (options_.model_bounce) {
+      hph += pred.bounce_jacobian * bounce_prior.asDiagonal() * pred.bounce_jacobian.transpose();
     }
     for (int j = 0; j < static_cast<int>(features.size()); ++j) {
       const Feature& f = features[static_cast<size_t>(j)];
@@ -492,6 +501,17 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
       if (OffsetIndex(g.m, g.n) < 0) AddOffset(g.m, g.n);
     }
   }
+  // This frame's camera bounce: a nuisance state, appended for the update
+  // and marginalised after it.
+  const int persistent = static_cast<int>(x_.size());
+  if (options_.model_bounce) {
+    x_.conservativeResize(persistent + 3);
+    x_.tail<3>().setZero();
+    Eigen::MatrixXd p = Eigen::MatrixXd::Zero(persistent + 3, persistent + 3);
+    p.topLeftCorner(persistent, persistent) = p_;
+    p.bottomRightCorner<3, 3>() = bounce_prior.asDiagonal();
+    p_ = std::move(p);
+  }
   const int n = static_cast<int>(x_.size());
   PseudoObservation compressed{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
   Eigen::MatrixXd stacked_h(2 * matches.size(), n);
@@ -499,7 +519,8 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   Eigen::MatrixXd stacked_r = Eigen::MatrixXd::Zero(2 * matches.size(), 2 * matches.size());
   for (size_t k = 0; k < matches.size(); ++k) {
     const auto& g = in_view[static_cast<size_t>(matches[k].plant)];
-    const Prediction pred = h.Predict(x_, s, g.m, g.n, OffsetIndex(g.m, g.n));
+    Prediction pred = h.Predict(x_, s, g.m, g.n, OffsetIndex(g.m, g.n));
+    if (options_.model_bounce) pred.jacobian.rightCols<3>() = pred.bounce_jacobian;
     const Measurement z = h.Measure(features[static_cast<size_t>(matches[k].feature)]);
     const Eigen::Matrix2d r_inv = z.covariance.inverse();
     const Eigen::Vector2d nu = z.value - pred.value;
@@ -513,6 +534,10 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   const Eigen::MatrixXd stacked_s = stacked_h * p_ * stacked_h.transpose() + stacked_r;
   report.nis = stacked_nu.dot(stacked_s.ldlt().solve(stacked_nu));
   Apply(compressed);
+  if (options_.model_bounce) {
+    x_.conservativeResize(persistent);
+    p_.conservativeResize(persistent, persistent);
+  }
   report.updated = true;
   last_update_utime_ = utime_;
 }

@@ -40,6 +40,12 @@ struct TrackerOptions {
   bool estimate_spacing = true;  // 5-state (thesis §4.1.2) or 3-state (§4.1.1)
   bool plant_offsets = true;     // per-plant offset states (see above)
   ObservationSpace space = ObservationSpace::kGround;
+  // Camera bounce (pitch, roll, height) moves every feature of a frame
+  // together; with model_bounce it is a per-frame nuisance state.
+  bool model_bounce = true;
+  double camera_pitch_sd_rad = 0.005;
+  double camera_roll_sd_rad = 0.0035;
+  double camera_height_sd_m = 0.004;
   int rows_each_side = 1;      // the bed: rows −k..k
   double row_spacing_m = 0.475;    // r̄: nominal, the fixed value or the initial estimate
   double plant_spacing_m = 0.45;   // l̄

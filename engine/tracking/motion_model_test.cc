@@ -105,3 +105,47 @@ TEST(ObservationModel, PlantWithOffsetJacobianMatchesFiniteDifferences) {
 
 }  // namespace
 }  // namespace plantscale::tracking
+
+namespace plantscale::tracking {
+namespace {
+
+// The camera bounce a frame suffers, against its first-order model: the
+// point the nominal camera reads where the bounced camera sees P.
+TEST(ObservationModel, BounceJacobianMatchesTheCameraModel) {
+  geometry::CameraOptions nominal;
+  nominal.height_m = 1.5;
+  nominal.tilt_rad = 0.7854;
+  nominal.focal_length_m = 0.0048;
+  nominal.pixel_width_m = 8.6e-6;
+  nominal.pixel_height_m = 8.3e-6;
+  const geometry::CameraModel camera(nominal);
+  const double eps = 1e-5;
+  for (const Eigen::Vector2d& p : {Eigen::Vector2d(0.0, 1.5), Eigen::Vector2d(0.4, 1.2),
+                                   Eigen::Vector2d(-0.5, 2.2)}) {
+    const Eigen::Matrix<double, 2, 3> j = BounceJacobian(p, nominal.height_m);
+    const auto moved = [&](geometry::CameraOptions bounced) {
+      const auto uv = geometry::CameraModel(bounced).Project({p.x(), p.y(), 0.0});
+      return Eigen::Vector2d((*camera.ImageToPlane(*uv, 0.0) - p) / eps);
+    };
+    geometry::CameraOptions pitched = nominal;
+    pitched.tilt_rad -= eps;  // pitch up: the camera looks farther ahead
+    geometry::CameraOptions rolled = nominal;
+    rolled.roll_rad += eps;
+    geometry::CameraOptions raised = nominal;
+    raised.height_m += eps;
+    const Eigen::Vector2d fd_pitch = moved(pitched);
+    const Eigen::Vector2d fd_roll = moved(rolled);
+    const Eigen::Vector2d fd_height = moved(raised);
+    // Signs follow the camera model's conventions up to the direction of
+    // each angle; the nuisance state is zero-mean, so only magnitudes and
+    // the relation between the two components matter.
+    const double sp = fd_pitch.dot(j.col(0)) >= 0 ? 1.0 : -1.0;
+    const double sr = fd_roll.dot(j.col(1)) >= 0 ? 1.0 : -1.0;
+    EXPECT_LT((fd_pitch - sp * j.col(0)).norm(), 1e-3 * j.col(0).norm() + 1e-4) << p.transpose();
+    EXPECT_LT((fd_roll - sr * j.col(1)).norm(), 1e-3 * j.col(1).norm() + 1e-4) << p.transpose();
+    EXPECT_LT((fd_height - j.col(2)).norm(), 1e-4) << p.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace plantscale::tracking

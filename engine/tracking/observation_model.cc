@@ -29,6 +29,18 @@ Eigen::Matrix<double, 2, 7> PlantWithOffsetJacobian(const GridState& s, int m, i
   return j;
 }
 
+Eigen::Matrix<double, 2, 3> BounceJacobian(const Eigen::Vector2d& p, double hc) {
+  // Rays from the camera (0, 0, h_c) through (x, y, 0): a pitch ε turns
+  // (y, −h_c) into (y + ε h_c, −h_c + ε y), a roll turns (x, −h_c) into
+  // (x − ε h_c, −h_c − ε x); a rise shrinks the point towards the nadir.
+  const double x = p.x();
+  const double y = p.y();
+  Eigen::Matrix<double, 2, 3> j;
+  j << x * y / hc, -(hc + x * x / hc), -x / hc,  //
+      hc + y * y / hc, -x * y / hc, -y / hc;
+  return j;
+}
+
 ObservationModel::ObservationModel(const geometry::CameraModel& camera,
                                    const TrackerOptions& options)
     : camera_(camera), options_(options) {}
@@ -44,8 +56,10 @@ Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& 
   p.jacobian = Eigen::MatrixXd::Zero(2, x.size());
   p.jacobian.leftCols(core) = jg.leftCols(core);
   p.offset_jacobian = jg.rightCols<2>();
-  if (offset_index >= 0) p.jacobian.middleCols<2>(offset_index) = jg.rightCols<2>();
+  if (offset_index >= 0) p.jacobian.middleCols<2>(offset_index) = p.offset_jacobian;
   p.value = g;
+  const double hc = camera_.options().height_m - camera_.options().virtual_plane_height_m;
+  p.bounce_jacobian = BounceJacobian(p.value, hc);
   if (options_.space == ObservationSpace::kImage) {
     const Eigen::Vector3d ground(g.x(), g.y(), camera_.options().virtual_plane_height_m);
     const auto uv = camera_.Project(ground);
@@ -53,6 +67,7 @@ Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& 
     p.value = uv ? *uv : Eigen::Vector2d(NAN, NAN);
     p.jacobian = d_uv * p.jacobian;
     p.offset_jacobian = d_uv * p.offset_jacobian;
+    p.bounce_jacobian = d_uv * p.bounce_jacobian;
   }
   return p;
 }

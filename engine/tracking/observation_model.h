@@ -22,10 +22,16 @@ Eigen::Vector2d PlantWithOffset(const geometry::GridState& state, int m, int n,
 Eigen::Matrix<double, 2, 7> PlantWithOffsetJacobian(const geometry::GridState& state, int m, int n,
                                                     const Eigen::Vector2d& offset);
 
+// How a point on the virtual plane (vehicle frame) seen by a camera h_c
+// above that plane moves when the camera pitches (about x), rolls (about y)
+// or rises, to first order: d(x, y)/d(pitch, roll, height).
+Eigen::Matrix<double, 2, 3> BounceJacobian(const Eigen::Vector2d& point, double camera_above_plane_m);
+
 struct Prediction {
   Eigen::Vector2d value;
   Eigen::MatrixXd jacobian;           // 2 × state size
   Eigen::Matrix2d offset_jacobian;    // d value / d δ of this plant
+  Eigen::Matrix<double, 2, 3> bounce_jacobian;  // d value / d(pitch, roll, height) of the camera
 };
 
 struct Measurement {

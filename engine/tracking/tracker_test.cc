@@ -85,8 +85,11 @@ TEST(GridTracker, EstimatesSpacingsStartedOff) {
   const GridState est = run.tracker.state();
   EXPECT_NEAR(est.row_spacing_m, 0.475, 0.005);
   EXPECT_NEAR(est.plant_spacing_m, 0.45, 0.005);
-  // The distance driven along the rows: 150 frames at 0.7 m/s.
-  EXPECT_NEAR(run.tracker.forward_distance_m(), 150 * 0.08 * 0.7, 0.02);
+  // The distance driven along the rows: 150 frames at 0.7 m/s. Each
+  // reference shift adds the l̄ estimate of its moment, so the first few,
+  // made while l̄ was still converging from 25 mm off, stay in the sum
+  // (about 3 cm here; 0.4 % of this short run, 0.03 % of a 120 m one).
+  EXPECT_NEAR(run.tracker.forward_distance_m(), 150 * 0.08 * 0.7, 0.04);
 }
 
 TEST(GridTracker, FixedGridNeedsTwoFeaturesEstimatedNeedsThreeOffOneRow) {
