@@ -11,6 +11,7 @@
 
 #include "app/camera_source.h"
 #include "app/config_loader.h"
+#include "app/tracking_eval.h"
 #include "telemetry/log.h"
 #include "telemetry/log_stats.h"
 #include "telemetry/replay.h"
@@ -62,8 +63,14 @@ using SourceFactory =
 
 // The vehicle process: LCM (and the log) around a runner with the stages
 // that exist today; the simulator's truth stage only when `sim_truth`.
+// With a calibrated camera the grid tracker runs too.
+struct TrackerSetup {
+  const geometry::CameraModel& camera;
+  tracking::TrackerOptions options;
+};
+
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
-               const std::string& title) {
+               const std::string& title, const std::optional<TrackerSetup>& tracker = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
@@ -82,9 +89,13 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   clock = &runner;
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
-  auto segmentation = std::make_unique<tm::SegmentationStage>();
+  auto segmentation = std::make_unique<tm::SegmentationStage>(
+      vision::SegmenterOptions{}, tracker ? &tracker->camera : nullptr);
   const tm::SegmentationStage* blobs = segmentation.get();
   runner.AddStage(std::move(segmentation));
+  if (tracker) {
+    runner.AddStage(std::make_unique<tm::TrackerStage>(tracker->camera, tracker->options, *blobs));
+  }
   runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
   if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
   g_stop = false;
@@ -126,7 +137,8 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       },
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
-          std::to_string(options.seed));
+          std::to_string(options.seed),
+      TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
 }
 
 namespace {

@@ -188,6 +188,13 @@ tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, doubl
   return o;
 }
 
+tracking::TrackerOptions ProductTrackerOptions(const sim::SimulatorOptions& s) {
+  tracking::TrackerOptions o = OurTrackerOptions(s, 0.0);
+  o.row_spacing_m = s.field.NominalRowSpacing();
+  o.plant_spacing_m = s.field.NominalPlantSpacing();
+  return o;
+}
+
 tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
   tracking::TrackerOptions o;
   o.estimate_spacing = false;

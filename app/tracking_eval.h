@@ -32,6 +32,9 @@ struct TrackingEvalOptions {
 // The product's tracker options for a simulated vehicle and field.
 tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& sim,
                                            double spacing_offset_m);
+// What a run of the product uses: ours, started from the spacings the
+// grower set on the planter (nominal), not the planted ones.
+tracking::TrackerOptions ProductTrackerOptions(const sim::SimulatorOptions& sim);
 // The thesis's on-line tracker (§4.6, ch. 8) with its noise settings.
 tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& sim);
 

@@ -1,10 +1,12 @@
 #include "telemetry/stages.h"
 
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
+#include "engine/tracking/blob_features.h"
 #include "telemetry/channels.h"
 #include "telemetry/convert.h"
 
@@ -35,14 +37,16 @@ OptionErrors ThumbnailOptions::Validate() const {
   return errors;
 }
 
-SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options)
-    : segmenter_(options) {}
+SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options,
+                                     const geometry::CameraModel* camera)
+    : segmenter_(options), camera_(camera) {}
 
 void SegmentationStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher&) {
   blobs_ = {};
   if (frame.image.empty()) return;
   try {
-    blobs_ = segmenter_.Process(frame.image).blobs;
+    blobs_ = camera_ ? segmenter_.Process(frame.image, *camera_).blobs
+                     : segmenter_.Process(frame.image).blobs;
   } catch (const DataError& e) {
     status.faults.push_back(std::string("segmentation: ") + e.what());
   }
@@ -108,6 +112,49 @@ void SimTruthStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& pu
   const sim::Pose2& p = frame.truth->pose;
   publisher.Publish(channels::kSimTruthPose,
                     ToLcm(Pose{p.x_m, p.y_m, p.heading_rad, Eigen::Matrix3d::Zero()}, frame.utime));
+}
+
+TrackerStage::TrackerStage(const geometry::CameraModel& camera,
+                           const tracking::TrackerOptions& options,
+                           const SegmentationStage& segmentation)
+    : tracker_(camera, options), segmentation_(segmentation) {}
+
+void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  for (const sim::OdometrySample& o : frame.odometry) {
+    const tracking::InputStatus in = tracker_.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+    if (!in.accepted) status.faults.push_back("tracker: " + in.reason);
+  }
+  if (frame.image.empty()) return;
+  tracking::FeaturesFromBlobs(segmentation_.blobs(), frame.image.cols, frame.image.rows,
+                              features_);
+  const tracking::FrameReport r =
+      tracker_.ProcessFrame(frame.utime, frame.image.cols, frame.image.rows, features_);
+  if (!r.input.accepted) status.faults.push_back("tracker: " + r.input.reason);
+  if (r.mode == tracking::TrackerMode::kLost) {
+    status.faults.push_back("tracker: " + r.skipped_reason);
+  }
+  GridEstimate e;
+  e.utime = frame.utime;
+  e.frame_index = frame.frame_index;
+  e.state = tracker_.state();
+  e.covariance = tracker_.covariance();
+  switch (r.mode) {
+    case tracking::TrackerMode::kInitialising: e.mode = FilterMode::kInitialising; break;
+    case tracking::TrackerMode::kLost: e.mode = FilterMode::kLost; break;
+    case tracking::TrackerMode::kTracking:
+      e.mode = r.updated ? FilterMode::kTracking : FilterMode::kDeadReckoning;
+      break;
+  }
+  for (const tracking::Association& a : r.associations) {
+    if (std::find(e.lines_in_view.begin(), e.lines_in_view.end(), a.m) == e.lines_in_view.end()) {
+      e.lines_in_view.push_back(a.m);
+    }
+  }
+  std::sort(e.lines_in_view.begin(), e.lines_in_view.end());
+  e.observations = static_cast<int>(features_.size());
+  e.validated = r.matched;
+  e.innovation_nis = r.nis;
+  publisher.Publish(channels::kGrid, ToLcm(e));
 }
 
 }  // namespace plantscale::telemetry

@@ -5,6 +5,8 @@
 #include <deque>
 
 #include "engine/common/options.h"
+#include "engine/geometry/camera_model.h"
+#include "engine/tracking/grid_tracker.h"
 #include "engine/vision/segmenter.h"
 #include "telemetry/runner.h"
 
@@ -30,16 +32,37 @@ struct ThumbnailOptions {
 
 // Plant segmentation of every frame (engine/vision): keeps the latest blob
 // list for the stages after it (thumbnail now; tracker and classifier next).
+// With a calibrated camera the blobs are projected onto its virtual ground
+// plane (the tracker needs that).
 class SegmentationStage : public Stage {
  public:
-  explicit SegmentationStage(const vision::SegmenterOptions& options = {});
+  explicit SegmentationStage(const vision::SegmenterOptions& options = {},
+                             const geometry::CameraModel* camera = nullptr);
   std::string name() const override { return "segmentation"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
   std::span<const vision::Blob> blobs() const { return blobs_; }
 
  private:
   vision::Segmenter segmenter_;
+  const geometry::CameraModel* camera_;
   std::span<const vision::Blob> blobs_;
+};
+
+// The crop-grid tracker (engine/tracking) on the segmentation's blobs and
+// the frame's odometry: grid state with covariance on PLANTSCALE_GRID every
+// frame; refused input and loss of the grid are reported as faults.
+class TrackerStage : public Stage {
+ public:
+  TrackerStage(const geometry::CameraModel& camera, const tracking::TrackerOptions& options,
+               const SegmentationStage& segmentation);
+  std::string name() const override { return "tracker"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+  const tracking::GridTracker& tracker() const { return tracker_; }
+
+ private:
+  tracking::GridTracker tracker_;
+  const SegmentationStage& segmentation_;
+  std::vector<tracking::Feature> features_;
 };
 
 // Downscaled JPEG of the camera frame (PLANTSCALE_THUMBNAIL, 2 Hz) with the

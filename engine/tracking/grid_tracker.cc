@@ -426,8 +426,21 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     const int offset = OffsetIndex(g.m, g.n);
     const Prediction pred = h.Predict(x_, s, g.m, g.n, offset);
     // Covariance of the prediction: the filter's, plus the prior of a new
-    // plant's offset.
-    Eigen::Matrix2d hph = pred.jacobian * p_ * pred.jacobian.transpose();
+    // plant's offset. H touches only the grid states and this plant's own
+    // offset, so only that block of P is needed.
+    const int c = core();
+    const int used = offset >= 0 ? c + 2 : c;
+    Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, 7> hs(2, used);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 7, 7> ps(used, used);
+    hs.leftCols(c) = pred.jacobian.leftCols(c);
+    ps.topLeftCorner(c, c) = p_.topLeftCorner(c, c);
+    if (offset >= 0) {
+      hs.rightCols<2>() = pred.jacobian.middleCols<2>(offset);
+      ps.topRightCorner(c, 2) = p_.block(0, offset, c, 2);
+      ps.bottomLeftCorner(2, c) = p_.block(offset, 0, 2, c);
+      ps.bottomRightCorner<2, 2>() = p_.block<2, 2>(offset, offset);
+    }
+    Eigen::Matrix2d hph = hs * ps * hs.transpose();
     if (offset < 0 && options_.plant_offsets) {
       hph += pred.offset_jacobian * pred.offset_jacobian.transpose() *
              (options_.plant_offset_sd_m * options_.plant_offset_sd_m);
