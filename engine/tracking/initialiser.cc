@@ -53,6 +53,23 @@ Eigen::Vector2d GridCoordinates(const Eigen::Vector2d& g, double offset_m, doubl
   return {c * dx - s * g.y(), s * dx + c * g.y()};
 }
 
+// A usable feature within the half-width of one of the fitted rows: its row
+// n and its position along the rows.
+struct OnRow {
+  int n = 0;
+  double along_m = 0.0;
+};
+std::optional<OnRow> FeatureOnRow(const Feature& f, double offset_m, double bearing_rad, double r,
+                                  int rows_each_side, const InitialiserOptions& o) {
+  if (!Usable(f, o)) return std::nullopt;
+  const Eigen::Vector2d g = GridCoordinates(f.ground_m, offset_m, bearing_rad);
+  const double n = std::round(g.x() / r);
+  if (std::abs(n) > rows_each_side || std::abs(g.x() - n * r) > o.row_halfwidth_fraction * r) {
+    return std::nullopt;
+  }
+  return OnRow{static_cast<int>(n), g.y()};
+}
+
 }  // namespace
 
 std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double r,
@@ -96,19 +113,16 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
 
   // Weighted least squares on the features near the winning rows:
   //   x − n r̄ / cos Ψ = t_x + y tan Ψ.
-  const double halfwidth = o.row_halfwidth_fraction * r;
   for (int iteration = 0; iteration < 3; ++iteration) {
     Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
     Eigen::Vector2d b = Eigen::Vector2d::Zero();
     double on_rows = 0.0;
     int count = 0;
     for (const Feature& f : features) {
-      if (!Usable(f, o)) continue;
-      const Eigen::Vector2d g = GridCoordinates(f.ground_m, fit.offset_m, fit.bearing_rad);
-      const double n = std::round(g.x() / r);
-      if (std::abs(n) > rows_each_side || std::abs(g.x() - n * r) > halfwidth) continue;
+      const auto on = FeatureOnRow(f, fit.offset_m, fit.bearing_rad, r, rows_each_side, o);
+      if (!on) continue;
       const double w = Weight(f, o);
-      const double lhs = f.ground_m.x() - n * r / std::cos(fit.bearing_rad);
+      const double lhs = f.ground_m.x() - on->n * r / std::cos(fit.bearing_rad);
       const Eigen::Vector2d row(1.0, f.ground_m.y());
       a += w * row * row.transpose();
       b += w * lhs * row;
@@ -129,16 +143,13 @@ std::optional<LinePhase> PlantLinePhaseOnGround(std::span<const Feature> feature
                                                 const RowFit& rows, double r, double l,
                                                 int rows_each_side,
                                                 const InitialiserOptions& o) {
-  const double halfwidth = o.row_halfwidth_fraction * r;
   std::complex<double> sum(0.0, 0.0);
   double total = 0.0;
   for (const Feature& f : features) {
-    if (!Usable(f, o)) continue;
-    const Eigen::Vector2d g = GridCoordinates(f.ground_m, rows.offset_m, rows.bearing_rad);
-    const double n = std::round(g.x() / r);
-    if (std::abs(n) > rows_each_side || std::abs(g.x() - n * r) > halfwidth) continue;
+    const auto on = FeatureOnRow(f, rows.offset_m, rows.bearing_rad, r, rows_each_side, o);
+    if (!on) continue;
     const double w = Weight(f, o);
-    sum += w * std::polar(1.0, -2.0 * std::numbers::pi * g.y() / l);
+    sum += w * std::polar(1.0, -2.0 * std::numbers::pi * on->along_m / l);
     total += w;
   }
   if (total <= 0.0) return std::nullopt;
