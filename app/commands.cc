@@ -1,6 +1,7 @@
 #include "app/commands.h"
 
 #include "app/export_commands.h"
+#include "app/motion_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
@@ -12,6 +13,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddSegmentCommands(registry_);
   AddTelemetryCommands(registry_);
   AddExportCommands(registry_);
+  AddMotionCommands(registry_);
 }
 
 }  // namespace plantscale::app
