@@ -1,6 +1,8 @@
 #include "app/motion_eval.h"
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <unordered_map>
@@ -87,7 +89,16 @@ class MethodRun {
     const motion::FrameMotion& m = tracker_.Update(features);
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++totals.frames;
+    const int before_matches = totals.matches, before_correct = totals.correct;
     ScoreMatches(features, m, frame, camera, by_instance, totals);
+    if (std::getenv("PLANTSCALE_MOTION_DEBUG")) {
+      const PlanarMotion truth = first_ ? PlanarMotion{} : TrueMotion(previous_pose_, frame.truth.pose);
+      std::fprintf(stderr, "%s f%d feats %zu tracks %zu cand %d coh %d matched %d correct %d %s psi %.3f/%.3f t %.4f,%.4f / %.4f,%.4f\n",
+                   motion::Name(tracker_.options().method), totals.frames, features.size(), tracker_.tracks().size(),
+                   m.candidates, m.coherent, totals.matches - before_matches, totals.correct - before_correct,
+                   motion::Name(m.loss), m.motion.psi_rad * 180 / M_PI, truth.psi_rad * 180 / M_PI,
+                   m.motion.t_m.x(), m.motion.t_m.y(), truth.t_m.x(), truth.t_m.y());
+    }
     if (first_) {
       first_pose_ = frame.truth.pose;
       first_distance_ = frame.truth.distance_m;
@@ -225,6 +236,8 @@ MotionMethodOptions OursMethod(const sim::SimulatorOptions& sim) {
                                   ? sim.camera.virtual_plane_height_m
                                   : sim.field.crop_radius_m * sim.field.crop_height_ratio;
   m.tracker.method = motion::MotionMethod::kOurs;
+  m.tracker.min_matches = 2;  // ψ comes with its prior: two features fix the translation
+  m.features.weed_plane_height_m = sim.field.weed_radius_median_m * sim.field.weed_height_ratio;
   return m;
 }
 
@@ -254,8 +267,12 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
     mosaic.resolution_m = options.mosaic_resolution_m;
     mosaic.min_m = {-1.5, -1.0};
     mosaic.max_m = {1.5, so.length_m + 1.0};
-    MethodRun paper_run(options.paper, camera, mosaic, options.match_tolerance_m);
-    MethodRun ours_run(options.ours, camera, mosaic, options.match_tolerance_m);
+    // Smoothness of motion needs a first motion: the nominal forward
+    // advance per frame (a set speed, not odometry).
+    MotionMethodOptions paper_o = options.paper, ours_o = options.ours;
+    for (MotionMethodOptions* m : {&paper_o, &ours_o}) m->tracker.initial_motion.t_m = {0.0, -step_m};
+    MethodRun paper_run(paper_o, camera, mosaic, options.match_tolerance_m);
+    MethodRun ours_run(ours_o, camera, mosaic, options.match_tolerance_m);
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;
     for (int k = 0; k < options.frames && simulator.Next(frame); ++k) {

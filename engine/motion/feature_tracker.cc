@@ -44,6 +44,9 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "max_motion_change_m", max_motion_change_m);
   RequirePositive(e, "max_rotation_change_rad", max_rotation_change_rad);
   RequireNonNegative(e, "max_misses", max_misses);
+  RequirePositive(e, "rotation_prior_sigma_rad", rotation_prior_sigma_rad);
+  RequireInRange(e, "heading_return_per_frame", heading_return_per_frame, 0.0, 1.0);
+  RequireInRange(e, "translation_smoothing", translation_smoothing, 0.0, 1.0, false);
   RequirePositive(e, "track_sigma_m", track_sigma_m);
   RequirePositive(e, "process_sigma_m", process_sigma_m);
   RequirePositive(e, "measurement_sigma_m", measurement_sigma_m);
@@ -60,6 +63,17 @@ FeatureTracker::FeatureTracker(const TrackerOptions& options, const geometry::Ca
   r1_ = Isotropic(paper ? options.track_sigma_m : options.process_sigma_m);
   r2_ = p0_;
   last_motion_ = options.initial_motion;
+  smoothed_t_m_ = options.initial_motion.t_m;
+}
+
+double FeatureTracker::PriorPsi() const {
+  if (options_.method == MotionMethod::kPaper) return last_motion_.psi_rad;
+  return options_.heading_return_per_frame * result_.pose.heading_rad;
+}
+
+PlanarMotion FeatureTracker::CoastingMotion() const {
+  if (options_.method == MotionMethod::kPaper) return last_motion_;
+  return {PriorPsi(), smoothed_t_m_};
 }
 
 bool FeatureTracker::InView(const Eigen::Vector2d& p_m) const {
@@ -91,7 +105,7 @@ const FrameMotion& FeatureTracker::Update(std::span<const Feature> features) {
   } else {
     std::vector<int> visible;
     for (size_t j = 0; j < tracks_.size(); ++j) {
-      if (InView(last_motion_.Apply(tracks_[j].filter.position_m())))
+      if (InView(CoastingMotion().Apply(tracks_[j].filter.position_m())))
         visible.push_back(static_cast<int>(j));
     }
     if (visible.empty()) {
@@ -111,7 +125,8 @@ std::vector<Match> FeatureTracker::Correspond(std::span<const Feature> features,
   Eigen::MatrixXd dm = Eigen::MatrixXd::Constant(features.size(), visible.size(), kNoMatch);
   for (size_t i = 0; i < features.size(); ++i) {
     const SearchRegion region = EpipolarSearchRegion(
-        features[i].position_m, last_motion_, options_.depth_tolerance, options_.search_margin_m);
+        features[i].position_m, CoastingMotion(), options_.depth_tolerance,
+        options_.search_margin_m);
     for (size_t v = 0; v < visible.size(); ++v) {
       const Track& t = tracks_[visible[v]];
       if (region.Contains(t.filter.position_m()))
@@ -127,7 +142,7 @@ std::vector<Match> FeatureTracker::Correspond(std::span<const Feature> features,
     prev.push_back(tracks_[visible[m.second]].filter.position_m());
     cur.push_back(features[m.first].position_m);
   }
-  const HoughResult hough = HoughSelect(prev, cur, last_motion_.psi_rad, options_.hough);
+  const HoughResult hough = HoughSelect(prev, cur, PriorPsi(), options_.hough);
   std::vector<Match> matches;
   for (int c : hough.coherent) matches.push_back(candidates[c]);
   result_.coherent = static_cast<int>(matches.size());
@@ -198,9 +213,9 @@ PlanarMotion FeatureTracker::Fit(std::span<const Feature> features, const std::v
   }
   PlanarMotion fit = FitRigidMotion(prev, cur);
   if (options_.method == MotionMethod::kPaper) return fit;
-  // Ours: a smoothness prior on ψ. Near the optimum the data cost is
+  // Ours: the row-following prior on ψ. Near the optimum the data cost is
   // S (ψ − ψ_fit)² / σ_m² with S = Σ|p − p̄|², so the posterior ψ is the
-  // precision-weighted mean with the previous ψ (σ_ψ = max rotation change / 3).
+  // precision-weighted mean of ψ_fit and ψ_prior.
   Eigen::Vector2d mean_prev = Eigen::Vector2d::Zero(), mean_cur = Eigen::Vector2d::Zero();
   for (size_t k = 0; k < prev.size(); ++k) mean_prev += prev[k], mean_cur += cur[k];
   mean_prev /= static_cast<double>(prev.size());
@@ -208,17 +223,18 @@ PlanarMotion FeatureTracker::Fit(std::span<const Feature> features, const std::v
   double s = 0.0;
   for (const Eigen::Vector2d& p : prev) s += (p - mean_prev).squaredNorm();
   const double data = s / (options_.measurement_sigma_m * options_.measurement_sigma_m);
-  const double sigma_psi = options_.max_rotation_change_rad / 3.0;
+  const double sigma_psi = options_.rotation_prior_sigma_rad;
   const double prior = 1.0 / (sigma_psi * sigma_psi);
-  const double psi0 = last_motion_.psi_rad;
+  const double psi0 = PriorPsi();
   fit.psi_rad = psi0 + data * WrapAngle(fit.psi_rad - psi0) / (data + prior);
   fit.t_m = mean_cur - fit.R() * mean_prev;
   return fit;
 }
 
 bool FeatureTracker::SmoothContinuation(const PlanarMotion& motion) const {
-  return (motion.t_m - last_motion_.t_m).norm() <= options_.max_motion_change_m &&
-         std::abs(WrapAngle(motion.psi_rad - last_motion_.psi_rad)) <=
+  const PlanarMotion expected = CoastingMotion();
+  return (motion.t_m - expected.t_m).norm() <= options_.max_motion_change_m &&
+         std::abs(WrapAngle(motion.psi_rad - expected.psi_rad)) <=
              options_.max_rotation_change_rad;
 }
 
@@ -259,16 +275,18 @@ void FeatureTracker::Advance(std::span<const Feature> features, const std::vecto
   result_.motion = motion;
   result_.pose = Compose(result_.pose, motion);
   last_motion_ = motion;
+  smoothed_t_m_ += options_.translation_smoothing * (motion.t_m - smoothed_t_m_);
   DropLostTracks();
   StartTracks(features, matched);
 }
 
 void FeatureTracker::Coast(std::span<const Feature> features, LockLoss loss, bool add_tracks) {
-  for (Track& t : tracks_) t.filter.Predict(last_motion_, r1_), ++t.misses;
+  const PlanarMotion coast = CoastingMotion();
+  for (Track& t : tracks_) t.filter.Predict(coast, r1_), ++t.misses;
   result_.locked = false;
   result_.loss = loss;
-  result_.motion = last_motion_;
-  result_.pose = Compose(result_.pose, last_motion_);
+  result_.motion = coast;
+  result_.pose = Compose(result_.pose, coast);
   DropLostTracks();
   result_.new_track_of_feature.assign(features.size(), -1);
   if (add_tracks) StartTracks(features, std::vector<uint8_t>(features.size(), 0));

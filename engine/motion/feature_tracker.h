@@ -11,7 +11,14 @@
 //   kOurs:  the same first two steps, then residual gates instead of the
 //           depth/direction cone (which admits a wide wedge of wrong
 //           matches), greedy final matching on residual plus similarity,
-//           a refit without outliers, and tight filter noise.
+//           a refit without outliers, tight filter noise, and a
+//           row-following motion prior: the rotation ψ is fused with
+//           ψ_prior = κ·H (H the heading from the first frame, which the
+//           vehicle steers back to along the rows), because with the small
+//           overlap of consecutive frames the features span a few
+//           centimetres and ψ alone is not observable to the 0.01° per
+//           frame that 1 cm/m of drift needs. Coasting uses the smoothed
+//           translation.
 // Bad frames (no features, duplicates, a frame whose features fit no
 // motion) lose lock: the pose and the tracks coast on the previous motion,
 // and the next good pair locks again.
@@ -42,6 +49,9 @@ struct TrackerOptions {
   double residual_gate_m = 0.012;   // kOurs: match residual against the fitted motion
   double similarity_weight_m = 0.004;  // kOurs: metres of residual worth one radian of eq. 6
   int min_matches = 3;              // fewer final matches lose lock
+  double rotation_prior_sigma_rad = 0.2 * M_PI / 180.0;  // kOurs: σ of ψ about ψ_prior
+  double heading_return_per_frame = 0.05;               // kOurs: κ
+  double translation_smoothing = 0.3;   // kOurs: weight of a new t in the coasting motion
   double max_motion_change_m = 0.12;  // a jump in t from the previous frame loses lock
   double max_rotation_change_rad = 5.0 * M_PI / 180.0;
   int max_misses = 3;               // a track unobserved this many frames is dropped
@@ -106,6 +116,10 @@ class FeatureTracker {
                                     const std::vector<int>& visible, std::vector<Match> matches,
                                     const PlanarMotion& motion) const;
   bool SmoothContinuation(const PlanarMotion& motion) const;
+  // The rotation expected before looking at the frame.
+  double PriorPsi() const;
+  // The motion to coast on when not locked.
+  PlanarMotion CoastingMotion() const;
   void Advance(std::span<const Feature> features, const std::vector<int>& visible,
                const std::vector<Match>& matches);
   void Coast(std::span<const Feature> features, LockLoss loss, bool add_tracks);
@@ -119,6 +133,7 @@ class FeatureTracker {
   std::vector<Track> tracks_;
   std::vector<Eigen::Vector2d> last_positions_;
   PlanarMotion last_motion_;
+  Eigen::Vector2d smoothed_t_m_{0.0, 0.0};
   FrameMotion result_;
   int64_t next_id_ = 1;
   bool first_ = true;

@@ -60,6 +60,7 @@ OptionErrors FeatureOptions::Validate() const {
   OptionErrors e;
   RequireNonNegative(e, "plane_height_m", plane_height_m);
   RequireNonNegative(e, "min_plant_area_m2", min_plant_area_m2);
+  RequireNonNegative(e, "weed_plane_height_m", weed_plane_height_m);
   RequirePositive(e, "detection_arm_m", detection_arm_m);
   RequireInRange(e, "min_sharpness_rad", min_sharpness_rad, 0.0, M_PI, false, false);
   RequireInRange(e, "characteristic_arm_fraction", characteristic_arm_fraction, 0.0, 0.5, false);
@@ -128,20 +129,22 @@ const std::vector<Feature>& FeatureExtractor::Extract(std::span<const vision::Bl
                                                       const geometry::CameraModel& camera) {
   features_.clear();
   for (size_t i = 0; i < blobs.size(); ++i) {
-    if (IsPlant(blobs[i]) && blobs[i].contour.size() >= 8)
-      AddBlobFeatures(blobs[i], static_cast<int>(i), camera);
+    const bool plant = IsPlant(blobs[i]);
+    if ((plant || options_.weed_features) && blobs[i].on_ground && blobs[i].contour.size() >= 8)
+      AddBlobFeatures(blobs[i], static_cast<int>(i), plant, camera);
   }
   return features_;
 }
 
-void FeatureExtractor::AddBlobFeatures(const vision::Blob& blob, int index,
+void FeatureExtractor::AddBlobFeatures(const vision::Blob& blob, int index, bool plant,
                                        const geometry::CameraModel& camera) {
   const int m = options_.border_margin_px;
+  const double height = plant ? options_.plane_height_m : options_.weed_plane_height_m;
   contour_m_.clear();
   cut_.clear();
   Eigen::Vector2d last(0.0, 0.0);
   for (const cv::Point& q : blob.contour) {
-    const auto g = ImageToFeaturePlane(camera, {q.x + 0.5, q.y + 0.5}, options_.plane_height_m);
+    const auto g = ImageToFeaturePlane(camera, {q.x + 0.5, q.y + 0.5}, height);
     const bool edge = q.x < m || q.y < m || q.x >= camera.width() - m || q.y >= camera.height() - m;
     if (g) last = *g;
     contour_m_.push_back(last);
@@ -159,6 +162,7 @@ void FeatureExtractor::AddBlobFeatures(const vision::Blob& blob, int index,
                          f.orientation_rad);
     f.pixel = {blob.contour[i].x + 0.5, blob.contour[i].y + 0.5};
     f.blob = index;
+    f.on_plant = plant;
     features_.push_back(f);
   }
 }

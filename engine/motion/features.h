@@ -20,8 +20,10 @@
 namespace plantscale::motion {
 
 struct FeatureOptions {
-  double plane_height_m = 0.0;          // feature plane above the soil (0: the paper's ground)
-  double min_plant_area_m2 = 0.004;     // blobs smaller than this are weeds: no features
+  double plane_height_m = 0.0;          // crop feature plane above the soil (0: the paper's ground)
+  double min_plant_area_m2 = 0.004;     // blobs smaller than this are weeds
+  bool weed_features = true;            // features on weed blobs too (else crop only, §5)
+  double weed_plane_height_m = 0.0;     // their plane (weeds are low)
   double detection_arm_m = 0.02;        // arm of the relevance (sharpness) measure
   double min_sharpness_rad = 0.9;       // relevance threshold: 180° − |α| above this
   double characteristic_arm_fraction = 0.10;  // arm of α and β: fraction of the contour length
@@ -37,6 +39,7 @@ struct Feature {
   double orientation_rad = 0.0;          // β: bisector from the x axis
   Eigen::Vector2d pixel{0.0, 0.0};       // image position (u, v)
   int blob = -1;                         // index of the blob in the frame
+  bool on_plant = true;                  // crop blob (else weed)
 };
 
 // Signed angle α at p between arms to a and b, and the bisector angle β
@@ -64,7 +67,8 @@ class FeatureExtractor {
   bool IsPlant(const vision::Blob& blob) const;
 
  private:
-  void AddBlobFeatures(const vision::Blob& blob, int index, const geometry::CameraModel& camera);
+  void AddBlobFeatures(const vision::Blob& blob, int index, bool plant,
+                       const geometry::CameraModel& camera);
 
   FeatureOptions options_;
   std::vector<Feature> features_;
