@@ -44,6 +44,8 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "max_motion_change_m", max_motion_change_m);
   RequirePositive(e, "max_rotation_change_rad", max_rotation_change_rad);
   RequireNonNegative(e, "max_misses", max_misses);
+  RequirePositive(e, "max_similarity_distance", max_similarity_distance);
+  RequireInRange(e, "min_matched_fraction", min_matched_fraction, 0.0, 1.0);
   RequirePositive(e, "rotation_prior_sigma_rad", rotation_prior_sigma_rad);
   RequireInRange(e, "heading_return_per_frame", heading_return_per_frame, 0.0, 1.0);
   RequireInRange(e, "translation_smoothing", translation_smoothing, 0.0, 1.0, false);
@@ -122,6 +124,7 @@ const FrameMotion& FeatureTracker::Update(std::span<const Feature> features) {
 std::vector<Match> FeatureTracker::Correspond(std::span<const Feature> features,
                                               const std::vector<int>& visible) {
   // Step 1: similarity inside the epipolar search regions, two-way matches.
+  const bool paper = options_.method == MotionMethod::kPaper;
   Eigen::MatrixXd dm = Eigen::MatrixXd::Constant(features.size(), visible.size(), kNoMatch);
   for (size_t i = 0; i < features.size(); ++i) {
     const SearchRegion region = EpipolarSearchRegion(
@@ -129,8 +132,9 @@ std::vector<Match> FeatureTracker::Correspond(std::span<const Feature> features,
         options_.search_margin_m);
     for (size_t v = 0; v < visible.size(); ++v) {
       const Track& t = tracks_[visible[v]];
-      if (region.Contains(t.filter.position_m()))
-        dm(i, v) = SimilarityDistance(Of(features[i]), t.characteristics);
+      if (!region.Contains(t.filter.position_m())) continue;
+      const double d = SimilarityDistance(Of(features[i]), t.characteristics);
+      if (paper || d <= options_.max_similarity_distance) dm(i, v) = d;
     }
   }
   const std::vector<Match> candidates = TwoWayMatches(dm);
@@ -196,7 +200,8 @@ std::vector<Match> FeatureTracker::FinalMatches(std::span<const Feature> feature
           cost(i, v) = d;
       } else {
         const double r = (p - motion.Apply(q)).norm();
-        if (r <= options_.residual_gate_m) cost(i, v) = r + options_.similarity_weight_m * d;
+        if (r <= options_.residual_gate_m && d <= options_.max_similarity_distance)
+          cost(i, v) = r + options_.similarity_weight_m * d;
       }
     }
   }
@@ -241,15 +246,22 @@ bool FeatureTracker::SmoothContinuation(const PlanarMotion& motion) const {
 void FeatureTracker::Advance(std::span<const Feature> features, const std::vector<int>& visible,
                              const std::vector<Match>& found) {
   std::vector<Match> matches = found;
-  if (static_cast<int>(matches.size()) < options_.min_matches) {
+  const bool paper = options_.method == MotionMethod::kPaper;
+  const double needed =
+      paper ? 0.0
+            : options_.min_matched_fraction *
+                  static_cast<double>(std::min(features.size(), visible.size()));
+  if (static_cast<int>(matches.size()) < options_.min_matches ||
+      static_cast<double>(matches.size()) < needed) {
     Coast(features, LockLoss::kTooFewMatches, true);
     return;
   }
   // Step 6: the definitive motion from all matches.
   PlanarMotion motion = Fit(features, visible, matches);
-  if (options_.method == MotionMethod::kOurs) {
+  if (!paper) {
     matches = KeepWithinGate(features, visible, std::move(matches), motion);
-    if (static_cast<int>(matches.size()) < options_.min_matches) {
+    if (static_cast<int>(matches.size()) < options_.min_matches ||
+        static_cast<double>(matches.size()) < needed) {
       Coast(features, LockLoss::kTooFewMatches, true);
       return;
     }

@@ -47,8 +47,14 @@ struct TrackerOptions {
   double search_margin_m = 0.03;                         // widening of the search ellipse
   HoughOptions hough;
   double residual_gate_m = 0.012;   // kOurs: match residual against the fitted motion
-  double similarity_weight_m = 0.004;  // kOurs: metres of residual worth one radian of eq. 6
+  double similarity_weight_m = 0.01;   // kOurs: metres of residual worth one radian of eq. 6
   int min_matches = 3;              // fewer final matches lose lock
+  // kOurs: candidates less similar than this are not matches (eq. 6, rad),
+  // and fewer matches than this fraction of min(features, tracks in view)
+  // lose lock
+  // (a frame of some other place matches a few tracks by chance only).
+  double max_similarity_distance = 0.6;
+  double min_matched_fraction = 0.3;
   double rotation_prior_sigma_rad = 0.2 * M_PI / 180.0;  // kOurs: σ of ψ about ψ_prior
   double heading_return_per_frame = 0.05;               // kOurs: κ
   double translation_smoothing = 0.3;   // kOurs: weight of a new t in the coasting motion
