@@ -122,6 +122,12 @@ class MethodRun {
     if (distance > 0.0)
       totals.drift_sum += 100.0 * (tracker_.pose().position_m - truth).norm() / distance;
     ++totals.sequences;
+    if (std::getenv("PLANTSCALE_MOTION_DEBUG2"))
+      std::fprintf(stderr, "drift %s est %.4f %.4f heading %.3f truth %.4f %.4f heading %.3f dist %.3f\n",
+                   motion::Name(tracker_.options().method), tracker_.pose().position_m.x(),
+                   tracker_.pose().position_m.y(), tracker_.pose().heading_rad * 180 / M_PI,
+                   truth.x(), truth.y(), (previous_pose_.heading_rad - first_pose_.heading_rad) * 180 / M_PI,
+                   distance);
     const maps::CropMap map = mosaic_.Build();
     std::vector<Eigen::Vector2d> plants;
     for (const auto& p : map.plants()) plants.push_back(p.position_m);
@@ -145,6 +151,11 @@ class MethodRun {
         if (now.plant_id >= 0 && now.plant_id == before.plant_id &&
             (now.field_m - before.field_m).norm() <= tolerance_m_)
           ++totals.correct;
+        if (std::getenv("PLANTSCALE_MOTION_DEBUG2"))
+          std::fprintf(stderr, "match %s same %d d %.4f alpha %.2f plant %d\n",
+                       motion::Name(tracker_.options().method), now.plant_id == before.plant_id,
+                       (now.field_m - before.field_m).norm(), features[i].convexity_rad,
+                       features[i].on_plant);
       }
       next[m.new_track_of_feature[i]] = now;
     }
