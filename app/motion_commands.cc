@@ -17,6 +17,8 @@ struct MotionArgs {
   int seeds = 3;
   int frames = 30;
   std::optional<int64_t> seed;
+  std::string camera;
+  std::optional<double> speed_m_s, frame_rate_hz;
   bool json = false;
   std::string baseline;
 };
@@ -90,6 +92,9 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   MotionEvalOptions o;
   o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
   if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
+  if (!a.camera.empty()) o.sim.camera = LoadCamera(a.camera, global.ConfigDir());
+  if (a.speed_m_s) o.sim.vehicle.speed_m_s = *a.speed_m_s;
+  if (a.frame_rate_hz) o.sim.vehicle.frame_rate_hz = *a.frame_rate_hz;
   o.seeds = a.seeds;
   o.frames = a.frames;
   o.paper = PaperMethod();
@@ -119,6 +124,13 @@ void AddMotionCommands(CommandRegistry& registry) {
       ->check(CLI::Range(2, 100000))->capture_default_str();
   cmd->add_option("--seed", a.seed, "first seed (default: the preset's)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--camera", a.camera,
+                  "camera name or YAML file instead of the preset's (e.g. sanchiz_pla_90, the "
+                  "paper's second set-up)");
+  cmd->add_option("--speed-m-s", a.speed_m_s, "vehicle speed instead of the preset's")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--frame-rate-hz", a.frame_rate_hz, "frame rate instead of the preset's")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--json", a.json, "print one JSON object");
   cmd->add_option("--baseline", a.baseline, "paper: the published method beside ours")
       ->check(CLI::IsMember({"paper"}));

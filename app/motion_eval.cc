@@ -249,6 +249,8 @@ MotionMethodOptions OursMethod(const sim::SimulatorOptions& sim) {
   m.tracker.method = motion::MotionMethod::kOurs;
   m.tracker.min_matches = 2;  // ψ comes with its prior: two features fix the translation
   m.features.weed_plane_height_m = sim.field.weed_radius_median_m * sim.field.weed_height_ratio;
+  m.features.crop_height_per_radius = sim.field.crop_height_ratio;
+  m.features.weed_height_per_radius = sim.field.weed_height_ratio;
   return m;
 }
 

@@ -61,6 +61,8 @@ OptionErrors FeatureOptions::Validate() const {
   RequireNonNegative(e, "plane_height_m", plane_height_m);
   RequireNonNegative(e, "min_plant_area_m2", min_plant_area_m2);
   RequireNonNegative(e, "weed_plane_height_m", weed_plane_height_m);
+  RequireNonNegative(e, "crop_height_per_radius", crop_height_per_radius);
+  RequireNonNegative(e, "weed_height_per_radius", weed_height_per_radius);
   RequirePositive(e, "detection_arm_m", detection_arm_m);
   RequireInRange(e, "min_sharpness_rad", min_sharpness_rad, 0.0, M_PI, false, false);
   RequireInRange(e, "characteristic_arm_fraction", characteristic_arm_fraction, 0.0, 0.5, false);
@@ -125,6 +127,12 @@ bool FeatureExtractor::IsPlant(const vision::Blob& blob) const {
   return blob.on_ground && blob.ground_area_m2 >= options_.min_plant_area_m2;
 }
 
+double FeatureExtractor::PlaneHeight(const vision::Blob& blob, bool plant) const {
+  const double ratio = plant ? options_.crop_height_per_radius : options_.weed_height_per_radius;
+  if (ratio <= 0.0) return plant ? options_.plane_height_m : options_.weed_plane_height_m;
+  return ratio * std::sqrt(blob.ground_area_m2 / M_PI);
+}
+
 const std::vector<Feature>& FeatureExtractor::Extract(std::span<const vision::Blob> blobs,
                                                       const geometry::CameraModel& camera) {
   features_.clear();
@@ -139,7 +147,7 @@ const std::vector<Feature>& FeatureExtractor::Extract(std::span<const vision::Bl
 void FeatureExtractor::AddBlobFeatures(const vision::Blob& blob, int index, bool plant,
                                        const geometry::CameraModel& camera) {
   const int m = options_.border_margin_px;
-  const double height = plant ? options_.plane_height_m : options_.weed_plane_height_m;
+  const double height = PlaneHeight(blob, plant);
   contour_m_.clear();
   cut_.clear();
   Eigen::Vector2d last(0.0, 0.0);

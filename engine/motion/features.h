@@ -24,6 +24,11 @@ struct FeatureOptions {
   double min_plant_area_m2 = 0.004;     // blobs smaller than this are weeds
   bool weed_features = true;            // features on weed blobs too (else crop only, §5)
   double weed_plane_height_m = 0.0;     // their plane (weeds are low)
+  // When > 0, each blob's plane is its own height: this ratio times the
+  // radius of a disc of the blob's ground area (plants are bowls whose
+  // height grows with their size); overrides the fixed heights above.
+  double crop_height_per_radius = 0.0;
+  double weed_height_per_radius = 0.0;
   double detection_arm_m = 0.02;        // arm of the relevance (sharpness) measure
   double min_sharpness_rad = 0.9;       // relevance threshold: 180° − |α| above this
   double characteristic_arm_fraction = 0.10;  // arm of α and β: fraction of the contour length
@@ -65,6 +70,8 @@ class FeatureExtractor {
   const FeatureOptions& options() const { return options_; }
   // True when a blob counts as a plant (crop) by its ground area.
   bool IsPlant(const vision::Blob& blob) const;
+  // Height of the plane a blob's contour is placed on.
+  double PlaneHeight(const vision::Blob& blob, bool plant) const;
 
  private:
   void AddBlobFeatures(const vision::Blob& blob, int index, bool plant,
