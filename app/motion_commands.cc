@@ -18,7 +18,7 @@ struct MotionArgs {
   int frames = 30;
   std::optional<int64_t> seed;
   std::string camera;
-  std::optional<double> speed_m_s, frame_rate_hz;
+  std::optional<double> speed_m_s, frame_rate_hz, offset_m;
   bool json = false;
   std::string baseline;
 };
@@ -95,6 +95,7 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   if (!a.camera.empty()) o.sim.camera = LoadCamera(a.camera, global.ConfigDir());
   if (a.speed_m_s) o.sim.vehicle.speed_m_s = *a.speed_m_s;
   if (a.frame_rate_hz) o.sim.vehicle.frame_rate_hz = *a.frame_rate_hz;
+  if (a.offset_m) o.sim.vehicle.start_offset_m = *a.offset_m;
   o.seeds = a.seeds;
   o.frames = a.frames;
   o.paper = PaperMethod();
@@ -131,6 +132,8 @@ void AddMotionCommands(CommandRegistry& registry) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--frame-rate-hz", a.frame_rate_hz, "frame rate instead of the preset's")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--offset-m", a.offset_m,
+                  "drive this far right of the central row (a camera beside the rows)");
   cmd->add_flag("--json", a.json, "print one JSON object");
   cmd->add_option("--baseline", a.baseline, "paper: the published method beside ours")
       ->check(CLI::IsMember({"paper"}));

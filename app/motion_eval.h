@@ -21,6 +21,7 @@ namespace plantscale::app {
 struct MotionMethodOptions {
   motion::FeatureOptions features;
   motion::TrackerOptions tracker;
+  double mosaic_plane_height_m = 0.0;  // plane the labels are placed on in the mosaic
 };
 
 struct MotionEvalOptions {

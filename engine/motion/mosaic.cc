@@ -65,9 +65,11 @@ maps::CropMap Mosaic::Build() const {
   maps::CropMap map(grid_);
   maps::MapLayers layers = map.layers();
   cv::Mat plants(grid_.rows(), grid_.cols(), CV_8UC1, cv::Scalar(0));
+  cv::Mat unknown(grid_.rows(), grid_.cols(), CV_8UC1, cv::Scalar(255));
   for (size_t i = 0; i < votes_.size(); ++i) {
     const auto& v = votes_[i];
     if (v[0] + v[1] + v[2] == 0) continue;
+    unknown.at<uint8_t>(grid_.CellOf(i).row, grid_.CellOf(i).col) = 0;
     const auto best = std::max_element(v.begin(), v.end()) - v.begin();
     layers.cls[i] = static_cast<uint8_t>(best);  // CellClass has the label values
     if (best == kPlantLabel) plants.at<uint8_t>(grid_.CellOf(i).row, grid_.CellOf(i).col) = 255;
@@ -75,10 +77,17 @@ maps::CropMap Mosaic::Build() const {
   map.SetLayers(std::move(layers));
   cv::Mat component, stats, centroids;
   const int n = cv::connectedComponentsWithStats(plants, component, stats, centroids, 8, CV_32S);
+  cv::dilate(unknown, unknown, cv::Mat());
+  std::vector<uint8_t> truncated(static_cast<size_t>(n), 0);
+  for (int r = 0; r < component.rows; ++r) {
+    for (int c = 0; c < component.cols; ++c) {
+      if (unknown.at<uint8_t>(r, c) != 0) truncated[component.at<int>(r, c)] = 1;
+    }
+  }
   int64_t id = 1;
   for (int k = 1; k < n; ++k) {
     const int area = stats.at<int>(k, cv::CC_STAT_AREA);
-    if (area < options_.min_plant_cells) continue;
+    if (area < options_.min_plant_cells || truncated[k]) continue;
     maps::MapPlant plant;
     plant.id = id++;
     const double res = grid_.resolution_m();

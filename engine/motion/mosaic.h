@@ -46,7 +46,8 @@ class Mosaic {
   // Votes every cell of the frame's footprint with the label under it.
   void AddFrame(const cv::Mat& labels, const VehiclePose2& pose);
   // Majority vote per cell (cells without votes stay unknown) and the plant
-  // components as plants.
+  // components as plants, except those touching unobserved cells (plants
+  // cut by the edge of every view: their centres would be biased inwards).
   maps::CropMap Build() const;
   int frames() const { return frames_; }
 

@@ -54,6 +54,15 @@ TEST_F(MosaicTest, APlantIsPlacedWithThePoseAndRegistered) {
   EXPECT_EQ(map.plants()[0].kind, maps::PlantKind::kCrop);
 }
 
+TEST_F(MosaicTest, APlantCutByTheEdgeOfTheViewIsNotRegistered) {
+  const Eigen::Vector2d uv = *camera_.Project({0.0, 0.55, 0.0});
+  cv::Mat labels = Labels(kSoilLabel);
+  cv::circle(labels, cv::Point(0, static_cast<int>(uv.y())), 80, cv::Scalar(kPlantLabel), cv::FILLED);
+  Mosaic mosaic(options_, camera_);
+  mosaic.AddFrame(labels, VehiclePose2{});
+  EXPECT_TRUE(mosaic.Build().plants().empty());
+}
+
 TEST_F(MosaicTest, LabelFrameSplitsPlantsFromWeedsBySize) {
   cv::Mat mask(576, 768, CV_8UC1, cv::Scalar(0));
   cv::rectangle(mask, cv::Rect(100, 100, 200, 200), cv::Scalar(255), cv::FILLED);

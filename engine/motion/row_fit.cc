@@ -11,6 +11,7 @@ namespace plantscale::motion {
 OptionErrors RowFitOptions::Validate() const {
   OptionErrors e;
   RequirePositive(e, "row_gap_m", row_gap_m);
+  RequireNonNegative(e, "outlier_m", outlier_m);
   if (min_plants < 2) e.push_back({"min_plants", "must be >= 2"});
   return e;
 }
@@ -38,6 +39,24 @@ FittedLine FitLine(std::span<const Eigen::Vector2d> points) {
   return line;
 }
 
+namespace {
+
+FittedLine FitRow(std::span<const Eigen::Vector2d> plants, const RowFitOptions& options) {
+  FittedLine line = FitLine(plants);
+  if (options.outlier_m <= 0.0) return line;
+  const Eigen::Vector2d normal(-line.direction.y(), line.direction.x());
+  std::vector<Eigen::Vector2d> kept;
+  for (const auto& p : plants) {
+    if (std::abs(normal.dot(p - line.point_m)) <= options.outlier_m) kept.push_back(p);
+  }
+  if (static_cast<int>(kept.size()) < options.min_plants || kept.size() == plants.size()) return line;
+  FittedLine refit = FitLine(kept);
+  refit.outliers = static_cast<int>(plants.size() - kept.size());
+  return refit;
+}
+
+}  // namespace
+
 RowFit FitRows(std::span<const Eigen::Vector2d> plants_m, double centre_y_m,
                const RowFitOptions& options) {
   std::vector<Eigen::Vector2d> sorted(plants_m.begin(), plants_m.end());
@@ -47,7 +66,7 @@ RowFit FitRows(std::span<const Eigen::Vector2d> plants_m, double centre_y_m,
   for (size_t i = 1; i <= sorted.size(); ++i) {
     if (i < sorted.size() && sorted[i].x() - sorted[i - 1].x() <= options.row_gap_m) continue;
     if (static_cast<int>(i - begin) >= options.min_plants)
-      fit.rows.push_back(FitLine(std::span(sorted).subspan(begin, i - begin)));
+      fit.rows.push_back(FitRow(std::span(sorted).subspan(begin, i - begin), options));
     begin = i;
   }
   for (const auto& row : fit.rows) fit.mean_rms_m += row.rms_m / static_cast<double>(fit.rows.size());

@@ -17,6 +17,10 @@ namespace plantscale::motion {
 struct RowFitOptions {
   double row_gap_m = 0.15;  // a gap this wide in x starts a new row
   int min_plants = 3;       // rows with fewer plants are not fitted
+  // Plants farther than this from the first fit are not the row's (weeds
+  // taken for crop, merged blobs; the paper assigned plants by hand) and the
+  // line is fitted again without them. 0: keep every plant.
+  double outlier_m = 0.06;
 
   OptionErrors Validate() const;
 };
@@ -26,6 +30,7 @@ struct FittedLine {
   Eigen::Vector2d direction{0.0, 1.0};    // unit, y ≥ 0
   double rms_m = 0.0;                     // perpendicular distances
   int plants = 0;
+  int outliers = 0;                       // plants left out of the fit
   // Across-row x of the line at height y.
   double XAt(double y_m) const;
 };

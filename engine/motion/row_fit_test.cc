@@ -33,6 +33,19 @@ TEST(RowFit, ThreeRowsGiveTheirScatterAngleAndSpacing) {
   EXPECT_NEAR(fit.mean_spacing_m, 0.4, 0.004);
 }
 
+TEST(RowFit, APlantFarFromItsRowIsLeftOutOfTheFit) {
+  std::vector<Eigen::Vector2d> plants;
+  for (int k = 0; k < 10; ++k) plants.emplace_back(0.002 * (k % 2), 0.3 * k);
+  plants.emplace_back(0.1, 1.35);  // a weed blob taken for crop, 10 cm off the row
+  const RowFit fit = FitRows(plants, 1.35, RowFitOptions{});
+  ASSERT_EQ(fit.rows.size(), 1U);
+  EXPECT_EQ(fit.rows[0].outliers, 1);
+  EXPECT_NEAR(fit.rows[0].rms_m, 0.001, 1e-4);  // the ±1 mm scatter of the others
+  RowFitOptions keep_all;
+  keep_all.outlier_m = 0.0;
+  EXPECT_GT(FitRows(plants, 1.35, keep_all).rows[0].rms_m, 0.02);
+}
+
 TEST(RowFit, RowsWithTooFewPlantsAreNotFitted) {
   const std::vector<Eigen::Vector2d> plants{{0, 0}, {0, 1}, {0.4, 0}, {0.4, 0.5}, {0.4, 1}};
   const RowFit fit = FitRows(plants, 0.5, RowFitOptions{});
