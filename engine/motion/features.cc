@@ -119,6 +119,11 @@ std::vector<int> DominantPoints(std::span<const Eigen::Vector2d> contour_m,
   return points;
 }
 
+double FeatureStability(int n_k, int detected, int not_in_view) {
+  const int seen_before = n_k - not_in_view;
+  return seen_before > 0 ? 100.0 * detected / seen_before : 0.0;  // eq. 5
+}
+
 FeatureExtractor::FeatureExtractor(const FeatureOptions& options) : options_(options) {
   ThrowIfInvalid("FeatureOptions", options.Validate());
 }

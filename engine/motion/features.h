@@ -60,6 +60,11 @@ void ConvexityOrientation(const Eigen::Vector2d& a, const Eigen::Vector2d& p,
 std::vector<int> DominantPoints(std::span<const Eigen::Vector2d> contour_m,
                                 std::span<const uint8_t> cut, const FeatureOptions& options);
 
+// Stability of a feature detector (Sanchiz & Pla §3, eq. 5), in %: of the
+// n_k features of image k, det also appeared and were detected in image
+// k−1 and notview were out of image k−1's view. 0 when n_k = notview.
+double FeatureStability(int n_k, int detected, int not_in_view);
+
 // Features of every plant blob (contours traced) of a frame.
 class FeatureExtractor {
  public:

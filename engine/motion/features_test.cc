@@ -85,6 +85,13 @@ TEST(Features, WeedsGiveNoFeaturesWhenOnlyPlantsAreUsed) {
   EXPECT_FALSE(with_weeds.Extract(found, camera).empty());
 }
 
+// Eq. 5: n_k = det + notdet + notview; 17 of the 20 that could have been
+// seen before were: 85 %, the paper's figure for its detector.
+TEST(Features, StabilityIsEquationFive) {
+  EXPECT_NEAR(FeatureStability(30, 17, 10), 85.0, 1e-12);
+  EXPECT_EQ(FeatureStability(5, 0, 5), 0.0);
+}
+
 TEST(Features, OptionsExplainWhatIsWrong) {
   FeatureOptions o;
   o.detection_arm_m = -1.0;
