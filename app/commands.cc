@@ -1,6 +1,7 @@
 #include "app/commands.h"
 
 #include "app/export_commands.h"
+#include "app/motion_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
@@ -14,6 +15,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddTelemetryCommands(registry_);
   AddExportCommands(registry_);
   AddTrackingCommands(registry_);
+  AddMotionCommands(registry_);
 }
 
 }  // namespace plantscale::app

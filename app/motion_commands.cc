@@ -1,0 +1,142 @@
+#include "app/motion_commands.h"
+
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "app/config_loader.h"
+#include "app/motion_eval.h"
+#include "app/segment_commands.h"
+
+namespace plantscale::app {
+namespace {
+
+struct MotionArgs {
+  std::string preset = "sanchiz_pla";
+  int seeds = 3;
+  int frames = 30;
+  std::optional<int64_t> seed;
+  std::string camera;
+  std::optional<double> speed_m_s, frame_rate_hz, offset_m;
+  bool json = false;
+  std::string baseline;
+};
+
+nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
+  return {{"method", m.method},
+          {"correct_correspondence_rate", m.correct_correspondence_rate},
+          {"matches", m.matches},
+          {"correct_matches", m.correct_matches},
+          {"pairs", m.pairs},
+          {"locked_pairs", m.locked_pairs},
+          {"rotation_rmse_deg", m.rotation_rmse_deg},
+          {"translation_rmse_m", m.translation_rmse_m},
+          {"drift_cm_per_m", m.drift_cm_per_m},
+          {"rows_fitted", m.rows_fitted},
+          {"row_fit_rms_m", m.row_fit_rms_m},
+          {"row_angle_deg", m.row_angle_deg},
+          {"row_spacing_m", m.row_spacing_m},
+          {"row_rms_m", m.row_rms_m},
+          {"row_spacings_m", m.row_spacings_m},
+          {"ms_per_frame", m.ms_per_frame}};
+}
+
+// Ours at the top level (the keys the issue names), the paper's method
+// under "baseline_paper", the published figures under "published".
+nlohmann::json EvaluationJson(const MotionEvaluation& e) {
+  nlohmann::json j = MethodJson(e.ours);
+  j["preset"] = e.preset;
+  j["seeds"] = e.seeds;
+  j["frames"] = e.frames;
+  j["distance_m"] = e.distance_m;
+  j["true_row_spacing_m"] = e.true_row_spacing_m;
+  j["baseline_paper"] = MethodJson(e.paper);
+  j["published"] = {{"correct_correspondence_rate_min", 0.95},
+                    {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
+                    {"row_angle_deg", {0.42, 0.54}},
+                    {"row_spacing_m", {0.4132, 0.4083}},
+                    {"true_row_spacing_m", 0.4}};
+  return j;
+}
+
+void PrintTable(const MotionEvaluation& e, bool with_paper, std::ostream& out) {
+  const auto row = [&](const char* name, double ours, double paper, const char* published) {
+    out << "  " << std::left << std::setw(30) << name << std::right << std::setw(10) << ours;
+    if (with_paper) out << std::setw(12) << paper;
+    out << "   " << published << '\n';
+  };
+  out << std::fixed << std::setprecision(4) << "motion on preset " << e.preset << " (" << e.seeds
+      << " seeds x " << e.frames << " frames, " << std::setprecision(2) << e.distance_m
+      << " m per sequence)\n"
+      << std::setprecision(4) << "  " << std::left << std::setw(30) << "figure" << std::right
+      << std::setw(10) << "ours";
+  if (with_paper) out << std::setw(12) << "paper's m.";
+  out << "   Sanchiz & Pla 1999, published\n";
+  const MotionMethodEvaluation &o = e.ours, &p = e.paper;
+  row("correct correspondences", o.correct_correspondence_rate, p.correct_correspondence_rate,
+      "> 0.95 over 30 images");
+  row("locked pairs", o.locked_pairs, p.locked_pairs, "-");
+  row("rotation RMSE (deg)", o.rotation_rmse_deg, p.rotation_rmse_deg, "-");
+  row("translation RMSE (m)", o.translation_rmse_m, p.translation_rmse_m, "-");
+  row("drift (cm/m)", o.drift_cm_per_m, p.drift_cm_per_m, "-");
+  row("row-fit RMS (m)", o.row_fit_rms_m, p.row_fit_rms_m, "0.0327, 0.0272, 0.0086");
+  row("angle between rows (deg)", o.row_angle_deg, p.row_angle_deg, "0.42, 0.54");
+  row("row spacing (m)", o.row_spacing_m, p.row_spacing_m, "0.4132, 0.4083");
+  row("true row spacing (m)", e.true_row_spacing_m, e.true_row_spacing_m, "0.400");
+  row("rows fitted", o.rows_fitted, p.rows_fitted, "3");
+  row("ms per frame (corr. + motion)", o.ms_per_frame, p.ms_per_frame, "-");
+}
+
+int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
+  MotionEvalOptions o;
+  o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
+  if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
+  if (!a.camera.empty()) o.sim.camera = LoadCamera(a.camera, global.ConfigDir());
+  if (a.speed_m_s) o.sim.vehicle.speed_m_s = *a.speed_m_s;
+  if (a.frame_rate_hz) o.sim.vehicle.frame_rate_hz = *a.frame_rate_hz;
+  if (a.offset_m) o.sim.vehicle.start_offset_m = *a.offset_m;
+  o.seeds = a.seeds;
+  o.frames = a.frames;
+  o.paper = PaperMethod();
+  o.ours = OursMethod(o.sim);
+  const MotionEvaluation e = EvaluateMotion(o);
+  if (a.json) {
+    std::cout << EvaluationJson(e).dump(2) << '\n';
+  } else {
+    PrintTable(e, a.baseline == "paper", std::cout);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void AddMotionCommands(CommandRegistry& registry) {
+  const GlobalOptions& global = registry.global();
+  MotionArgs& a = registry.Keep(MotionArgs{});
+  CLI::App* cmd = registry.Add(
+      "motion",
+      "Sanchiz & Pla feature correspondence, motion without odometry and mosaic row fit",
+      [&a, &global] { return EvaluateMotionCommand(a, global); }, EvaluateCommand(registry));
+  cmd->add_option("--preset", a.preset, "preset name or YAML file")->capture_default_str();
+  cmd->add_option("--seeds", a.seeds, "number of sequences (seeds)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--frames", a.frames, "images per sequence")
+      ->check(CLI::Range(2, 100000))->capture_default_str();
+  cmd->add_option("--seed", a.seed, "first seed (default: the preset's)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--camera", a.camera,
+                  "camera name or YAML file instead of the preset's (e.g. sanchiz_pla_90, the "
+                  "paper's second set-up)");
+  cmd->add_option("--speed-m-s", a.speed_m_s, "vehicle speed instead of the preset's")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--frame-rate-hz", a.frame_rate_hz, "frame rate instead of the preset's")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--offset-m", a.offset_m,
+                  "drive this far right of the central row (a camera beside the rows)");
+  cmd->add_flag("--json", a.json, "print one JSON object");
+  cmd->add_option("--baseline", a.baseline, "paper: the published method beside ours")
+      ->check(CLI::IsMember({"paper"}));
+}
+
+}  // namespace plantscale::app
