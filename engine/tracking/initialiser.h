@@ -31,7 +31,7 @@ struct InitialiserOptions {
   double min_row_support = 0.45;        // fraction of the vote weight on the rows
   double min_phase_coherence = 0.35;    // |Σ w e^{-iθ}| / Σ w along the rows
   int min_features = 4;
-  int confirm_frames = 2;               // consecutive agreeing frames to accept
+  int confirm_frames = 3;               // consecutive agreeing frames to accept
   double confirm_offset_m = 0.03;
   double confirm_bearing_rad = 0.026;   // 1.5°
   double confirm_forward_m = 0.05;
