@@ -41,7 +41,7 @@ TEST(Initialiser, RefusesFeaturesWithoutRows) {
   }
 }
 
-TEST(Initialiser, ConfirmsOnTheSecondAgreeingFrame) {
+TEST(Initialiser, ConfirmsOnTheThirdAgreeingFrame) {
   testing::TestScene scene;
   scene.truth = {-0.04, 0.3, 0.03, 0.475, 0.45};
   GridInitialiser init(InitialiserOptions{}, 0.475, 0.45, 1, 1.5);
@@ -49,6 +49,8 @@ TEST(Initialiser, ConfirmsOnTheSecondAgreeingFrame) {
   InitialiserResult first = init.Offer(scene.Features(), {});
   EXPECT_FALSE(first.state);
   EXPECT_NE(first.reason.find("waiting"), std::string::npos);
+  scene.Drive(u);
+  EXPECT_FALSE(init.Offer(scene.Features(), u).state);
   scene.Drive(u);
   const InitialiserResult second = init.Offer(scene.Features(), u);
   ASSERT_TRUE(second.state);
