@@ -4,6 +4,7 @@
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
+#include "app/ui_commands.h"
 
 namespace plantscale::app {
 
@@ -12,6 +13,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddSegmentCommands(registry_);
   AddTelemetryCommands(registry_);
   AddExportCommands(registry_);
+  AddUiCommands(registry_);
 }
 
 }  // namespace plantscale::app

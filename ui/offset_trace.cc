@@ -1,0 +1,131 @@
+#include "ui/offset_trace.h"
+
+#include <vtkAxis.h>
+#include <vtkBrush.h>
+#include <vtkContextScene.h>
+#include <vtkDoubleArray.h>
+#include <vtkPen.h>
+#include <vtkPlot.h>
+#include <vtkPlotArea.h>
+#include <vtkTextProperty.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace plantscale::ui {
+namespace {
+
+constexpr const char* kColumns[] = {"distance", "offset", "offset_lo", "offset_hi",
+                                    "bearing",  "bearing_lo", "bearing_hi"};
+
+void AddColumns(vtkTable* table) {
+  for (const char* name : kColumns) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name);
+    table->AddColumn(a);
+  }
+}
+
+void AddBand(vtkChartXY* chart, vtkTable* table, const char* lo, const char* hi, int r, int g,
+             int b, int corner) {
+  vtkNew<vtkPlotArea> area;
+  chart->AddPlot(area);
+  area->SetInputData(table);
+  area->SetInputArray(0, "distance");
+  area->SetInputArray(1, lo);
+  area->SetInputArray(2, hi);
+  area->GetBrush()->SetColor(r, g, b, 70);
+  area->GetPen()->SetOpacity(0);
+  chart->SetPlotCorner(area, corner);
+}
+
+vtkPlot* AddLine(vtkChartXY* chart, vtkTable* table, const char* y, int r, int g, int b,
+                 int corner) {
+  vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+  line->SetInputData(table, "distance", y);
+  line->SetColor(r, g, b, 255);
+  line->SetWidth(1.5f);
+  chart->SetPlotCorner(line, corner);
+  return line;
+}
+
+}  // namespace
+
+OffsetTrace::OffsetTrace(const OffsetTraceParams& params) : params_(params) { Build(); }
+
+void OffsetTrace::Build() {
+  AddColumns(estimate_);
+  AddColumns(truth_);
+  actor_->GetScene()->AddItem(chart_);
+  chart_->SetTitle("Row offset and bearing");
+  chart_->GetTitleProperties()->SetFontSize(12);
+  chart_->SetShowLegend(true);
+  AddBand(chart_, estimate_, "offset_lo", "offset_hi", 30, 110, 230, 0);
+  AddBand(chart_, estimate_, "bearing_lo", "bearing_hi", 240, 140, 20, 1);
+  AddLine(chart_, estimate_, "offset", 30, 110, 230, 0)->SetLabel("offset (mm)");
+  AddLine(chart_, estimate_, "bearing", 240, 140, 20, 1)->SetLabel("bearing (deg)");
+  vtkPlot* truth = AddLine(chart_, truth_, "offset", 90, 90, 90, 0);
+  truth->SetLabel("true offset (mm)");
+  truth->GetPen()->SetLineType(vtkPen::DASH_LINE);
+  chart_->GetAxis(vtkAxis::BOTTOM)->SetTitle("distance (m)");
+  chart_->GetAxis(vtkAxis::LEFT)->SetTitle("offset (mm)");
+  chart_->GetAxis(vtkAxis::RIGHT)->SetTitle("bearing (deg)");
+  for (int a : {vtkAxis::BOTTOM, vtkAxis::LEFT, vtkAxis::RIGHT}) {
+    chart_->GetAxis(a)->GetTitleProperties()->SetFontSize(11);
+    chart_->GetAxis(a)->GetLabelProperties()->SetFontSize(10);
+  }
+}
+
+void OffsetTrace::AddTo(vtkRenderer* renderer) { renderer->AddActor(actor_); }
+
+void OffsetTrace::SetVisible(bool visible) { actor_->SetVisibility(visible); }
+
+// Rows of `trace` (decimated to max_points, limited to window_m) in display
+// units: offset mm, bearing degrees, bands at ±band_sigmas σ.
+void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) const {
+  size_t first = 0;
+  if (params_.window_m > 0.0 && !trace.empty()) {
+    while (first < trace.size() &&
+           trace[first].distance_m < trace.back().distance_m - params_.window_m) {
+      ++first;
+    }
+  }
+  const size_t n = trace.size() - first;
+  const size_t step = std::max<size_t>(1, n / static_cast<size_t>(params_.max_points));
+  const double k = params_.band_sigmas, deg = 180.0 / std::numbers::pi;
+  table->SetNumberOfRows(static_cast<vtkIdType>((n + step - 1) / step));
+  vtkIdType row = 0;
+  for (size_t i = first; i < trace.size(); i += step, ++row) {
+    const TraceSample& t = trace[i];
+    const double values[] = {t.distance_m,
+                             1e3 * t.offset_m,
+                             1e3 * (t.offset_m - k * t.offset_sigma_m),
+                             1e3 * (t.offset_m + k * t.offset_sigma_m),
+                             deg * t.bearing_rad,
+                             deg * (t.bearing_rad - k * t.bearing_sigma_rad),
+                             deg * (t.bearing_rad + k * t.bearing_sigma_rad)};
+    for (int c = 0; c < 7; ++c) table->SetValue(row, c, vtkVariant(values[c]));
+  }
+  table->Modified();
+}
+
+void OffsetTrace::Update(const RunModel& model) {
+  // Without a tracker the simulator's truth stands in for the estimate.
+  const bool tracker = !model.trace().empty();
+  const std::vector<TraceSample>& estimate = tracker ? model.trace() : model.truth_trace();
+  if (estimate.size() != seen_) {
+    seen_ = estimate.size();
+    Fill(estimate_, estimate);
+    chart_->SetTitle(tracker ? "Row offset and bearing (tracker, band ±2σ)"
+                             : "Row offset and bearing (simulator truth; no tracker in log)");
+  }
+  const std::vector<TraceSample> none;
+  const std::vector<TraceSample>& truth = tracker ? model.truth_trace() : none;
+  if (truth.size() != seen_truth_) {
+    seen_truth_ = truth.size();
+    Fill(truth_, truth);
+  }
+  chart_->RecalculateBounds();
+}
+
+}  // namespace plantscale::ui
