@@ -102,7 +102,7 @@ void CameraView::ShowBlobs(const plantscale_thumbnail_t& t) {
   std::vector<Polyline> crop, weed, other;
   const double scale = static_cast<double>(width_) / source_w_;
   for (const plantscale_blob_t& b : t.blobs) {
-    const double r = std::max(3.0, scale * std::sqrt(std::max(0, b.area_px) / 3.14159));
+    const double r = std::max(5.0, 1.6 * scale * std::sqrt(std::max(0, b.area_px) / 3.14159));
     const Polyline c = Circle(ToWorld({b.u, b.v}), r);
     (b.cls == 1 ? crop : b.cls == 2 ? weed : other).push_back(c);
   }

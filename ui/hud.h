@@ -42,7 +42,7 @@ class Hud {
 
 struct NozzleBarParams {
   double recent_s = 5.0;  // shots counted over this past window
-  int full_scale_shots = 10;
+  int full_scale_shots = 4;
 };
 
 class NozzleBarView {

@@ -58,6 +58,7 @@ void MapLayer::Update(const RunModel& model) {
     if (!slot.actor) {
       slot.actor = vtkSmartPointer<vtkImageActor>::New();
       slot.actor->InterpolateOff();
+      slot.actor->GetMapper()->BorderOn();  // whole edge cells: no seams between tiles
       slot.actor->SetVisibility(visible_);
       renderer_->AddActor(slot.actor);
     }

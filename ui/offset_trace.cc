@@ -2,6 +2,7 @@
 
 #include <vtkAxis.h>
 #include <vtkBrush.h>
+#include <vtkChartLegend.h>
 #include <vtkContextScene.h>
 #include <vtkDoubleArray.h>
 #include <vtkPen.h>
@@ -11,6 +12,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace plantscale::ui {
 namespace {
@@ -36,6 +38,7 @@ void AddBand(vtkChartXY* chart, vtkTable* table, const char* lo, const char* hi,
   area->SetInputArray(2, hi);
   area->GetBrush()->SetColor(r, g, b, 70);
   area->GetPen()->SetOpacity(0);
+  area->SetLabel(std::string(lo).starts_with("offset") ? "offset ±2 sd" : "bearing ±2 sd");
   chart->SetPlotCorner(area, corner);
 }
 
@@ -60,6 +63,10 @@ void OffsetTrace::Build() {
   chart_->SetTitle("Row offset and bearing");
   chart_->GetTitleProperties()->SetFontSize(12);
   chart_->SetShowLegend(true);
+  chart_->GetLegend()->GetLabelProperties()->SetFontSize(9);
+  chart_->GetLegend()->SetInline(false);
+  chart_->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);
+  chart_->GetLegend()->SetVerticalAlignment(vtkChartLegend::BOTTOM);
   AddBand(chart_, estimate_, "offset_lo", "offset_hi", 30, 110, 230, 0);
   AddBand(chart_, estimate_, "bearing_lo", "bearing_hi", 240, 140, 20, 1);
   AddLine(chart_, estimate_, "offset", 30, 110, 230, 0)->SetLabel("offset (mm)");
@@ -116,7 +123,7 @@ void OffsetTrace::Update(const RunModel& model) {
   if (estimate.size() != seen_) {
     seen_ = estimate.size();
     Fill(estimate_, estimate);
-    chart_->SetTitle(tracker ? "Row offset and bearing (tracker, band ±2σ)"
+    chart_->SetTitle(tracker ? "Row offset and bearing (tracker)"
                              : "Row offset and bearing (simulator truth; no tracker in log)");
   }
   const std::vector<TraceSample> none;

@@ -149,7 +149,7 @@ void Generator::Frame(int frame, double t, int64_t utime) {
 void Generator::Grid(int frame, const tm::Pose& p, double t, int64_t utime) {
   const double c = std::cos(p.heading_rad), s = std::sin(p.heading_rad);
   double y0 = 0.5;
-  while (y0 < p.y_m + 1.0) y0 += o_.plant_spacing_m;  // first line ahead of the view's bottom
+  while (y0 < p.y_m + 0.45) y0 += o_.plant_spacing_m;  // first line above the image's bottom edge
   geometry::GridState truth;
   truth.offset_m = -p.x_m / c;
   truth.forward_m = (y0 - p.y_m) + p.x_m * s / c;
