@@ -132,6 +132,11 @@ void OffsetTrace::Update(const RunModel& model) {
     seen_truth_ = truth.size();
     Fill(truth_, truth);
   }
+  // Fewer than two points is no line (VTK would complain on every render).
+  for (vtkIdType i = 0; i < chart_->GetNumberOfPlots(); ++i) {
+    const vtkIdType rows = (i < 4 ? estimate_ : truth_)->GetNumberOfRows();
+    chart_->GetPlot(i)->SetVisible(rows >= 2);
+  }
   chart_->RecalculateBounds();
 }
 

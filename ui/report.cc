@@ -106,6 +106,7 @@ ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem
   pictures.map = render.Map(model, "map.png", std::nullopt, o.map_width_px, o.map_height_px);
   pictures.trace = render.Trace(model);
   pictures.closeups = closeups;
+  pictures.ellipse_confidence = o.ellipse_confidence;
   for (size_t i = 0; i < model.event_snapshots().size(); ++i) {
     pictures.cameras.push_back({render.Camera(model.event_snapshots()[i], static_cast<int>(i)),
                                 model.event_snapshots()[i].event.text});

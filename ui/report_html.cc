@@ -93,7 +93,7 @@ std::string ReportHtml(const std::string& log_name, const RunSummary& s,
   Figure(out, p.trace, "Lateral offset and bearing against distance with ±2σ bands");
   out << "<h2>Ellipse close-ups</h2>\n";
   if (p.closeups.empty()) out << "<p>none (run shorter than the close-up spacing)</p>\n";
-  for (const std::string& c : p.closeups) Figure(out, c, "95 % ellipses: vehicle (magenta), plants (white); " + c);
+  for (const std::string& c : p.closeups) Figure(out, c, Fixed(100.0 * p.ellipse_confidence, 0) + " % ellipses: vehicle (magenta), plants (white); " + c);
   out << "<h2>Camera at events</h2>\n";
   if (p.cameras.empty()) out << "<p>no warning or error events</p>\n";
   for (const auto& [file, caption] : p.cameras) Figure(out, file, caption);

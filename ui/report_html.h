@@ -15,6 +15,7 @@ struct ReportPictures {
   std::string map, trace;
   std::vector<std::string> closeups;
   std::vector<std::pair<std::string, std::string>> cameras;  // file, caption
+  double ellipse_confidence = 0.95;
   std::vector<std::string> AllFiles() const;
 };
 
