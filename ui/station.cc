@@ -332,8 +332,7 @@ StationResult RunStation(const StationOptions& options) {
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.frames_per_second = result.seconds > 0 ? result.frames / result.seconds : 0.0;
   std::lock_guard lock(source->mutex);
-  const auto problems = source->model().Problems(source->now_utime());
-  if (!problems.empty()) result.last_problem = problems.back();
+  result.problems = source->model().Problems(source->now_utime());
   return result;
 }
 

@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/common/options.h"
 #include "ui/camera_view.h"
@@ -63,7 +64,7 @@ struct StationResult {
   int64_t frames = 0;
   double seconds = 0.0;
   double frames_per_second = 0.0;
-  std::string last_problem;
+  std::vector<std::string> problems;  // what was wrong when it closed
 };
 
 // Runs until the window closes or max_seconds pass. Throws DisplayError
