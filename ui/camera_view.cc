@@ -29,6 +29,12 @@ CameraView::CameraView(const CameraViewParams& params)
       rows_(palette::kRowLine, 1.5, 0.2),
       gates_(palette::kGate, 1.0, 0.25) {
   image_->InterpolateOn();
+  vtkNew<vtkImageData> blank;  // until a thumbnail arrives (VTK wants an input)
+  blank->SetDimensions(1, 1, 1);
+  blank->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  static_cast<unsigned char*>(blank->GetScalarPointer())[0] = 0;
+  image_->GetMapper()->SetInputData(blank);
+  image_->SetVisibility(false);
 }
 
 void CameraView::AddTo(vtkRenderer* renderer) {
@@ -41,7 +47,8 @@ void CameraView::AddTo(vtkRenderer* renderer) {
 }
 
 void CameraView::SetVisible(bool visible) {
-  image_->SetVisibility(visible);
+  visible_ = visible;
+  image_->SetVisibility(visible && has_image_);
   for (LineLayer* l : {&crop_blobs_, &weed_blobs_, &other_blobs_, &rows_, &gates_}) l->SetVisible(visible);
   grid_points_.SetVisible(visible);
 }
@@ -95,6 +102,8 @@ void CameraView::ShowImage(const plantscale_thumbnail_t& t) {
     }
   }
   image_->GetMapper()->SetInputData(image);
+  has_image_ = true;
+  image_->SetVisibility(visible_);
   image_->Modified();
 }
 

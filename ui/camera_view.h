@@ -51,6 +51,7 @@ class CameraView {
   int source_w_ = 640, source_h_ = 480;
   int64_t seen_thumbnail_ = -1;
   int64_t seen_grid_ = -1;
+  bool visible_ = true, has_image_ = false;
 };
 
 }  // namespace plantscale::ui

@@ -90,24 +90,28 @@ void CovarianceEllipses::SetConfidence(double confidence) {
   k2_ = EllipseScale2d(confidence);
   params_.confidence = confidence;
   seen_messages_ = -1;
+  seen_plants_ = -1;
 }
 
-void CovarianceEllipses::Update(const RunModel& model) {
-  if (model.messages() == seen_messages_) return;
-  seen_messages_ = model.messages();
-  const std::optional<tm::Pose> pose = model.pose();
-  std::vector<Polyline> vehicle;
-  if (pose && pose->covariance.topLeftCorner<2, 2>().trace() > 0.0) {
-    vehicle.push_back(EllipseOutline({pose->x_m, pose->y_m}, pose->covariance.topLeftCorner<2, 2>(), k2_));
+void CovarianceEllipses::Update(const RunModel& model, const FieldWindow& view) {
+  if (model.messages() != seen_messages_) {
+    seen_messages_ = model.messages();
+    const std::optional<tm::Pose> pose = model.pose();
+    std::vector<Polyline> vehicle;
+    if (pose && pose->covariance.topLeftCorner<2, 2>().trace() > 0.0) {
+      vehicle.push_back(EllipseOutline({pose->x_m, pose->y_m}, pose->covariance.topLeftCorner<2, 2>(), k2_));
+    }
+    vehicle_.Set(vehicle);
   }
-  vehicle_.Set(vehicle);
-  if (model.plants().size() == seen_plants_ && model.plants_in_frame().empty()) return;
-  seen_plants_ = model.plants().size();
+  if (model.plant_messages() == seen_plants_ && built_.Covers(view)) return;
+  seen_plants_ = model.plant_messages();
+  built_ = BuiltRange::Around(view, 0.5 * (view.y1_m - view.y0_m));
   std::vector<Polyline> plants;
   int drawn = 0;
   for (auto it = model.plants().rbegin(); it != model.plants().rend() && drawn < params_.max_plants;
        ++it, ++drawn) {
     const tm::PlantObservation& p = it->second.plant;
+    if (p.position_m.y() < built_.y0_m || p.position_m.y() > built_.y1_m) continue;
     if (p.covariance.trace() > 0.0) plants.push_back(EllipseOutline(p.position_m, p.covariance, k2_, 24));
   }
   plants_.Set(plants);
@@ -118,12 +122,14 @@ void CovarianceEllipses::SetVisible(bool visible) {
   plants_.SetVisible(visible);
 }
 
-void PlantMarkers::Update(const RunModel& model) {
-  if (model.messages() == seen_messages_) return;
-  seen_messages_ = model.messages();
+void PlantMarkers::Update(const RunModel& model, const FieldWindow& view) {
+  if (model.plant_messages() == seen_messages_ && built_.Covers(view)) return;
+  seen_messages_ = model.plant_messages();
+  built_ = BuiltRange::Around(view, 0.5 * (view.y1_m - view.y0_m));
   std::vector<Eigen::Vector2d> points;
   std::vector<Rgb> colours;
   for (const auto& [id, r] : model.plants()) {
+    if (r.plant.position_m.y() < built_.y0_m || r.plant.position_m.y() > built_.y1_m) continue;
     points.push_back(r.plant.position_m);
     colours.push_back(r.plant.kind == tm::PlantKind::kCrop   ? palette::kCrop
                       : r.plant.kind == tm::PlantKind::kWeed ? palette::kWeed

@@ -12,6 +12,21 @@
 
 namespace plantscale::ui {
 
+// A field-frame window: along-bed y range and across-bed x centre.
+struct FieldWindow {
+  double y0_m = 0.0, y1_m = 6.0;
+  double x_centre_m = 0.0;
+};
+
+// Along-bed range a layer was built for: rebuilt when the view leaves it.
+struct BuiltRange {
+  double y0_m = 1.0, y1_m = -1.0;  // empty
+  bool Covers(const FieldWindow& w) const { return y0_m <= w.y0_m && w.y1_m <= y1_m; }
+  static BuiltRange Around(const FieldWindow& w, double margin_m) {
+    return {w.y0_m - margin_m, w.y1_m + margin_m};
+  }
+};
+
 struct GridOverlayParams {
   int rows_each_side = 1;    // rows n = −k..k drawn
   int lines_behind = 3;      // plant lines drawn behind line 0
@@ -50,7 +65,8 @@ class CovarianceEllipses {
   // Throws std::invalid_argument when confidence is outside (0, 1).
   explicit CovarianceEllipses(const EllipseParams& params = {});
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model);
+  // Plants are drawn near `view` only (the whole run in a report).
+  void Update(const RunModel& model, const FieldWindow& view);
   void SetConfidence(double confidence);
   void SetVisible(bool visible);
 
@@ -58,19 +74,21 @@ class CovarianceEllipses {
   EllipseParams params_;
   double k2_;
   LineLayer vehicle_, plants_;
-  size_t seen_plants_ = static_cast<size_t>(-1);
+  int64_t seen_plants_ = -1;
   int64_t seen_messages_ = -1;
+  BuiltRange built_;
 };
 
 class PlantMarkers {
  public:
   void AddTo(vtkRenderer* renderer) { points_.AddTo(renderer); }
-  void Update(const RunModel& model);
+  void Update(const RunModel& model, const FieldWindow& view);
   void SetVisible(bool visible) { points_.SetVisible(visible); }
 
  private:
   PointLayer points_{5.0, 0.02};
   int64_t seen_messages_ = -1;
+  BuiltRange built_;
 };
 
 class VehicleMarker {

@@ -73,6 +73,15 @@ void MapLayer::SetVisible(bool visible) {
   for (auto& [key, tile] : tiles_) tile.actor->SetVisibility(visible);
 }
 
+void MapLayer::Cull(const FieldWindow& view) {
+  const double margin = 0.5 * (view.y1_m - view.y0_m);
+  for (auto& [key, tile] : tiles_) {
+    const double* b = tile.actor->GetBounds();
+    const bool near = b[3] >= view.y0_m - margin && b[2] <= view.y1_m + margin;
+    tile.actor->SetVisibility(visible_ && near);
+  }
+}
+
 bool MapLayer::Bounds(double b[4]) const {
   if (tiles_.empty()) return false;
   b[0] = b[2] = 1e300;

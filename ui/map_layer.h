@@ -10,6 +10,7 @@
 #include <map>
 #include <utility>
 
+#include "ui/field_overlays.h"
 #include "ui/run_model.h"
 
 namespace plantscale::ui {
@@ -19,6 +20,8 @@ class MapLayer {
   void AddTo(vtkRenderer* renderer) { renderer_ = renderer; }
   void Update(const RunModel& model);
   void SetVisible(bool visible);
+  // Shows only tiles that overlap `view` (along the bed, with a margin).
+  void Cull(const FieldWindow& view);
   // Field-frame bounds of every tile (x0, x1, y0, y1); false when none.
   bool Bounds(double bounds[4]) const;
 

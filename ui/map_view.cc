@@ -25,11 +25,12 @@ void MapView::AddTo(vtkRenderer* renderer) {
 
 void MapView::Update(const RunModel& model) {
   map_.Update(model);
-  plants_.Update(model);
+  const FieldWindow view = PlaceCamera(model);
+  map_.Cull(view);
+  plants_.Update(model, view);
   grid_.Update(model);
-  ellipses_.Update(model);
+  ellipses_.Update(model, view);
   vehicle_.Update(model);
-  PlaceCamera(model);
 }
 
 FieldWindow MapView::WholeRun(const RunModel& model) const {
@@ -44,8 +45,7 @@ FieldWindow MapView::WholeRun(const RunModel& model) const {
   return {lo - 0.2, hi + 0.2, 0.0};
 }
 
-void MapView::PlaceCamera(const RunModel& model) {
-  if (renderer_ == nullptr) return;
+FieldWindow MapView::PlaceCamera(const RunModel& model) {
   FieldWindow w;
   if (window_) {
     w = *window_;
@@ -53,6 +53,7 @@ void MapView::PlaceCamera(const RunModel& model) {
     const double start = pose->y_m - (0.5 * params_.follow_length_m - params_.follow_ahead_m);
     w = {start, start + params_.follow_length_m, 0.0};
   }
+  if (renderer_ == nullptr) return w;
   // Parallel scale is half the view height; the height holds length / aspect.
   const double aspect = std::max(1e-6, renderer_->GetTiledAspectRatio());
   const double cy = 0.5 * (w.y0_m + w.y1_m);
@@ -62,6 +63,7 @@ void MapView::PlaceCamera(const RunModel& model) {
   camera->SetViewUp(-1.0, 0.0, 0.0);
   camera->SetParallelScale(0.5 * (w.y1_m - w.y0_m) / aspect);
   camera->SetClippingRange(1.0, 100.0);
+  return w;
 }
 
 void MapView::SetVisible(MapLayerId layer, bool visible) {

@@ -22,12 +22,6 @@ struct MapViewParams {
   EllipseParams ellipses;
 };
 
-// A field-frame window: along-bed y range and across-bed x centre.
-struct FieldWindow {
-  double y0_m = 0.0, y1_m = 6.0;
-  double x_centre_m = 0.0;
-};
-
 class MapView {
  public:
   explicit MapView(const MapViewParams& params = {});
@@ -44,7 +38,7 @@ class MapView {
   Eigen::Vector2d FieldAtDisplay(double x, double y) const;
 
  private:
-  void PlaceCamera(const RunModel& model);
+  FieldWindow PlaceCamera(const RunModel& model);
 
   MapViewParams params_;
   vtkRenderer* renderer_ = nullptr;

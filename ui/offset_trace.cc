@@ -2,6 +2,11 @@
 
 #include <vtkAxis.h>
 #include <vtkBrush.h>
+#include <vtkCamera.h>
+#include <vtkImageData.h>
+#include <vtkImageMapper3D.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkChartLegend.h>
 #include <vtkContextScene.h>
 #include <vtkDoubleArray.h>
@@ -83,9 +88,43 @@ void OffsetTrace::Build() {
   }
 }
 
-void OffsetTrace::AddTo(vtkRenderer* renderer) { renderer->AddActor(actor_); }
+void OffsetTrace::AddTo(vtkRenderer* renderer) {
+  renderer_ = renderer;
+  if (params_.cached_width_px <= 0) return renderer->AddActor(actor_);
+  cache_window_ = vtkSmartPointer<vtkRenderWindow>::New();
+  cache_window_->SetOffScreenRendering(1);
+  cache_window_->SetSize(params_.cached_width_px, params_.cached_height_px);
+  vtkNew<vtkRenderer> chart_renderer;
+  chart_renderer->SetBackground(1, 1, 1);
+  chart_renderer->AddActor(actor_);
+  cache_window_->AddRenderer(chart_renderer);
+  renderer->AddActor(cache_actor_);
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->ParallelProjectionOn();
+  const double w = params_.cached_width_px, h = params_.cached_height_px;
+  camera->SetFocalPoint(0.5 * w, 0.5 * h, 0.0);
+  camera->SetPosition(0.5 * w, 0.5 * h, 10.0);
+  camera->SetParallelScale(0.5 * h);
+  camera->SetClippingRange(1.0, 20.0);
+}
 
-void OffsetTrace::SetVisible(bool visible) { actor_->SetVisibility(visible); }
+void OffsetTrace::SetVisible(bool visible) {
+  actor_->SetVisibility(visible);
+  cache_actor_->SetVisibility(visible);
+}
+
+void OffsetTrace::Rasterise() {
+  cache_window_->Render();
+  const int w = params_.cached_width_px, h = params_.cached_height_px;
+  vtkNew<vtkUnsignedCharArray> pixels;
+  cache_window_->GetPixelData(0, 0, w - 1, h - 1, 0, pixels);
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(w, h, 1);
+  image->SetOrigin(0.5, 0.5, 0.0);
+  image->GetPointData()->SetScalars(pixels);
+  cache_actor_->GetMapper()->SetInputData(image);
+  cache_actor_->Modified();
+}
 
 // Rows of `trace` (decimated to max_points, limited to window_m) in display
 // units: offset mm, bearing degrees, bands at ±band_sigmas σ.
@@ -138,6 +177,11 @@ void OffsetTrace::Update(const RunModel& model) {
     chart_->GetPlot(i)->SetVisible(rows >= 2);
   }
   chart_->RecalculateBounds();
+  if (cache_window_ && (drawn_ == static_cast<size_t>(-1) || seen_ < drawn_ ||
+                        seen_ >= drawn_ + static_cast<size_t>(params_.redraw_every))) {
+    drawn_ = seen_;
+    Rasterise();
+  }
 }
 
 }  // namespace plantscale::ui

@@ -103,6 +103,7 @@ void RunModel::ObservePose(const tm::TelemetrySnapshot& s) {
 
 void RunModel::ObservePlants(const tm::TelemetrySnapshot& s) {
   plants_ = s.plants;
+  ++plant_messages_;
   const int64_t now = s.channels.at(tm::channels::kPlants).last_recv_utime;
   for (const tm::PlantObservation& p : s.plants) {
     PlantRecord& r = registry_[p.id];

@@ -95,6 +95,7 @@ class RunModel {
   const std::map<int64_t, PlantRecord>& plants() const { return registry_; }
   const std::map<std::pair<int, int>, telemetry::MapTileDelta>& tiles() const { return tiles_; }
   int tile_revision_sum() const { return tile_revisions_; }
+  int64_t plant_messages() const { return plant_messages_; }  // changes when plants() may have
   const std::vector<TraceSample>& trace() const { return trace_; }
   const std::vector<TraceSample>& truth_trace() const { return truth_trace_; }
   const std::vector<std::pair<double, double>>& path() const { return path_; }  // field x, y
@@ -146,6 +147,7 @@ class RunModel {
   int64_t first_boot_utime_ = 0;
   int64_t last_message_utime_ = 0;
   int64_t messages_ = 0;
+  int64_t plant_messages_ = 0;
 };
 
 // Chi-square quantile with two degrees of freedom: the squared Mahalanobis

@@ -125,7 +125,14 @@ StationScene::StationScene(Canvas& canvas, const StationOptions& options)
         return p;
       }()),
       camera_(options.camera),
-      trace_(OffsetTraceParams{2.0, 20.0, 600}),
+      trace_([&] {
+        OffsetTraceParams p;
+        p.window_m = 20.0;
+        p.max_points = 600;
+        p.cached_width_px = static_cast<int>((kTrace[2] - kTrace[0]) * options.width_px);
+        p.cached_height_px = static_cast<int>((kTrace[3] - kTrace[1]) * options.height_px);
+        return p;
+      }()),
       timeline_(palette::kNozzleOpen, 12.0, 0.1) {
   hud_.AddTo(Add(canvas, kHud, palette::kHudOk));
   map_renderer_ = Add(canvas, kMap, palette::kBackground);
