@@ -172,11 +172,20 @@ class Controller {
   Controller(Canvas& canvas, StationScene& scene, Source& source, const StationOptions& o)
       : canvas_(canvas), scene_(scene), source_(source), options_(o) {}
 
+  // Updates the scene and renders when something visible changed: a new
+  // message, the HUD text (heartbeat age, clock), a key or a click. An idle
+  // station then costs nothing between messages (the window's swap alone is
+  // ~13 ms of CPU at 1280×720 under Xvfb).
   void Frame(double wall_s) {
     {
       std::lock_guard lock(source_.mutex);
       source_.Tick(wall_s);
-      scene_.hud().SetStatus(source_.Status() + Tools());
+      const std::string status = source_.Status() + Tools();
+      const std::string hud = HudLine(source_.model(), source_.now_utime()) + status;
+      const int64_t messages = source_.model().messages();
+      if (!dirty_ && messages == drawn_messages_ && hud == drawn_hud_) return;
+      dirty_ = false, drawn_messages_ = messages, drawn_hud_ = hud;
+      scene_.hud().SetStatus(status);
       scene_.Update(source_.model(), source_.now_utime(), source_.fraction());
     }
     canvas_.window()->Render();
@@ -185,6 +194,7 @@ class Controller {
 
   bool Key(const std::string& key) {
     std::lock_guard lock(source_.mutex);
+    dirty_ = true;
     MapView& map = scene_.map();
     const auto toggle = [&](MapLayerId id) { map.SetVisible(id, !map.Visible(id)); };
     if (key == "m") toggle(MapLayerId::kMap);
@@ -206,6 +216,7 @@ class Controller {
 
   void Click(int x, int y) {
     std::lock_guard lock(source_.mutex);
+    dirty_ = true;
     const int* size = canvas_.window()->GetSize();
     const double fx = static_cast<double>(x) / size[0], fy = static_cast<double>(y) / size[1];
     if (fy < 0.03) return source_.Seek(fx, false);
@@ -267,6 +278,9 @@ class Controller {
   std::optional<Eigen::Vector2d> first_;
   std::string tool_text_;
   int64_t frames_ = 0;
+  bool dirty_ = true;
+  int64_t drawn_messages_ = -1;
+  std::string drawn_hud_;
 };
 
 void RunInteractive(Canvas& canvas, Controller& controller, double max_seconds) {
