@@ -33,6 +33,7 @@ class Source {
   virtual void TogglePause() {}
   virtual void ScaleSpeed(double) {}
   virtual std::string Status() const = 0;
+  virtual std::string LogError() const { return ""; }  // the log could not be read to its end
   std::mutex mutex;  // held while the model is read or changed
 };
 
@@ -52,6 +53,7 @@ class LogSource : public Source {
     timeline_.Seek(relative ? timeline_.position_s() + value : value * timeline_.duration_s());
   }
   void TogglePause() override { timeline_.SetPaused(!timeline_.paused()); }
+  std::string LogError() const override { return timeline_.error(); }
   void ScaleSpeed(double f) override { timeline_.SetSpeed(std::clamp(timeline_.speed() * f, 0.125, 64.0)); }
   std::string Status() const override {
     std::ostringstream out;
@@ -353,7 +355,8 @@ StationResult RunStation(const StationOptions& options) {
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.frames_per_second = result.seconds > 0 ? result.frames / result.seconds : 0.0;
   std::lock_guard lock(source->mutex);
-  result.problems = source->model().Problems(source->now_utime());
+  if (!source->LogError().empty()) result.problems.push_back("log: " + source->LogError());
+  for (const std::string& p : source->model().Problems(source->now_utime())) result.problems.push_back(p);
   return result;
 }
 
