@@ -61,7 +61,7 @@ FieldWindow MapView::PlaceCamera(const RunModel& model) {
   camera->SetFocalPoint(w.x_centre_m, cy, 0.0);
   camera->SetPosition(w.x_centre_m, cy, 50.0);
   camera->SetViewUp(-1.0, 0.0, 0.0);
-  camera->SetParallelScale(0.5 * (w.y1_m - w.y0_m) / aspect);
+  camera->SetParallelScale(std::max(0.5 * params_.min_across_m, 0.5 * (w.y1_m - w.y0_m) / aspect));
   camera->SetClippingRange(1.0, 100.0);
   return w;
 }

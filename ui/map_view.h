@@ -18,6 +18,7 @@ enum class MapLayerId { kMap, kPlants, kGrid, kEllipses, kVehicle };
 struct MapViewParams {
   double follow_length_m = 6.0;  // field length shown when following the vehicle
   double follow_ahead_m = 1.5;   // the vehicle sits this far left of the centre
+  double min_across_m = 1.6;     // at least this much of the bed's width is shown
   GridOverlayParams grid;
   EllipseParams ellipses;
 };
