@@ -36,6 +36,8 @@ void BM_StationFrame(benchmark::State& state) {
   LogTimeline timeline(SyntheticRun(run), "");
   timeline.Seek(timeline.duration_s() - 20.0);  // the 100 m map is loaded; 20 s still to play
   StationOptions options;
+  options.width_px = static_cast<int>(state.range(0));
+  options.height_px = options.width_px * 9 / 16;
   Canvas canvas(options.width_px, options.height_px, /*offscreen=*/false);
   StationScene scene(canvas, options);
   int64_t frames = 0;
@@ -51,7 +53,7 @@ void BM_StationFrame(benchmark::State& state) {
   state.counters["tiles"] = static_cast<double>(timeline.model().tiles().size());
   state.counters["plants"] = static_cast<double>(timeline.model().plants().size());
 }
-BENCHMARK(BM_StationFrame)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK(BM_StationFrame)->Arg(1280)->Arg(960)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
 // The render alone (nothing changes): what the GL side costs.
 void BM_StationRenderOnly(benchmark::State& state) {
