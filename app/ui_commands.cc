@@ -72,6 +72,8 @@ void AddUiCommands(CommandRegistry& registry) {
   station->add_option("--speed", s.options.speed, "log replay speed (default 1)");
   station->add_option("--confidence", s.options.ellipse_confidence, "ellipse confidence (default 0.95)");
   station->add_option("--seconds", s.options.max_seconds, "close after this many seconds (0: never)");
+  station->add_option("--close-when-quiet", s.options.close_when_quiet_s,
+                      "close this many seconds after the last message (0: never)");
   station->add_flag("--offscreen", s.options.offscreen, "render without showing a window (needs --seconds)");
 
   ReportArgs& r = registry.Keep(ReportArgs{});

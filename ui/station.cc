@@ -117,6 +117,10 @@ OptionErrors StationOptions::Validate() const {
   RequireInRange(e, "ellipse_confidence", ellipse_confidence, 0.0, 1.0, false, false);
   RequireInRange(e, "speed", speed, 0.125, 64.0);
   RequireNonNegative(e, "max_seconds", max_seconds);
+  RequireNonNegative(e, "close_when_quiet_s", close_when_quiet_s);
+  if (offscreen && max_seconds <= 0.0 && close_when_quiet_s <= 0.0) {
+    e.push_back({"offscreen", "needs max_seconds or close_when_quiet_s (nothing would close it)"});
+  }
   return e;
 }
 
@@ -178,20 +182,35 @@ class Controller {
   // message, the HUD text (heartbeat age, clock), a key or a click. An idle
   // station then costs nothing between messages (the window's swap alone is
   // ~13 ms of CPU at 1280×720 under Xvfb).
-  void Frame(double wall_s) {
+  bool Frame(double wall_s) {
     {
       std::lock_guard lock(source_.mutex);
       source_.Tick(wall_s);
+      if (source_.model().messages() != last_messages_) {
+        last_messages_ = source_.model().messages();
+        last_message_time_ = Clock::now();
+      }
       const std::string status = source_.Status() + Tools();
       const std::string hud = HudLine(source_.model(), source_.now_utime()) + status;
       const int64_t messages = source_.model().messages();
-      if (!dirty_ && messages == drawn_messages_ && hud == drawn_hud_) return;
+      if (!dirty_ && messages == drawn_messages_ && hud == drawn_hud_) return false;
       dirty_ = false, drawn_messages_ = messages, drawn_hud_ = hud;
       scene_.hud().SetStatus(status);
       scene_.Update(source_.model(), source_.now_utime(), source_.fraction());
     }
     canvas_.window()->Render();
     ++frames_;
+    return true;
+  }
+
+  // max_seconds reached, or messages stopped close_when_quiet_s ago.
+  bool ShouldClose(Clock::time_point start) const {
+    const Clock::time_point now = Clock::now();
+    if (options_.max_seconds > 0 && std::chrono::duration<double>(now - start).count() > options_.max_seconds) {
+      return true;
+    }
+    return options_.close_when_quiet_s > 0 && last_messages_ > 0 &&
+           std::chrono::duration<double>(now - last_message_time_).count() > options_.close_when_quiet_s;
   }
 
   bool Key(const std::string& key) {
@@ -281,11 +300,13 @@ class Controller {
   std::string tool_text_;
   int64_t frames_ = 0;
   bool dirty_ = true;
+  int64_t last_messages_ = 0;
+  Clock::time_point last_message_time_ = Clock::now();
   int64_t drawn_messages_ = -1;
   std::string drawn_hud_;
 };
 
-void RunInteractive(Canvas& canvas, Controller& controller, double max_seconds) {
+void RunInteractive(Canvas& canvas, Controller& controller) {
   vtkNew<vtkRenderWindowInteractor> interactor;
   interactor->SetRenderWindow(canvas.window());
   interactor->SetInteractorStyle(nullptr);  // no camera rotation: our keys and clicks only
@@ -294,8 +315,7 @@ void RunInteractive(Canvas& canvas, Controller& controller, double max_seconds) 
     Controller* controller;
     vtkRenderWindowInteractor* interactor;
     Clock::time_point start, last;
-    double max_seconds;
-  } context{&controller, interactor, Clock::now(), Clock::now(), max_seconds};
+  } context{&controller, interactor, Clock::now(), Clock::now()};
   const auto on_event = [](vtkObject*, unsigned long event, void* data, void*) {
     auto* c = static_cast<Context*>(data);
     if (event == vtkCommand::KeyPressEvent) {
@@ -309,9 +329,7 @@ void RunInteractive(Canvas& canvas, Controller& controller, double max_seconds) 
       const Clock::time_point now = Clock::now();
       c->controller->Frame(std::chrono::duration<double>(now - c->last).count());
       c->last = now;
-      if (c->max_seconds > 0 && std::chrono::duration<double>(now - c->start).count() > c->max_seconds) {
-        c->interactor->TerminateApp();
-      }
+      if (c->controller->ShouldClose(c->start)) c->interactor->TerminateApp();
     }
   };
   vtkNew<vtkCallbackCommand> callback;
@@ -342,13 +360,15 @@ StationResult RunStation(const StationOptions& options) {
   const Clock::time_point start = Clock::now();
   if (options.offscreen) {
     Clock::time_point last = start;
-    while (std::chrono::duration<double>(Clock::now() - start).count() < options.max_seconds) {
+    while (!controller.ShouldClose(start)) {
       const Clock::time_point now = Clock::now();
-      controller.Frame(std::chrono::duration<double>(now - last).count());
+      if (!controller.Frame(std::chrono::duration<double>(now - last).count())) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));  // nothing changed
+      }
       last = now;
     }
   } else {
-    RunInteractive(canvas, controller, options.max_seconds);
+    RunInteractive(canvas, controller);
   }
   StationResult result;
   result.frames = controller.frames();

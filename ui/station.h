@@ -32,6 +32,7 @@ struct StationOptions {
   double ellipse_confidence = 0.95;
   double speed = 1.0;          // log replay speed
   double max_seconds = 0.0;    // > 0: close after this long (demo, tests)
+  double close_when_quiet_s = 0.0;  // > 0: close this long after the last message (demo)
   bool offscreen = false;      // no window: render into the back buffer only
   CameraViewParams camera;
 
@@ -67,7 +68,8 @@ struct StationResult {
   std::vector<std::string> problems;  // what was wrong when it closed
 };
 
-// Runs until the window closes or max_seconds pass. Throws DisplayError
+// Runs until the window closes, max_seconds pass or, with close_when_quiet_s,
+// messages have stopped for that long. Throws DisplayError
 // without an X display, InvalidOptionsError, telemetry::LogError or
 // telemetry::TransportError.
 StationResult RunStation(const StationOptions& options);
