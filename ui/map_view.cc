@@ -84,6 +84,14 @@ void MapView::SetVisible(MapLayerId layer, bool visible) {
 
 bool MapView::Visible(MapLayerId layer) const { return visible_[static_cast<int>(layer)]; }
 
+Eigen::Vector2d MapView::DisplayAtField(const Eigen::Vector2d& field) const {
+  vtkNew<vtkCoordinate> c;
+  c->SetCoordinateSystemToWorld();
+  c->SetValue(field.x(), field.y(), 0.0);
+  const double* display = c->GetComputedDoubleDisplayValue(renderer_);
+  return {display[0], display[1]};
+}
+
 Eigen::Vector2d MapView::FieldAtDisplay(double x, double y) const {
   vtkNew<vtkCoordinate> c;
   c->SetCoordinateSystemToDisplay();

@@ -37,6 +37,8 @@ class MapView {
   CovarianceEllipses& ellipses() { return ellipses_; }
   // Field point under display pixel (x, y) (VTK display coordinates, y up).
   Eigen::Vector2d FieldAtDisplay(double x, double y) const;
+  // Display pixel (VTK, y up) of a field point.
+  Eigen::Vector2d DisplayAtField(const Eigen::Vector2d& field) const;
 
  private:
   FieldWindow PlaceCamera(const RunModel& model);

@@ -59,7 +59,14 @@ vtkPlot* AddLine(vtkChartXY* chart, vtkTable* table, const char* y, int r, int g
 
 }  // namespace
 
-OffsetTrace::OffsetTrace(const OffsetTraceParams& params) : params_(params) { Build(); }
+OffsetTrace::OffsetTrace(const OffsetTraceParams& params) : params_(params) {
+  Build();
+  vtkNew<vtkImageData> blank;  // until the first picture (VTK wants an input)
+  blank->SetDimensions(1, 1, 1);
+  blank->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  static_cast<unsigned char*>(blank->GetScalarPointer())[0] = 255;
+  cache_actor_->GetMapper()->SetInputData(blank);
+}
 
 void OffsetTrace::Build() {
   AddColumns(estimate_);

@@ -13,7 +13,8 @@
 
 #include "telemetry/transport.h"
 #include "ui/palette.h"
-#include "ui/station_timeline.h"
+#include "ui/station_controller.h"
+#include "ui/station_sources.h"
 
 namespace plantscale::ui {
 namespace {
@@ -21,82 +22,6 @@ namespace {
 namespace tm = plantscale::telemetry;
 using Clock = std::chrono::steady_clock;
 
-// Where the model comes from: a log with a timeline, or live LCM.
-class Source {
- public:
-  virtual ~Source() = default;
-  virtual void Tick(double wall_s) = 0;
-  virtual const RunModel& model() const = 0;
-  virtual int64_t now_utime() const = 0;
-  virtual double fraction() const { return -1.0; }  // timeline position, < 0 live
-  virtual void Seek(double, bool) {}
-  virtual void TogglePause() {}
-  virtual void ScaleSpeed(double) {}
-  virtual std::string Status() const = 0;
-  virtual std::string LogError() const { return ""; }  // the log could not be read to its end
-  std::mutex mutex;  // held while the model is read or changed
-};
-
-class LogSource : public Source {
- public:
-  LogSource(const std::filesystem::path& log, double speed) : timeline_(LogTimeline::Load(log)) {
-    timeline_.SetSpeed(speed);
-    timeline_.Seek(0.0);
-  }
-  void Tick(double wall_s) override { timeline_.Advance(wall_s); }
-  const RunModel& model() const override { return timeline_.model(); }
-  int64_t now_utime() const override { return timeline_.now_utime(); }
-  double fraction() const override {
-    return timeline_.duration_s() > 0 ? timeline_.position_s() / timeline_.duration_s() : 0.0;
-  }
-  void Seek(double value, bool relative) override {
-    timeline_.Seek(relative ? timeline_.position_s() + value : value * timeline_.duration_s());
-  }
-  void TogglePause() override { timeline_.SetPaused(!timeline_.paused()); }
-  std::string LogError() const override { return timeline_.error(); }
-  void ScaleSpeed(double f) override { timeline_.SetSpeed(std::clamp(timeline_.speed() * f, 0.125, 64.0)); }
-  std::string Status() const override {
-    std::ostringstream out;
-    out.precision(1);
-    out << std::fixed << (timeline_.paused() ? "PAUSED " : "") << "log " << timeline_.position_s() << "/"
-        << timeline_.duration_s() << " s x" << timeline_.speed();
-    if (!timeline_.error().empty()) out << "  LOG CUT: " << timeline_.error();
-    if (timeline_.empty()) out << "  (log has no events)";
-    return out.str();
-  }
-
- private:
-  LogTimeline timeline_;
-};
-
-class LiveSource : public Source {
- public:
-  explicit LiveSource(const std::string& url) : transport_(url.empty() ? tm::LcmTransportOptions{}.url : url) {
-    subscriber_.SetObserver([this](const std::string& ch, bool applied, const tm::TelemetrySnapshot& s) {
-      std::lock_guard lock(mutex);
-      model_.Observe(ch, applied, s);
-    });
-    subscriber_.Attach(transport_);
-    thread_ = std::thread([this] {
-      while (!stop_) transport_.Handle(50);
-    });
-  }
-  ~LiveSource() override {
-    stop_ = true;
-    thread_.join();
-  }
-  void Tick(double) override {}
-  const RunModel& model() const override { return model_; }
-  int64_t now_utime() const override { return tm::WallUtime(); }
-  std::string Status() const override { return "live " + transport_.url(); }
-
- private:
-  tm::LcmTransport transport_;
-  tm::Subscriber subscriber_;
-  RunModel model_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
 
 // Layout, normalised window coordinates (x0, y0, x1, y1), y up.
 constexpr double kHud[] = {0.0, 0.92, 1.0, 1.0};
@@ -166,153 +91,13 @@ void StationScene::Update(const RunModel& model, int64_t now_utime, double fract
 
 namespace {
 
-std::string WhyName(int why) {
-  static const char* names[] = {"undecided", "crop in its region", "outside crop region", "too small",
-                                "too large", "failsafe", "spray mode"};
-  return why >= 0 && why < 7 ? names[why] : "?";
-}
-
-// Keys, clicks and the per-frame update of a running station.
-class Controller {
- public:
-  Controller(Canvas& canvas, StationScene& scene, Source& source, const StationOptions& o)
-      : canvas_(canvas), scene_(scene), source_(source), options_(o) {}
-
-  // Updates the scene and renders when something visible changed: a new
-  // message, the HUD text (heartbeat age, clock), a key or a click. An idle
-  // station then costs nothing between messages (the window's swap alone is
-  // ~13 ms of CPU at 1280×720 under Xvfb).
-  bool Frame(double wall_s) {
-    {
-      std::lock_guard lock(source_.mutex);
-      source_.Tick(wall_s);
-      if (source_.model().messages() != last_messages_) {
-        last_messages_ = source_.model().messages();
-        last_message_time_ = Clock::now();
-      }
-      const std::string status = source_.Status() + Tools();
-      const std::string hud = HudLine(source_.model(), source_.now_utime()) + status;
-      const int64_t messages = source_.model().messages();
-      if (!dirty_ && messages == drawn_messages_ && hud == drawn_hud_) return false;
-      dirty_ = false, drawn_messages_ = messages, drawn_hud_ = hud;
-      scene_.hud().SetStatus(status);
-      scene_.Update(source_.model(), source_.now_utime(), source_.fraction());
-    }
-    canvas_.window()->Render();
-    ++frames_;
-    return true;
-  }
-
-  // max_seconds reached, or messages stopped close_when_quiet_s ago.
-  bool ShouldClose(Clock::time_point start) const {
-    const Clock::time_point now = Clock::now();
-    if (options_.max_seconds > 0 && std::chrono::duration<double>(now - start).count() > options_.max_seconds) {
-      return true;
-    }
-    return options_.close_when_quiet_s > 0 && last_messages_ > 0 &&
-           std::chrono::duration<double>(now - last_message_time_).count() > options_.close_when_quiet_s;
-  }
-
-  bool Key(const std::string& key) {
-    std::lock_guard lock(source_.mutex);
-    dirty_ = true;
-    MapView& map = scene_.map();
-    const auto toggle = [&](MapLayerId id) { map.SetVisible(id, !map.Visible(id)); };
-    if (key == "m") toggle(MapLayerId::kMap);
-    if (key == "p") toggle(MapLayerId::kPlants);
-    if (key == "g") toggle(MapLayerId::kGrid);
-    if (key == "l") toggle(MapLayerId::kEllipses);
-    if (key == "v") toggle(MapLayerId::kVehicle);
-    if (key == "f") follow_ = !follow_, map.SetWindow(follow_ ? std::nullopt : std::optional(map.WholeRun(source_.model())));
-    if (key == "c") confidence_ = (confidence_ + 1) % 4, map.ellipses().SetConfidence(kConfidences[confidence_]);
-    if (key == "space") source_.TogglePause();
-    if (key == "plus" || key == "equal" || key == "KP_Add") source_.ScaleSpeed(2.0);
-    if (key == "minus" || key == "KP_Subtract") source_.ScaleSpeed(0.5);
-    if (key == "Left") source_.Seek(-5.0, true);
-    if (key == "Right") source_.Seek(5.0, true);
-    if (key == "Home") source_.Seek(0.0, false);
-    if (key == "r") measuring_ = !measuring_, first_.reset(), tool_text_.clear();
-    return key == "q" || key == "Escape";
-  }
-
-  void Click(int x, int y) {
-    std::lock_guard lock(source_.mutex);
-    dirty_ = true;
-    const int* size = canvas_.window()->GetSize();
-    const double fx = static_cast<double>(x) / size[0], fy = static_cast<double>(y) / size[1];
-    if (fy < 0.03) return source_.Seek(fx, false);
-    if (!scene_.map_renderer()->IsInViewport(x, y)) return;
-    const Eigen::Vector2d at = scene_.map().FieldAtDisplay(x, y);
-    if (measuring_) return Measure(at);
-    tool_text_ = PlantRecordText(at);
-  }
-
-  int64_t frames() const { return frames_; }
-
- private:
-  static constexpr double kConfidences[] = {0.5, 0.9, 0.95, 0.99};
-
-  std::string Tools() const {
-    std::string s = "  ellipses " + std::to_string(static_cast<int>(kConfidences[confidence_] * 100)) + "%";
-    if (measuring_) s += "  MEASURE";
-    if (!tool_text_.empty()) s += "  | " + tool_text_;
-    return s;
-  }
-
-  void Measure(const Eigen::Vector2d& at) {
-    if (!first_) {
-      first_ = at;
-      tool_text_ = "measure: click the second point";
-      return;
-    }
-    std::ostringstream out;
-    out.precision(3);
-    out << std::fixed << "distance " << (at - *first_).norm() << " m";
-    tool_text_ = out.str();
-    first_.reset();
-  }
-
-  std::string PlantRecordText(const Eigen::Vector2d& at) const {
-    const PlantRecord* best = nullptr;
-    double best_d = 0.15;  // clicks farther than this from any plant select nothing
-    for (const auto& [id, r] : source_.model().plants()) {
-      const double d = (r.plant.position_m - at).norm();
-      if (d < best_d) best_d = d, best = &r;
-    }
-    if (best == nullptr) return "no plant within 0.15 m of the click";
-    const tm::PlantObservation& p = best->plant;
-    std::ostringstream out;
-    out.precision(3);
-    out << std::fixed << "plant " << p.id << ": "
-        << (p.kind == tm::PlantKind::kCrop ? "crop" : p.kind == tm::PlantKind::kWeed ? "weed" : "unknown")
-        << ", " << 1e4 * p.size_m2 << " cm2, " << 1e3 * p.distance_to_crop_m << " mm to predicted crop, "
-        << (p.sprayed ? "sprayed" : "not sprayed") << " (" << WhyName(p.why) << ")";
-    return out.str();
-  }
-
-  Canvas& canvas_;
-  StationScene& scene_;
-  Source& source_;
-  StationOptions options_;
-  bool follow_ = true, measuring_ = false;
-  int confidence_ = 2;
-  std::optional<Eigen::Vector2d> first_;
-  std::string tool_text_;
-  int64_t frames_ = 0;
-  bool dirty_ = true;
-  int64_t last_messages_ = 0;
-  Clock::time_point last_message_time_ = Clock::now();
-  int64_t drawn_messages_ = -1;
-  std::string drawn_hud_;
-};
-
-void RunInteractive(Canvas& canvas, Controller& controller) {
+void RunInteractive(Canvas& canvas, StationController& controller) {
   vtkNew<vtkRenderWindowInteractor> interactor;
   interactor->SetRenderWindow(canvas.window());
   interactor->SetInteractorStyle(nullptr);  // no camera rotation: our keys and clicks only
   interactor->Initialize();
   struct Context {
-    Controller* controller;
+    StationController* controller;
     vtkRenderWindowInteractor* interactor;
     Clock::time_point start, last;
   } context{&controller, interactor, Clock::now(), Clock::now()};
@@ -356,7 +141,7 @@ StationResult RunStation(const StationOptions& options) {
   Canvas canvas(options.width_px, options.height_px, options.offscreen);
   canvas.window()->SetWindowName("plantscale station");
   StationScene scene(canvas, options);
-  Controller controller(canvas, scene, *source, options);
+  StationController controller(canvas, scene, *source, options);
   const Clock::time_point start = Clock::now();
   if (options.offscreen) {
     Clock::time_point last = start;
