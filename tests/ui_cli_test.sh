@@ -10,23 +10,9 @@ plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
 failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 if [[ -z "${DISPLAY:-}" ]]; then echo "skip: no DISPLAY (run under xvfb-run -a)"; exit 77; fi
-
-expect() {  # expect CODE PATTERN -- command...
-  local code="$1" pattern="$2"
-  shift 3
-  local output status
-  output=$("$@" 2>&1)
-  status=$?
-  if [[ $status -ne $code ]]; then
-    fail "'$*' exited $status, expected $code"; echo "$output" | tail -5; return
-  fi
-  if ! grep -qE -- "$pattern" <<<"$output"; then
-    fail "'$*' output lacks /$pattern/"; echo "$output" | tail -5; return
-  fi
-  echo "ok: $* -> $status"
-}
 
 log="$work/run.lcmlog"
 "$plantscale" simulate --preset testbed --length-m 4 --seed 2 --publish --fast --lcm-url memq:// \
