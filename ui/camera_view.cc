@@ -23,9 +23,9 @@ Polyline Circle(const Eigen::Vector2d& c, double r) {
 CameraView::CameraView(const CameraViewParams& params)
     : params_(params),
       gate_k2_(EllipseScale2d(params.gate_probability)),
-      crop_blobs_(palette::kCrop, 2.0, 0.1),
-      weed_blobs_(palette::kWeed, 2.0, 0.1),
-      other_blobs_(palette::kUnknownPlant, 2.0, 0.1),
+      crop_blobs_(palette::kBlobCrop, 2.0, 0.1),
+      weed_blobs_(palette::kBlobWeed, 2.0, 0.1),
+      other_blobs_(palette::kBlobUnknown, 2.0, 0.1),
       rows_(palette::kRowLine, 1.5, 0.2),
       gates_(palette::kGate, 1.0, 0.25) {
   image_->InterpolateOn();
@@ -111,7 +111,7 @@ void CameraView::ShowBlobs(const plantscale_thumbnail_t& t) {
   std::vector<Polyline> crop, weed, other;
   const double scale = static_cast<double>(width_) / source_w_;
   for (const plantscale_blob_t& b : t.blobs) {
-    const double r = std::max(5.0, 1.6 * scale * std::sqrt(std::max(0, b.area_px) / 3.14159));
+    const double r = std::max(6.5, 2.0 * scale * std::sqrt(std::max(0, b.area_px) / 3.14159));
     const Polyline c = Circle(ToWorld({b.u, b.v}), r);
     (b.cls == 1 ? crop : b.cls == 2 ? weed : other).push_back(c);
   }

@@ -20,6 +20,10 @@ inline constexpr Rgb kVehicle{1.0, 0.3, 1.0};      // vehicle marker and its ell
 inline constexpr Rgb kPath{0.85, 0.85, 0.85};
 inline constexpr Rgb kPlantEllipse{1.0, 1.0, 1.0};
 inline constexpr Rgb kGate{1.0, 0.55, 0.0};
+// Blob rings in the camera view: lighter than the plants they ring.
+inline constexpr Rgb kBlobCrop{0.55, 1.0, 0.55};
+inline constexpr Rgb kBlobWeed{1.0, 0.25, 0.25};
+inline constexpr Rgb kBlobUnknown{1.0, 1.0, 0.6};
 inline constexpr Rgb kHudOk{0.10, 0.22, 0.14};
 inline constexpr Rgb kHudLost{0.80, 0.05, 0.05};
 inline constexpr Rgb kHudNoMessages{0.55, 0.40, 0.0};
