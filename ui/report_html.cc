@@ -21,6 +21,9 @@ void SummaryTable(std::ostringstream& out, const RunSummary& s) {
   Row(out, "distance", Fixed(s.distance_m, 2) + " m");
   Row(out, "mean offset (" + s.offset_source + ")", Fixed(1e3 * s.mean_offset_m, 1) + " mm");
   Row(out, "RMS offset (" + s.offset_source + ")", Fixed(1e3 * s.rms_offset_m, 1) + " mm");
+  if (s.rms_offset_error_m) {
+    Row(out, "RMS offset error (tracker − simulator truth)", Fixed(1e3 * *s.rms_offset_error_m, 1) + " mm");
+  }
   Row(out, "plants seen", std::to_string(s.plants_seen) + " (" + std::to_string(s.crop_seen) +
                               " crop, " + std::to_string(s.weeds_seen) + " weeds)");
   Row(out, "crop treated", std::to_string(s.crop_treated));

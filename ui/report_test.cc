@@ -57,6 +57,10 @@ TEST(Report, SummaryPicturesAndSameBytes) {
   // RMS ≈ √(28.3² + 8²) ≈ 29 mm.
   EXPECT_NEAR(1e3 * s.rms_offset_m, 29.0, 5.0);
   EXPECT_GE(s.rms_offset_m, std::abs(s.mean_offset_m));
+  // The synthetic tracker is truth plus N(0, 8 mm): over ~300 frames the RMS
+  // error is 8 mm within 1 mm (3 standard errors of 0.33 mm).
+  ASSERT_TRUE(s.rms_offset_error_m.has_value());
+  EXPECT_NEAR(1e3 * *s.rms_offset_error_m, 8.0, 1.0);
   EXPECT_GT(s.crop_seen, 3 * 12 / 0.45 * 0.9);  // three rows of plants at 0.45 m
   EXPECT_GT(s.weeds_seen, 10);
   EXPECT_EQ(s.weeds_treated, s.weeds_seen);  // the synthetic sprayer hits every weed

@@ -28,6 +28,23 @@ bool Contains(const std::vector<std::string>& v, const std::string& s) {
   return false;
 }
 
+// RMS of estimate − truth over the frames (utime) both traces have.
+std::optional<double> RmsOffsetError(const std::vector<TraceSample>& estimate,
+                                     const std::vector<TraceSample>& truth) {
+  std::map<int64_t, double> truth_at;
+  for (const TraceSample& t : truth) truth_at[t.utime] = t.offset_m;
+  double sum2 = 0.0;
+  int n = 0;
+  for (const TraceSample& e : estimate) {
+    const auto it = truth_at.find(e.utime);
+    if (it == truth_at.end()) continue;
+    sum2 += (e.offset_m - it->second) * (e.offset_m - it->second);
+    ++n;
+  }
+  if (n == 0) return std::nullopt;
+  return std::sqrt(sum2 / n);
+}
+
 }  // namespace
 
 OptionErrors RunModelOptions::Validate() const {
@@ -194,6 +211,7 @@ RunSummary RunModel::Summary() const {
     s.mean_offset_m = sum / n;
     s.rms_offset_m = std::sqrt(sum2 / n);
   }
+  s.rms_offset_error_m = RmsOffsetError(trace_, truth_trace_);
   for (const auto& [id, r] : registry_) {
     const bool crop = r.plant.kind == tm::PlantKind::kCrop;
     const bool weed = r.plant.kind == tm::PlantKind::kWeed;

@@ -62,6 +62,8 @@ struct RunSummary {
   std::string offset_source;  // "tracker", "simulator truth" or "none"
   double mean_offset_m = 0.0;
   double rms_offset_m = 0.0;
+  // Tracker offset minus the simulator's truth at the same frame, when both are logged.
+  std::optional<double> rms_offset_error_m;
   int plants_seen = 0;
   int crop_seen = 0;
   int weeds_seen = 0;
