@@ -13,6 +13,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libspdlog-dev
   liblcm-dev liblcm-bin libglib2.0-dev
   libgdal-dev gdal-bin
+  libvtk9-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )

@@ -41,6 +41,11 @@ void Subscriber::Attach(Transport& transport) {
       ".*", [this](const ReceivedMessage& m) { Feed(m.channel, m.data, m.size, m.recv_utime); });
 }
 
+void Subscriber::SetObserver(Observer observer) {
+  std::lock_guard lock(mutex_);
+  observer_ = std::move(observer);
+}
+
 TelemetrySnapshot Subscriber::Snapshot() const {
   std::lock_guard lock(mutex_);
   return state_;
@@ -65,6 +70,7 @@ void Subscriber::Take(const std::string& channel, const void* data, size_t size,
   if (!message) {
     ++s.decode_failures;
     NoteProblem(error);
+    if (observer_) observer_(channel, false, state_);
     return;
   }
   TrackSequence(s, message->seq);
@@ -73,7 +79,10 @@ void Subscriber::Take(const std::string& channel, const void* data, size_t size,
   } catch (const std::exception& e) {
     ++s.invalid;
     NoteProblem("channel " + channel + ": " + e.what());
+    if (observer_) observer_(channel, false, state_);
+    return;
   }
+  if (observer_) observer_(channel, true, state_);
 }
 
 void Subscriber::Feed(const std::string& channel, const void* data, size_t size,
@@ -86,6 +95,7 @@ void Subscriber::Feed(const std::string& channel, const void* data, size_t size,
   s.bytes += static_cast<int64_t>(size);
   s.last_recv_utime = recv_utime;
   if (s.received == 1) NoteProblem("unknown channel " + channel + " (ignored)");
+  if (observer_) observer_(channel, false, state_);
 }
 
 bool Subscriber::Dispatch(const std::string& channel, const void* data, size_t size, int64_t recv) {

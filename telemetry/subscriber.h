@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -78,6 +79,14 @@ class Subscriber {
   // One message (from a transport or a log); never throws on bad bytes.
   void Feed(const std::string& channel, const void* data, size_t size, int64_t recv_utime);
   TelemetrySnapshot Snapshot() const;
+  // Called under the lock after every message with its channel, whether it
+  // was applied (false: bad bytes, rejected values, unknown channel) and the
+  // whole state, so that a consumer can accumulate more than the bounded
+  // histories (the report, the station's run model) without copying the
+  // state per message. Must not call back into this subscriber.
+  using Observer =
+      std::function<void(const std::string& channel, bool applied, const TelemetrySnapshot& state)>;
+  void SetObserver(Observer observer);
 
  private:
   template <typename Message, typename Apply>
@@ -89,6 +98,7 @@ class Subscriber {
   SubscriberOptions options_;
   mutable std::mutex mutex_;
   TelemetrySnapshot state_;
+  Observer observer_;
 };
 
 }  // namespace plantscale::telemetry

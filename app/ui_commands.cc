@@ -1,0 +1,200 @@
+#include "app/ui_commands.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+#include "ui/canvas.h"
+#include "ui/report.h"
+#include "ui/station.h"
+
+namespace plantscale::app {
+namespace {
+
+struct StationArgs {
+  ui::StationOptions options;
+  std::string log;
+};
+
+struct ReportArgs {
+  std::string log;
+  std::string out;
+  double closeup_every_m = 10.0;
+  double confidence = 0.95;
+};
+
+// Without DISPLAY VTK would abort the process; say so and how to fix it
+// rather than re-executing under xvfb-run behind the user's back.
+int NoDisplay(const ui::DisplayError& e) {
+  std::cerr << "plantscale: error: " << e.what() << '\n';
+  return 2;
+}
+
+int Station(StationArgs& a) {
+  a.options.log = a.log;
+  try {
+    const ui::StationResult r = ui::RunStation(a.options);
+    std::cout << "station: " << r.frames << " frames in " << std::fixed << std::setprecision(1)
+              << r.seconds << " s (" << r.frames_per_second << " fps)\n";
+    for (const std::string& p : r.problems) std::cout << "station: problem: " << p << '\n';
+  } catch (const ui::DisplayError& e) {
+    return NoDisplay(e);
+  }
+  return 0;
+}
+
+int Report(const ReportArgs& a) {
+  ui::ReportOptions options;
+  options.closeup_every_m = a.closeup_every_m;
+  options.ellipse_confidence = a.confidence;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    const ui::ReportResult r = ui::WriteReport(a.log, a.out, options);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::cout << "report: " << r.index.string() << " (" << r.pictures.size() << " pictures, "
+              << std::fixed << std::setprecision(2) << r.summary.distance_m << " m, " << s << " s)\n";
+    for (const std::string& p : r.problems) std::cout << "report: problem: " << p << '\n';
+  } catch (const ui::DisplayError& e) {
+    return NoDisplay(e);
+  }
+  return 0;
+}
+
+struct DemoArgs {
+  std::string out = "out/demo";
+  std::string preset = "field";
+  double length_m = 40.0;
+  bool real_time = false;
+  std::string lcm_url = "udpm://239.255.76.67:7668?ttl=0";  // a port apart from LCM's default
+};
+
+bool OnPath(const std::string& program) {
+  return std::system(("command -v " + program + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+// Starts `args` (args[0] looked up on PATH); returns the child's pid, or -1.
+pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& output) {
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_addopen(&files, STDOUT_FILENO, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&files, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid = -1;
+  const int error = posix_spawnp(&pid, argv[0], &files, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&files);
+  return error == 0 ? pid : -1;
+}
+
+int Wait(pid_t pid) {
+  int status = 0;
+  if (pid < 0 || waitpid(pid, &status, 0) < 0) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Without a display the whole demo runs again under one `xvfb-run -a` (one
+// virtual X server for the station and the report: separate xvfb-run -a
+// calls race for display numbers). Returns only when that is not possible.
+void ReexecUnderXvfb(const std::string& self, const DemoArgs& a) {
+  if (ui::DisplayAvailable() || !OnPath("xvfb-run")) return;
+  std::vector<std::string> args{"xvfb-run", "-a", self, "demo-system", "--out", a.out, "--preset", a.preset,
+                                "--length-m", std::to_string(a.length_m), "--lcm-url", a.lcm_url};
+  if (a.real_time) args.push_back("--real-time");
+  std::vector<char*> argv;
+  for (std::string& s : args) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  setenv("PLANTSCALE_DEMO_XVFB", "1", 1);  // tells the re-run its display is virtual
+  execvp(argv[0], argv.data());
+}
+
+// The whole system on the simulator: the vehicle process publishing over
+// LCM and logging, the station subscribing (a window with DISPLAY, else
+// off-screen under xvfb-run), then the report of the log.
+int DemoSystem(const DemoArgs& a) {
+  namespace fs = std::filesystem;
+  const fs::path out = a.out, log = out / "run.lcmlog";
+  fs::create_directories(out);
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  ReexecUnderXvfb(self, a);
+  const bool can_render = ui::DisplayAvailable();
+  // The station shows a window when there is a real display, else renders off-screen.
+  const bool virtual_display = std::getenv("PLANTSCALE_DEMO_XVFB") != nullptr;
+  std::vector<std::string> station{"station", "--lcm-url", a.lcm_url, "--close-when-quiet", "3", "--seconds", "900"};
+  if (virtual_display) station.push_back("--offscreen");
+  station.insert(station.begin(), self);
+  const pid_t station_pid = can_render ? Spawn(station, out / "station.txt") : -1;
+  std::this_thread::sleep_for(std::chrono::seconds(can_render ? 2 : 0));  // let it subscribe
+  std::vector<std::string> vehicle{self, "simulate", "--preset", a.preset, "--length-m", std::to_string(a.length_m),
+                                   "--publish", "--lcm-url", a.lcm_url, "--log", log.string()};
+  if (!a.real_time) vehicle.push_back("--fast");
+  std::cout << "demo: vehicle publishing on " << a.lcm_url << (a.real_time ? "" : " (as fast as it can)") << "...\n";
+  const int vehicle_status = Wait(Spawn(vehicle, out / "vehicle.txt"));
+  const int station_status = Wait(station_pid);
+  if (vehicle_status != 0) {
+    std::cerr << "plantscale: error: demo: the vehicle process exited " << vehicle_status << "; see "
+              << (out / "vehicle.txt").string() << '\n';
+    return 1;
+  }
+  const int report_status =
+      can_render ? Wait(Spawn({self, "report", log.string(), "--out", (out / "report").string()}, out / "report.txt"))
+                 : -1;
+  std::cout << "demo: vehicle log     " << log.string() << "  (vehicle output " << (out / "vehicle.txt").string()
+            << ")\n";
+  std::cout << "demo: station         " << (station_pid < 0 ? "not run (no display and no xvfb-run)"
+                                            : "exit " + std::to_string(station_status) + ", output " +
+                                                  (out / "station.txt").string())
+            << '\n';
+  std::cout << "demo: report          " << (report_status == 0 ? (out / "report" / "index.html").string()
+                                                              : "failed, see " + (out / "report.txt").string())
+            << '\n';
+  std::cout << "demo: maps            not written: exporting maps from an LCM log comes with the maps issue\n";
+  return report_status == 0 && station_status == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+void AddUiCommands(CommandRegistry& registry) {
+  StationArgs& s = registry.Keep(StationArgs{});
+  CLI::App* station = registry.Add("station", "operator station window (live LCM or a log)",
+                                   [&s] { return Station(s); });
+  station->add_option("--lcm-url", s.options.lcm_url, "LCM URL to subscribe to (default LCM's)");
+  station->add_option("--log", s.log, "replay this LCM log with a timeline instead of live")
+      ->check(CLI::ExistingFile);
+  station->add_option("--speed", s.options.speed, "log replay speed (default 1)");
+  station->add_option("--confidence", s.options.ellipse_confidence, "ellipse confidence (default 0.95)");
+  station->add_option("--seconds", s.options.max_seconds, "close after this many seconds (0: never)");
+  station->add_option("--close-when-quiet", s.options.close_when_quiet_s,
+                      "close this many seconds after the last message (0: never)");
+  station->add_flag("--offscreen", s.options.offscreen, "render without showing a window (needs --seconds)");
+
+  ReportArgs& r = registry.Keep(ReportArgs{});
+  CLI::App* report = registry.Add("report", "render a run report (index.html and PNGs) from a log",
+                                  [&r] { return Report(r); });
+  report->add_option("LOG", r.log, "LCM log of the run")->required()->check(CLI::ExistingFile);
+  report->add_option("--out", r.out, "output folder")->required();
+  report->add_option("--closeup-every-m", r.closeup_every_m, "ellipse close-up spacing (default 10 m)");
+  report->add_option("--confidence", r.confidence, "ellipse confidence (default 0.95)");
+
+  DemoArgs& d = registry.Keep(DemoArgs{});
+  CLI::App* demo = registry.Add("demo-system",
+                                "the whole system on the simulator: vehicle over LCM, station, log, report",
+                                [&d] { return DemoSystem(d); });
+  demo->add_option("--out", d.out, "output folder")->capture_default_str();
+  demo->add_option("--preset", d.preset, "simulator preset")->capture_default_str();
+  demo->add_option("--length-m", d.length_m, "distance to drive, metres")->capture_default_str();
+  demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
+  demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
+}
+
+}  // namespace plantscale::app

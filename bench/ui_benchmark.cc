@@ -1,0 +1,91 @@
+// ui benchmarks (issue 9 figures), run under Xvfb: `xvfb-run -a build/bench/ui_benchmark`.
+//  - BM_StationFrame: one station frame (update the scene from the run model,
+//    render the 1280×720 window) with a 100 m bed map loaded while the log
+//    plays on; target ≥ 60 fps, i.e. ≤ 16.7 ms per frame.
+//  - BM_Report40m: `plantscale report` of a 40 m run; target ≤ 10 s.
+// Both use the synthetic run (ui/synthetic_run.h) until the tracker and the
+// treatment map publish for real.
+
+#include <benchmark/benchmark.h>
+
+#include <sys/resource.h>
+
+#include <filesystem>
+
+#include "ui/canvas.h"
+#include "ui/report.h"
+#include "ui/station.h"
+#include "ui/station_timeline.h"
+#include "ui/synthetic_run.h"
+
+namespace plantscale::ui {
+namespace {
+
+// User + system CPU of the whole process (llvmpipe renders on its own threads).
+double ProcessCpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+void BM_StationFrame(benchmark::State& state) {
+  if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
+  SyntheticRunOptions run;
+  run.length_m = 100.0;
+  LogTimeline timeline(SyntheticRun(run), "");
+  timeline.Seek(timeline.duration_s() - 20.0);  // the 100 m map is loaded; 20 s still to play
+  StationOptions options;
+  options.width_px = static_cast<int>(state.range(0));
+  options.height_px = options.width_px * 9 / 16;
+  Canvas canvas(options.width_px, options.height_px, /*offscreen=*/false);
+  StationScene scene(canvas, options);
+  int64_t frames = 0;
+  const double cpu0 = ProcessCpuSeconds();
+  for (auto _ : state) {
+    timeline.Advance(1.0 / 60.0);
+    scene.Update(timeline.model(), timeline.now_utime(), timeline.position_s() / timeline.duration_s());
+    canvas.window()->Render();
+    ++frames;
+  }
+  state.counters["fps"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.counters["process_cpu_ms_per_frame"] = 1e3 * (ProcessCpuSeconds() - cpu0) / static_cast<double>(frames);
+  state.counters["tiles"] = static_cast<double>(timeline.model().tiles().size());
+  state.counters["plants"] = static_cast<double>(timeline.model().plants().size());
+}
+BENCHMARK(BM_StationFrame)->Arg(1280)->Arg(960)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+
+// The render alone (nothing changes): what the GL side costs.
+void BM_StationRenderOnly(benchmark::State& state) {
+  if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
+  SyntheticRunOptions run;
+  run.length_m = 100.0;
+  LogTimeline timeline(SyntheticRun(run), "");
+  timeline.Seek(timeline.duration_s() - 20.0);
+  StationOptions options;
+  Canvas canvas(options.width_px, options.height_px, /*offscreen=*/false);
+  StationScene scene(canvas, options);
+  scene.Update(timeline.model(), timeline.now_utime(), 0.8);
+  for (auto _ : state) canvas.window()->Render();
+  state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_StationRenderOnly)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+void BM_Report40m(benchmark::State& state) {
+  if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
+  const auto dir = std::filesystem::temp_directory_path() / "plantscale_ui_bench";
+  std::filesystem::create_directories(dir);
+  SyntheticRunOptions run;
+  run.length_m = 40.0;
+  WriteSyntheticLog(dir / "run40.lcmlog", run);
+  for (auto _ : state) {
+    const ReportResult r = WriteReport(dir / "run40.lcmlog", dir / "report");
+    benchmark::DoNotOptimize(r.summary.distance_m);
+  }
+}
+BENCHMARK(BM_Report40m)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
+
+}  // namespace
+}  // namespace plantscale::ui
+
+BENCHMARK_MAIN();

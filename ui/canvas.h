@@ -1,0 +1,49 @@
+#pragma once
+// An off-screen (or on-screen) VTK render window of a fixed size whose
+// pixels can be read back, plus the DISPLAY check: VTK 9.1 here renders only
+// through GLX and aborts the process without an X server, so everything
+// that renders calls RequireDisplay() first.
+
+#include <vtkNew.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <stdexcept>
+#include <string>
+
+namespace plantscale::ui {
+
+struct Rgb {
+  double r = 0.0, g = 0.0, b = 0.0;  // 0..1
+};
+
+// No X display to render with.
+class DisplayError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+bool DisplayAvailable();
+// Throws DisplayError naming `what` and how to get a display (xvfb-run -a).
+void RequireDisplay(const std::string& what);
+
+class Canvas {
+ public:
+  // Throws DisplayError without DISPLAY.
+  Canvas(int width_px, int height_px, bool offscreen = true);
+  vtkRenderWindow* window() { return window_; }
+  // A renderer over the viewport (x0, y0)–(x1, y1), normalised, y up.
+  vtkRenderer* AddRenderer(double x0, double y0, double x1, double y1, Rgb background);
+  // Renders and reads the colour buffer back: 8-bit BGR, top row first.
+  cv::Mat Render();
+
+ private:
+  vtkNew<vtkRenderWindow> window_;
+};
+
+// Throws std::runtime_error naming the file when it cannot be written.
+void WritePng(const cv::Mat& bgr, const std::filesystem::path& path);
+
+}  // namespace plantscale::ui

@@ -1,0 +1,105 @@
+#pragma once
+// Layers drawn over the map in field metres: the predicted grid (row lines
+// and plant lines from the grid state and the vehicle pose), covariance
+// ellipses (vehicle pose and plant positions at a settable confidence), plant
+// markers coloured by class, and the vehicle with its path.
+
+#include <Eigen/Core>
+#include <optional>
+
+#include "ui/poly.h"
+#include "ui/run_model.h"
+
+namespace plantscale::ui {
+
+// A field-frame window: along-bed y range and across-bed x centre.
+struct FieldWindow {
+  double y0_m = 0.0, y1_m = 6.0;
+  double x_centre_m = 0.0;
+};
+
+// Along-bed range a layer was built for: rebuilt when the view leaves it.
+struct BuiltRange {
+  double y0_m = 1.0, y1_m = -1.0;  // empty
+  bool Covers(const FieldWindow& w) const { return y0_m <= w.y0_m && w.y1_m <= y1_m; }
+  static BuiltRange Around(const FieldWindow& w, double margin_m) {
+    return {w.y0_m - margin_m, w.y1_m + margin_m};
+  }
+};
+
+struct GridOverlayParams {
+  int rows_each_side = 1;    // rows n = −k..k drawn
+  int lines_behind = 3;      // plant lines drawn behind line 0
+  int lines_ahead = 10;      // and ahead of it
+};
+
+// Vehicle-frame point → field frame (inverse of sim::FieldToVehicle):
+// f = p + R(ψ) v with R = [cos ψ, −sin ψ; sin ψ, cos ψ].
+Eigen::Vector2d VehicleToField(const telemetry::Pose& pose, const Eigen::Vector2d& v);
+// Predicted row lines (rows −k..k) and plant lines, as field-frame segments.
+std::vector<Polyline> GridRowLines(const telemetry::GridEstimate& grid, const telemetry::Pose& pose,
+                                   const GridOverlayParams& params);
+std::vector<Polyline> GridPlantLines(const telemetry::GridEstimate& grid,
+                                     const telemetry::Pose& pose, const GridOverlayParams& params);
+
+class GridOverlay {
+ public:
+  explicit GridOverlay(const GridOverlayParams& params = {});
+  void AddTo(vtkRenderer* renderer);
+  void Update(const RunModel& model);
+  void SetVisible(bool visible);
+
+ private:
+  GridOverlayParams params_;
+  LineLayer rows_, lines_;
+};
+
+struct EllipseParams {
+  double confidence = 0.95;  // probability inside each ellipse
+  double min_plant_age_s = 0.0;
+  int max_plants = 4000;     // newest plants drawn
+};
+
+class CovarianceEllipses {
+ public:
+  // Throws std::invalid_argument when confidence is outside (0, 1).
+  explicit CovarianceEllipses(const EllipseParams& params = {});
+  void AddTo(vtkRenderer* renderer);
+  // Plants are drawn near `view` only (the whole run in a report).
+  void Update(const RunModel& model, const FieldWindow& view);
+  void SetConfidence(double confidence);
+  void SetVisible(bool visible);
+
+ private:
+  EllipseParams params_;
+  double k2_;
+  LineLayer vehicle_, plants_;
+  int64_t seen_plants_ = -1;
+  int64_t seen_messages_ = -1;
+  BuiltRange built_;
+};
+
+class PlantMarkers {
+ public:
+  void AddTo(vtkRenderer* renderer) { points_.AddTo(renderer); }
+  void Update(const RunModel& model, const FieldWindow& view);
+  void SetVisible(bool visible) { points_.SetVisible(visible); }
+
+ private:
+  PointLayer points_{5.0, 0.02};
+  int64_t seen_messages_ = -1;
+  BuiltRange built_;
+};
+
+class VehicleMarker {
+ public:
+  VehicleMarker();
+  void AddTo(vtkRenderer* renderer);
+  void Update(const RunModel& model);
+  void SetVisible(bool visible);
+
+ private:
+  LineLayer body_, path_;
+};
+
+}  // namespace plantscale::ui

@@ -1,0 +1,61 @@
+#pragma once
+// Heads-up display and nozzle bar. The HUD strip shows speed, filter mode,
+// frame rate, distance, link health and heartbeat age; its background turns
+// red at once when the heartbeat is older than the lost-link limit (amber
+// when nothing has arrived at all), and the first problem is spelt out. The
+// nozzle bar shows each nozzle (closed grey, open blue, fault orange) with
+// its shots over the last few seconds as a bar above it.
+
+#include <vtkNew.h>
+#include <vtkRenderer.h>
+#include <vtkTextActor.h>
+
+#include <string>
+
+#include "ui/poly.h"
+#include "ui/run_model.h"
+
+namespace plantscale::ui {
+
+struct HudParams {
+  int font_size = 14;
+};
+
+// One line of HUD text for people (also used by the report).
+std::string HudLine(const RunModel& model, int64_t now_utime);
+std::string FilterModeName(telemetry::FilterMode mode);
+
+class Hud {
+ public:
+  explicit Hud(const HudParams& params = {});
+  void AddTo(vtkRenderer* renderer);
+  void Update(const RunModel& model, int64_t now_utime);
+  // Extra text on the right of the second line (station: play state, tool).
+  void SetStatus(const std::string& text) { status_ = text; }
+
+ private:
+  HudParams params_;
+  vtkRenderer* renderer_ = nullptr;
+  vtkNew<vtkTextActor> line1_, line2_;
+  std::string status_;
+};
+
+struct NozzleBarParams {
+  double recent_s = 5.0;  // shots counted over this past window
+  int full_scale_shots = 4;
+};
+
+class NozzleBarView {
+ public:
+  explicit NozzleBarView(const NozzleBarParams& params = {});
+  void AddTo(vtkRenderer* renderer);
+  void Update(const RunModel& model, int64_t now_utime);
+
+ private:
+  NozzleBarParams params_;
+  vtkRenderer* renderer_ = nullptr;
+  LineLayer closed_, open_, fault_, recent_;
+  vtkNew<vtkTextActor> label_;
+};
+
+}  // namespace plantscale::ui

@@ -1,0 +1,57 @@
+#pragma once
+// The bed seen from above: map tiles, plant markers, predicted grid,
+// covariance ellipses and the vehicle, in one renderer. Drawn with the
+// direction of travel (field +y) to the right and the vehicle's left (field
+// −x) up; the camera follows the vehicle or frames a given field window.
+
+#include <vtkRenderer.h>
+
+#include <optional>
+
+#include "ui/field_overlays.h"
+#include "ui/map_layer.h"
+
+namespace plantscale::ui {
+
+enum class MapLayerId { kMap, kPlants, kGrid, kEllipses, kVehicle };
+
+struct MapViewParams {
+  double follow_length_m = 6.0;  // field length shown when following the vehicle
+  double follow_ahead_m = 1.5;   // the vehicle sits this far left of the centre
+  double min_across_m = 1.6;     // at least this much of the bed's width is shown
+  GridOverlayParams grid;
+  EllipseParams ellipses;
+};
+
+class MapView {
+ public:
+  explicit MapView(const MapViewParams& params = {});
+  void AddTo(vtkRenderer* renderer);
+  void Update(const RunModel& model);
+  void SetVisible(MapLayerId layer, bool visible);
+  bool Visible(MapLayerId layer) const;
+  // Frame `window` (free camera) or, with nullopt, follow the vehicle.
+  void SetWindow(std::optional<FieldWindow> window) { window_ = window; }
+  // The whole run: tiles, plants and path.
+  FieldWindow WholeRun(const RunModel& model) const;
+  CovarianceEllipses& ellipses() { return ellipses_; }
+  // Field point under display pixel (x, y) (VTK display coordinates, y up).
+  Eigen::Vector2d FieldAtDisplay(double x, double y) const;
+  // Display pixel (VTK, y up) of a field point.
+  Eigen::Vector2d DisplayAtField(const Eigen::Vector2d& field) const;
+
+ private:
+  FieldWindow PlaceCamera(const RunModel& model);
+
+  MapViewParams params_;
+  vtkRenderer* renderer_ = nullptr;
+  MapLayer map_;
+  PlantMarkers plants_;
+  GridOverlay grid_;
+  CovarianceEllipses ellipses_;
+  VehicleMarker vehicle_;
+  std::optional<FieldWindow> window_;
+  bool visible_[5] = {true, true, true, true, true};
+};
+
+}  // namespace plantscale::ui

@@ -1,0 +1,194 @@
+#include "ui/offset_trace.h"
+
+#include <vtkAxis.h>
+#include <vtkBrush.h>
+#include <vtkCamera.h>
+#include <vtkImageData.h>
+#include <vtkImageMapper3D.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkChartLegend.h>
+#include <vtkContextScene.h>
+#include <vtkDoubleArray.h>
+#include <vtkPen.h>
+#include <vtkPlot.h>
+#include <vtkPlotArea.h>
+#include <vtkTextProperty.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace plantscale::ui {
+namespace {
+
+constexpr const char* kColumns[] = {"distance", "offset", "offset_lo", "offset_hi",
+                                    "bearing",  "bearing_lo", "bearing_hi"};
+
+void AddColumns(vtkTable* table) {
+  for (const char* name : kColumns) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name);
+    table->AddColumn(a);
+  }
+}
+
+void AddBand(vtkChartXY* chart, vtkTable* table, const char* lo, const char* hi, int r, int g,
+             int b, int corner) {
+  vtkNew<vtkPlotArea> area;
+  chart->AddPlot(area);
+  area->SetInputData(table);
+  area->SetInputArray(0, "distance");
+  area->SetInputArray(1, lo);
+  area->SetInputArray(2, hi);
+  area->GetBrush()->SetColor(r, g, b, 70);
+  area->GetPen()->SetOpacity(0);
+  area->SetLabel(std::string(lo).starts_with("offset") ? "offset ±2 sd" : "bearing ±2 sd");
+  chart->SetPlotCorner(area, corner);
+}
+
+vtkPlot* AddLine(vtkChartXY* chart, vtkTable* table, const char* y, int r, int g, int b,
+                 int corner) {
+  vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+  line->SetInputData(table, "distance", y);
+  line->SetColor(r, g, b, 255);
+  line->SetWidth(1.5f);
+  chart->SetPlotCorner(line, corner);
+  return line;
+}
+
+}  // namespace
+
+OffsetTrace::OffsetTrace(const OffsetTraceParams& params) : params_(params) {
+  Build();
+  vtkNew<vtkImageData> blank;  // until the first picture (VTK wants an input)
+  blank->SetDimensions(1, 1, 1);
+  blank->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  static_cast<unsigned char*>(blank->GetScalarPointer())[0] = 255;
+  cache_actor_->GetMapper()->SetInputData(blank);
+}
+
+void OffsetTrace::Build() {
+  AddColumns(estimate_);
+  AddColumns(truth_);
+  actor_->GetScene()->AddItem(chart_);
+  chart_->SetTitle("Row offset and bearing");
+  chart_->GetTitleProperties()->SetFontSize(12);
+  chart_->SetShowLegend(true);
+  chart_->GetLegend()->GetLabelProperties()->SetFontSize(9);
+  chart_->GetLegend()->SetInline(false);
+  chart_->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);
+  chart_->GetLegend()->SetVerticalAlignment(vtkChartLegend::BOTTOM);
+  AddBand(chart_, estimate_, "offset_lo", "offset_hi", 30, 110, 230, 0);
+  AddBand(chart_, estimate_, "bearing_lo", "bearing_hi", 240, 140, 20, 1);
+  AddLine(chart_, estimate_, "offset", 30, 110, 230, 0)->SetLabel("offset (mm)");
+  AddLine(chart_, estimate_, "bearing", 240, 140, 20, 1)->SetLabel("bearing (deg)");
+  vtkPlot* truth = AddLine(chart_, truth_, "offset", 90, 90, 90, 0);
+  truth->SetLabel("true offset (mm)");
+  truth->GetPen()->SetLineType(vtkPen::DASH_LINE);
+  chart_->GetAxis(vtkAxis::BOTTOM)->SetTitle("distance (m)");
+  chart_->GetAxis(vtkAxis::LEFT)->SetTitle("offset (mm)");
+  chart_->GetAxis(vtkAxis::RIGHT)->SetTitle("bearing (deg)");
+  for (int a : {vtkAxis::BOTTOM, vtkAxis::LEFT, vtkAxis::RIGHT}) {
+    chart_->GetAxis(a)->GetTitleProperties()->SetFontSize(11);
+    chart_->GetAxis(a)->GetLabelProperties()->SetFontSize(10);
+  }
+}
+
+void OffsetTrace::AddTo(vtkRenderer* renderer) {
+  renderer_ = renderer;
+  if (params_.cached_width_px <= 0) return renderer->AddActor(actor_);
+  cache_window_ = vtkSmartPointer<vtkRenderWindow>::New();
+  cache_window_->SetOffScreenRendering(1);
+  cache_window_->SetSize(params_.cached_width_px, params_.cached_height_px);
+  vtkNew<vtkRenderer> chart_renderer;
+  chart_renderer->SetBackground(1, 1, 1);
+  chart_renderer->AddActor(actor_);
+  cache_window_->AddRenderer(chart_renderer);
+  renderer->AddActor(cache_actor_);
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->ParallelProjectionOn();
+  const double w = params_.cached_width_px, h = params_.cached_height_px;
+  camera->SetFocalPoint(0.5 * w, 0.5 * h, 0.0);
+  camera->SetPosition(0.5 * w, 0.5 * h, 10.0);
+  camera->SetParallelScale(0.5 * h);
+  camera->SetClippingRange(1.0, 20.0);
+}
+
+void OffsetTrace::SetVisible(bool visible) {
+  actor_->SetVisibility(visible);
+  cache_actor_->SetVisibility(visible);
+}
+
+void OffsetTrace::Rasterise() {
+  cache_window_->Render();
+  const int w = params_.cached_width_px, h = params_.cached_height_px;
+  vtkNew<vtkUnsignedCharArray> pixels;
+  cache_window_->GetPixelData(0, 0, w - 1, h - 1, 0, pixels);
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(w, h, 1);
+  image->SetOrigin(0.5, 0.5, 0.0);
+  image->GetPointData()->SetScalars(pixels);
+  cache_actor_->GetMapper()->SetInputData(image);
+  cache_actor_->Modified();
+}
+
+// Rows of `trace` (decimated to max_points, limited to window_m) in display
+// units: offset mm, bearing degrees, bands at ±band_sigmas σ.
+void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) const {
+  size_t first = 0;
+  if (params_.window_m > 0.0 && !trace.empty()) {
+    while (first < trace.size() &&
+           trace[first].distance_m < trace.back().distance_m - params_.window_m) {
+      ++first;
+    }
+  }
+  const size_t n = trace.size() - first;
+  const size_t step = std::max<size_t>(1, n / static_cast<size_t>(params_.max_points));
+  const double k = params_.band_sigmas, deg = 180.0 / std::numbers::pi;
+  table->SetNumberOfRows(static_cast<vtkIdType>((n + step - 1) / step));
+  vtkIdType row = 0;
+  for (size_t i = first; i < trace.size(); i += step, ++row) {
+    const TraceSample& t = trace[i];
+    const double values[] = {t.distance_m,
+                             1e3 * t.offset_m,
+                             1e3 * (t.offset_m - k * t.offset_sigma_m),
+                             1e3 * (t.offset_m + k * t.offset_sigma_m),
+                             deg * t.bearing_rad,
+                             deg * (t.bearing_rad - k * t.bearing_sigma_rad),
+                             deg * (t.bearing_rad + k * t.bearing_sigma_rad)};
+    for (int c = 0; c < 7; ++c) table->SetValue(row, c, vtkVariant(values[c]));
+  }
+  table->Modified();
+}
+
+void OffsetTrace::Update(const RunModel& model) {
+  // Without a tracker the simulator's truth stands in for the estimate.
+  const bool tracker = !model.trace().empty();
+  const std::vector<TraceSample>& estimate = tracker ? model.trace() : model.truth_trace();
+  if (estimate.size() != seen_) {
+    seen_ = estimate.size();
+    Fill(estimate_, estimate);
+    chart_->SetTitle(tracker ? "Row offset and bearing (tracker)"
+                             : "Row offset and bearing (simulator truth; no tracker in log)");
+  }
+  const std::vector<TraceSample> none;
+  const std::vector<TraceSample>& truth = tracker ? model.truth_trace() : none;
+  if (truth.size() != seen_truth_) {
+    seen_truth_ = truth.size();
+    Fill(truth_, truth);
+  }
+  // Fewer than two points is no line (VTK would complain on every render).
+  for (vtkIdType i = 0; i < chart_->GetNumberOfPlots(); ++i) {
+    const vtkIdType rows = (i < 4 ? estimate_ : truth_)->GetNumberOfRows();
+    chart_->GetPlot(i)->SetVisible(rows >= 2);
+  }
+  chart_->RecalculateBounds();
+  if (cache_window_ && (drawn_ == static_cast<size_t>(-1) || seen_ < drawn_ ||
+                        seen_ >= drawn_ + static_cast<size_t>(params_.redraw_every))) {
+    drawn_ = seen_;
+    Rasterise();
+  }
+}
+
+}  // namespace plantscale::ui

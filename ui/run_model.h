@@ -1,0 +1,159 @@
+#pragma once
+// What the station and the report show, accumulated from the subscriber
+// message by message (Subscriber::SetObserver): the latest state of every
+// channel plus the whole run's offset trace, plant registry, shots, path,
+// map tiles and events, and a plain-words list of what is wrong (no
+// messages, lost link, vehicle restarts, bad messages, foreign channels).
+// No VTK here: the scene pieces read this.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/common/options.h"
+#include "telemetry/subscriber.h"
+
+namespace plantscale::ui {
+
+struct RunModelOptions {
+  double link_lost_after_s = 2.0;  // heartbeat age that counts as a lost link (2 Hz heartbeat)
+  int max_event_snapshots = 6;     // thumbnails kept at warning/error events
+
+  OptionErrors Validate() const;
+};
+
+// One filter state against distance driven (the offset trace).
+struct TraceSample {
+  int64_t utime = 0;
+  double distance_m = 0.0;
+  double offset_m = 0.0;
+  double offset_sigma_m = 0.0;
+  double bearing_rad = 0.0;
+  double bearing_sigma_rad = 0.0;
+  telemetry::FilterMode mode = telemetry::FilterMode::kInitialising;
+};
+
+struct PlantRecord {
+  telemetry::PlantObservation plant;  // newest observation of this id
+  int64_t first_utime = 0;
+  int64_t last_utime = 0;
+  int observations = 0;
+};
+
+struct EventSnapshot {
+  plantscale_event_t event;
+  std::optional<plantscale_thumbnail_t> thumbnail;  // latest at the event
+  std::optional<telemetry::GridEstimate> grid;
+};
+
+enum class LinkLevel { kNoMessages, kOk, kLost };
+
+struct LinkStatus {
+  LinkLevel level = LinkLevel::kNoMessages;
+  double heartbeat_age_s = 0.0;  // NaN when no heartbeat was ever seen
+  std::string text;              // for people: "link ok", "LINK LOST: no heartbeat for 3.1 s"
+};
+
+struct RunSummary {
+  double distance_m = 0.0;
+  std::string offset_source;  // "tracker", "simulator truth" or "none"
+  double mean_offset_m = 0.0;
+  double rms_offset_m = 0.0;
+  // Tracker offset minus the simulator's truth at the same frame, when both are logged.
+  std::optional<double> rms_offset_error_m;
+  int plants_seen = 0;
+  int crop_seen = 0;
+  int weeds_seen = 0;
+  int crop_treated = 0;
+  int weeds_treated = 0;
+  int shots = 0;
+  std::optional<double> area_treated_m2;  // from TREATED map cells; none without tiles
+  std::vector<std::string> faults;        // vehicle faults, error events, bad messages
+  int64_t messages = 0;
+  int vehicle_restarts = 0;
+};
+
+class RunModel {
+ public:
+  // Throws InvalidOptionsError.
+  explicit RunModel(const RunModelOptions& options = {});
+
+  // Subscriber observer: one message on `channel` (applied or not).
+  void Observe(const std::string& channel, bool applied, const telemetry::TelemetrySnapshot& state);
+  // Attaches Observe to `subscriber` (the model must outlive it).
+  void Follow(telemetry::Subscriber& subscriber);
+
+  const std::optional<telemetry::GridEstimate>& grid() const { return grid_; }
+  const std::optional<telemetry::GridEstimate>& truth() const { return truth_; }
+  // The vehicle pose to draw: dead reckoning, else simulator truth.
+  std::optional<telemetry::Pose> pose() const;
+  const std::optional<telemetry::NozzleBar>& nozzles() const { return nozzles_; }
+  const std::optional<telemetry::Health>& health() const { return health_; }
+  const std::optional<plantscale_thumbnail_t>& thumbnail() const { return thumbnail_; }
+  const std::vector<telemetry::PlantObservation>& plants_in_frame() const { return plants_; }
+  const std::map<int64_t, PlantRecord>& plants() const { return registry_; }
+  const std::map<std::pair<int, int>, telemetry::MapTileDelta>& tiles() const { return tiles_; }
+  int tile_revision_sum() const { return tile_revisions_; }
+  int64_t plant_messages() const { return plant_messages_; }  // changes when plants() may have
+  const std::vector<TraceSample>& trace() const { return trace_; }
+  const std::vector<TraceSample>& truth_trace() const { return truth_trace_; }
+  const std::vector<std::pair<double, double>>& path() const { return path_; }  // field x, y
+  const std::vector<telemetry::NozzleShot>& shots() const { return shots_; }
+  const std::vector<plantscale_event_t>& events() const { return events_; }
+  const std::vector<EventSnapshot>& event_snapshots() const { return event_snapshots_; }
+  double distance_m() const { return distance_m_; }
+  double speed_m_s() const { return speed_m_s_; }  // mean of the wheel speeds
+  int64_t last_message_utime() const { return last_message_utime_; }
+  int64_t messages() const { return messages_; }
+
+  // Heartbeat state at `now_utime` (the log clock when replaying).
+  LinkStatus Link(int64_t now_utime) const;
+  // What is wrong, newest last, one line each (subscriber problems included).
+  std::vector<std::string> Problems(int64_t now_utime) const;
+  RunSummary Summary() const;
+
+ private:
+  void ObserveGrid(const telemetry::GridEstimate& grid, std::vector<TraceSample>& trace);
+  void ObservePlants(const telemetry::TelemetrySnapshot& state);
+  void ObserveTiles(const telemetry::TelemetrySnapshot& state);
+  void ObserveHealth(const telemetry::TelemetrySnapshot& state);
+  void ObserveEvent(const telemetry::TelemetrySnapshot& state);
+  void ObservePose(const telemetry::TelemetrySnapshot& state);
+
+  RunModelOptions options_;
+  std::optional<telemetry::GridEstimate> grid_, truth_;
+  std::optional<telemetry::Pose> pose_, truth_pose_;
+  std::optional<telemetry::NozzleBar> nozzles_;
+  std::optional<telemetry::Health> health_;
+  int64_t health_recv_utime_ = 0;
+  std::optional<plantscale_thumbnail_t> thumbnail_;
+  std::vector<telemetry::PlantObservation> plants_;
+  std::map<int64_t, PlantRecord> registry_;
+  std::map<std::pair<int, int>, telemetry::MapTileDelta> tiles_;
+  int tile_revisions_ = 0;
+  std::vector<TraceSample> trace_, truth_trace_;
+  std::vector<std::pair<double, double>> path_;
+  std::vector<telemetry::NozzleShot> shots_;
+  std::vector<plantscale_event_t> events_;
+  std::vector<EventSnapshot> event_snapshots_;
+  std::vector<std::string> vehicle_faults_;
+  std::vector<std::string> restarts_;
+  std::deque<std::string> subscriber_problems_;
+  std::map<std::string, telemetry::ChannelStats> channels_;
+  int64_t unknown_messages_ = 0;
+  double distance_m_ = 0.0;
+  double speed_m_s_ = 0.0;
+  int64_t first_boot_utime_ = 0;
+  int64_t last_message_utime_ = 0;
+  int64_t messages_ = 0;
+  int64_t plant_messages_ = 0;
+};
+
+// Chi-square quantile with two degrees of freedom: the squared Mahalanobis
+// radius that holds `confidence` of a 2-D Gaussian, k² = −2 ln(1 − p).
+double EllipseScale2d(double confidence);
+
+}  // namespace plantscale::ui

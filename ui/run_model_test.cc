@@ -1,0 +1,106 @@
+// The run model from messages we construct: offset trace, plant registry,
+// heartbeat age and lost link, and the bad inputs the station must survive
+// and explain (no messages, another program's log, vehicle restart, NaN).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "telemetry/channels.h"
+#include "telemetry/codec.h"
+#include "telemetry/convert.h"
+#include "ui/run_model.h"
+#include "ui/scene_test_util.h"
+
+namespace plantscale::ui {
+namespace {
+
+namespace tm = plantscale::telemetry;
+
+bool Mentions(const std::vector<std::string>& lines, const std::string& what) {
+  for (const std::string& l : lines) {
+    if (l.find(what) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(RunModel, EllipseScaleIsChiSquareTwoDof) {
+  EXPECT_NEAR(EllipseScale2d(0.95), 5.991, 1e-3);  // χ²₂(0.95)
+  EXPECT_NEAR(EllipseScale2d(0.99), 9.210, 1e-3);
+  EXPECT_NEAR(EllipseScale2d(1.0 - std::exp(-0.5)), 1.0, 1e-12);  // 1σ contour
+  EXPECT_THROW(EllipseScale2d(1.0), std::invalid_argument);
+}
+
+TEST(RunModel, TraceCarriesOffsetSigmaAndDistance) {
+  tm::Subscriber sub;
+  RunModel model;
+  model.Follow(sub);
+  plantscale_odometry_t odo{};
+  odo.distance_m = 3.5;
+  odo.valid = 1;
+  const tm::Bytes o = tm::Encode(odo);
+  sub.Feed(tm::channels::kOdometry, o.data(), o.size(), 1000);
+  tm::GridEstimate g;
+  g.state.offset_m = 0.012;
+  g.covariance(0, 0) = 0.004 * 0.004;
+  g.covariance(2, 2) = 0.01 * 0.01;
+  const tm::Bytes b = tm::Encode(tm::ToLcm(g));
+  sub.Feed(tm::channels::kGrid, b.data(), b.size(), 2000);
+  ASSERT_EQ(model.trace().size(), 1u);
+  EXPECT_DOUBLE_EQ(model.trace()[0].distance_m, 3.5);
+  EXPECT_NEAR(model.trace()[0].offset_sigma_m, 0.004, 1e-12);
+  EXPECT_NEAR(model.trace()[0].bearing_sigma_rad, 0.01, 1e-12);
+}
+
+TEST(RunModel, NoMessagesIsSaid) {
+  RunModel model;
+  EXPECT_EQ(model.Link(123).level, LinkLevel::kNoMessages);
+  EXPECT_TRUE(Mentions(model.Problems(123), "NO MESSAGES"));
+}
+
+TEST(RunModel, HeartbeatAgeAndLostLinkAtTheLimit) {
+  SyntheticRunOptions o;
+  o.heartbeat_stops_at_s = 3.0;
+  LogTimeline run = testing::RunUpTo(o, 4.8);  // heartbeats every 6 frames (0.48 s): last at 2.88 s
+  EXPECT_EQ(run.model().Link(run.now_utime()).level, LinkLevel::kOk);
+  EXPECT_NEAR(run.model().Link(run.now_utime()).heartbeat_age_s, 1.92, 1e-6);
+  run.Seek(5.0);  // 2.12 s > 2 s: lost
+  EXPECT_EQ(run.model().Link(run.now_utime()).level, LinkLevel::kLost);
+  EXPECT_TRUE(Mentions(run.model().Problems(run.now_utime()), "LINK LOST"));
+}
+
+TEST(RunModel, VehicleRestartIsSaidAndCounted) {
+  SyntheticRunOptions o;
+  o.restart_at_s = 4.0;
+  const LogTimeline run = testing::RunUpTo(o, 8.0);
+  EXPECT_TRUE(Mentions(run.model().Problems(run.now_utime()), "restarted"));
+  EXPECT_EQ(run.model().Summary().vehicle_restarts, 1);
+  EXPECT_GT(run.model().trace().size(), 90u);  // the trace goes on after the restart
+}
+
+TEST(RunModel, NanMessageIsRejectedAndNamed) {
+  SyntheticRunOptions o;
+  o.nan_grid_at_s = 2.0;
+  const LogTimeline run = testing::RunUpTo(o, 4.0);
+  EXPECT_TRUE(Mentions(run.model().Problems(run.now_utime()), tm::channels::kGrid));
+  for (const TraceSample& t : run.model().trace()) EXPECT_TRUE(std::isfinite(t.offset_m));
+  EXPECT_TRUE(Mentions(run.model().Summary().faults, "bad messages"));
+}
+
+TEST(RunModel, LogFromAnotherProgramIsSaid) {
+  std::vector<tm::LogEvent> events;
+  for (int i = 0; i < 10; ++i) events.push_back({i, 1000 + i * 1000, "OTHER_PROGRAM", {1, 2, 3}});
+  LogTimeline run(std::move(events), "");
+  run.Seek(1.0);
+  EXPECT_TRUE(Mentions(run.model().Problems(run.now_utime()), "no plantscale messages"));
+}
+
+TEST(RunModel, PlantRegistryKeepsEveryPlantOnce) {
+  const LogTimeline run = testing::RunUpTo({}, 20.0);  // the whole 10 m run
+  const RunSummary s = run.model().Summary();
+  EXPECT_EQ(s.plants_seen, s.crop_seen + s.weeds_seen);
+  // Crop at 0.45 m in three rows, seen up to 2.3 m ahead of the 10 m end.
+  EXPECT_NEAR(s.crop_seen, 3 * static_cast<int>((10.0 + 2.3 - 0.5) / 0.45 + 1), 3);
+}
+
+}  // namespace
+}  // namespace plantscale::ui

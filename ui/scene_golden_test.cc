@@ -1,0 +1,158 @@
+// Golden images of each scene piece, with pixel checks that mean something:
+// predicted rows where the grid says, blobs and grid in the camera view where
+// the camera model projects them, a red HUD on a lost link.
+#include <gtest/gtest.h>
+
+#include "engine/geometry/grid_model.h"
+#include "ui/camera_view.h"
+#include "ui/canvas.h"
+#include "ui/golden.h"
+#include "ui/hud.h"
+#include "ui/map_view.h"
+#include "ui/offset_trace.h"
+#include "ui/palette.h"
+#include "ui/scene_test_util.h"
+
+namespace plantscale::ui {
+namespace {
+
+using testing::MatchesGolden;
+using testing::RunUpTo;
+
+bool IsRowYellow(const cv::Vec3b& bgr) { return bgr[2] > 200 && bgr[1] > 170 && bgr[0] < 90; }
+
+// Renders a map view of `model` with only `layers` visible.
+cv::Mat RenderMap(const RunModel& model, std::initializer_list<MapLayerId> layers, int w = 400,
+                  int h = 300, std::optional<FieldWindow> window = std::nullopt) {
+  Canvas canvas(w, h);
+  MapView view;
+  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
+  for (MapLayerId id : {MapLayerId::kMap, MapLayerId::kPlants, MapLayerId::kGrid, MapLayerId::kEllipses,
+                        MapLayerId::kVehicle}) {
+    view.SetVisible(id, std::find(layers.begin(), layers.end(), id) != layers.end());
+  }
+  view.SetWindow(window);
+  view.Update(model);
+  return canvas.Render();
+}
+
+TEST(SceneGolden, MapLayerShowsCropWeedSoilTreated) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 12.0);
+  const cv::Mat image = RenderMap(run.model(), {MapLayerId::kMap});
+  EXPECT_TRUE(MatchesGolden(image, "map_layer"));
+}
+
+// The follow camera puts field x = 0 on the middle image row and shows
+// 6 m across 400 px (66.7 px/m), field −x up: row n's line is at image row
+// 150 + x_n · 66.7 where x_n = n r̄ − t_x / cos ψ ≈ n · 0.475 m + vehicle x.
+TEST(SceneGolden, GridOverlayRowsAtExpectedImageRows) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 12.0);
+  const cv::Mat image = RenderMap(run.model(), {MapLayerId::kGrid, MapLayerId::kVehicle});
+  EXPECT_TRUE(MatchesGolden(image, "grid_overlay"));
+  const auto& grid = *run.model().grid();
+  const auto pose = *run.model().pose();
+  const double ppm = 400.0 / 6.0;
+  const int column = 200;  // 1.5 m ahead of the vehicle: inside the drawn lines
+  for (int n = -1; n <= 1; ++n) {
+    const auto line = GridRowLines(grid, pose, {})[static_cast<size_t>(n + 1)];
+    const double x = 0.5 * (line.front().x() + line.back().x());
+    const int expected = static_cast<int>(std::lround(150.0 + x * ppm));
+    int found = -1000;
+    for (int r = expected - 6; r <= expected + 6; ++r) {
+      if (IsRowYellow(image.at<cv::Vec3b>(r, column)) && std::abs(r - expected) < std::abs(found - expected)) found = r;
+    }
+    EXPECT_NEAR(found, expected, 3) << "row " << n << " (tolerance 3 px = 4.5 cm)";
+    EXPECT_NEAR(x, n * 0.475 + pose.x_m, 0.05) << "row " << n << " near its planted line";
+  }
+}
+
+TEST(SceneGolden, EllipsesCloseUp) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 12.0);
+  const double y = run.model().pose()->y_m;
+  const cv::Mat image = RenderMap(run.model(), {MapLayerId::kEllipses, MapLayerId::kPlants, MapLayerId::kVehicle},
+                                  400, 300, FieldWindow{y - 0.5, y + 2.5, 0.0});
+  EXPECT_TRUE(MatchesGolden(image, "ellipses"));
+}
+
+TEST(SceneGolden, OffsetTraceChart) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 20.0);
+  Canvas canvas(400, 300);
+  OffsetTrace trace;
+  trace.AddTo(canvas.AddRenderer(0, 0, 1, 1, {1, 1, 1}));
+  trace.Update(run.model());
+  EXPECT_TRUE(MatchesGolden(canvas.Render(), "offset_trace"));
+}
+
+TEST(SceneGolden, CameraViewGridAtProjectedColumns) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 12.0);
+  Canvas canvas(320, 240);
+  CameraView view;
+  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
+  view.Update(run.model());
+  const cv::Mat image = canvas.Render();
+  EXPECT_TRUE(MatchesGolden(image, "camera_view"));
+  // Thumbnail 160×120 shown in 320×240: 2 screen px per thumbnail px, 0.5 per source px.
+  const geometry::GridModel model(geometry::CameraModel({}), {});
+  int checked = 0;
+  for (const geometry::GridPlant& p : model.PlantsInView(run.model().grid()->state)) {
+    const int u = static_cast<int>(std::lround(0.5 * p.image_px.x()));
+    const int v = static_cast<int>(std::lround(0.5 * p.image_px.y()));
+    if (u < 4 || v < 4 || u > 315 || v > 235) continue;
+    bool yellow = false;
+    for (int dv = -2; dv <= 2; ++dv) {
+      for (int du = -2; du <= 2; ++du) yellow |= IsRowYellow(image.at<cv::Vec3b>(v + dv, u + du));
+    }
+    EXPECT_TRUE(yellow) << "grid plant (m " << p.m << ", n " << p.n << ") not drawn at (" << u << ", " << v << ")";
+    ++checked;
+  }
+  EXPECT_GE(checked, 6);
+}
+
+cv::Mat RenderHud(const RunModel& model, int64_t now) {
+  Canvas canvas(400, 60);
+  Hud hud;
+  hud.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kHudOk));
+  hud.Update(model, now);
+  return canvas.Render();
+}
+
+TEST(SceneGolden, HudGreenWhileHeartbeatArrives) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 6.0);
+  const cv::Mat image = RenderHud(run.model(), run.now_utime());
+  EXPECT_TRUE(MatchesGolden(image, "hud_ok"));
+  const cv::Vec3b corner = image.at<cv::Vec3b>(58, 398);
+  EXPECT_NEAR(corner[1], 255 * palette::kHudOk.g, 2);
+  EXPECT_LT(corner[2], 60);
+}
+
+TEST(SceneGolden, HudRedAtOnceOnLostLink) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions o;
+  o.heartbeat_stops_at_s = 3.0;
+  const LogTimeline run = RunUpTo(o, 6.0);
+  const cv::Mat image = RenderHud(run.model(), run.now_utime());
+  EXPECT_TRUE(MatchesGolden(image, "hud_lost"));
+  const cv::Vec3b corner = image.at<cv::Vec3b>(58, 398);  // background, below the text
+  EXPECT_GT(corner[2], 190);  // red ≥ 0.75
+  EXPECT_LT(corner[1], 30);
+  EXPECT_LT(corner[0], 30);
+}
+
+TEST(SceneGolden, NozzleBar) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = RunUpTo({}, 12.0);
+  Canvas canvas(400, 60);
+  NozzleBarView bar;
+  bar.AddTo(canvas.AddRenderer(0, 0, 1, 1, {0.12, 0.12, 0.13}));
+  bar.Update(run.model(), run.now_utime());
+  EXPECT_TRUE(MatchesGolden(canvas.Render(), "nozzle_bar"));
+}
+
+}  // namespace
+}  // namespace plantscale::ui

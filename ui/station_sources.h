@@ -1,0 +1,96 @@
+#pragma once
+// Where the station's run model comes from: a log played on a timeline
+// (pause, speed, seek), or live LCM with the subscriber on its own thread.
+// The mutex guards the model between that thread and the UI thread.
+
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "telemetry/transport.h"
+#include "ui/station_timeline.h"
+
+namespace plantscale::ui {
+
+// Where the model comes from: a log with a timeline, or live LCM.
+class Source {
+ public:
+  virtual ~Source() = default;
+  virtual void Tick(double wall_s) = 0;
+  virtual const RunModel& model() const = 0;
+  virtual int64_t now_utime() const = 0;
+  virtual double fraction() const { return -1.0; }  // timeline position, < 0 live
+  virtual void Seek(double, bool) {}
+  virtual void TogglePause() {}
+  virtual void ScaleSpeed(double) {}
+  virtual std::string Status() const = 0;
+  virtual std::string LogError() const { return ""; }  // the log could not be read to its end
+  std::mutex mutex;  // held while the model is read or changed
+};
+
+class LogSource : public Source {
+ public:
+  LogSource(const std::filesystem::path& log, double speed) : timeline_(LogTimeline::Load(log)) {
+    timeline_.SetSpeed(speed);
+    timeline_.Seek(0.0);
+  }
+  void Tick(double wall_s) override { timeline_.Advance(wall_s); }
+  const RunModel& model() const override { return timeline_.model(); }
+  int64_t now_utime() const override { return timeline_.now_utime(); }
+  double fraction() const override {
+    return timeline_.duration_s() > 0 ? timeline_.position_s() / timeline_.duration_s() : 0.0;
+  }
+  void Seek(double value, bool relative) override {
+    timeline_.Seek(relative ? timeline_.position_s() + value : value * timeline_.duration_s());
+  }
+  void TogglePause() override { timeline_.SetPaused(!timeline_.paused()); }
+  std::string LogError() const override { return timeline_.error(); }
+  void ScaleSpeed(double f) override { timeline_.SetSpeed(std::clamp(timeline_.speed() * f, 0.125, 64.0)); }
+  std::string Status() const override {
+    std::ostringstream out;
+    out.precision(1);
+    out << std::fixed << (timeline_.paused() ? "PAUSED " : "") << "log " << timeline_.position_s() << "/"
+        << timeline_.duration_s() << " s x" << timeline_.speed();
+    if (!timeline_.error().empty()) out << "  LOG CUT: " << timeline_.error();
+    if (timeline_.empty()) out << "  (log has no events)";
+    return out.str();
+  }
+
+ private:
+  LogTimeline timeline_;
+};
+
+class LiveSource : public Source {
+ public:
+  explicit LiveSource(const std::string& url) : transport_(url.empty() ? telemetry::LcmTransportOptions{}.url : url) {
+    subscriber_.SetObserver([this](const std::string& ch, bool applied, const telemetry::TelemetrySnapshot& s) {
+      std::lock_guard lock(mutex);
+      model_.Observe(ch, applied, s);
+    });
+    subscriber_.Attach(transport_);
+    thread_ = std::thread([this] {
+      while (!stop_) transport_.Handle(50);
+    });
+  }
+  ~LiveSource() override {
+    stop_ = true;
+    thread_.join();
+  }
+  void Tick(double) override {}
+  const RunModel& model() const override { return model_; }
+  int64_t now_utime() const override { return telemetry::WallUtime(); }
+  std::string Status() const override { return "live " + transport_.url(); }
+
+ private:
+  telemetry::LcmTransport transport_;
+  telemetry::Subscriber subscriber_;
+  RunModel model_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace plantscale::ui

@@ -1,0 +1,89 @@
+// The station composed: a golden of the whole window, and the station loop
+// kept running (off-screen) on logs that are wrong, saying what is wrong.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "telemetry/log.h"
+#include "ui/golden.h"
+#include "ui/palette.h"
+#include "ui/scene_test_util.h"
+#include "ui/station.h"
+
+namespace plantscale::ui {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(Station, ComposedWindowGolden) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  const LogTimeline run = testing::RunUpTo({}, 12.0);
+  StationOptions o;
+  o.width_px = 640, o.height_px = 360;
+  Canvas canvas(o.width_px, o.height_px);
+  StationScene scene(canvas, o);
+  scene.Update(run.model(), run.now_utime(), 12.0 / 20.0);
+  const cv::Mat image = canvas.Render();
+  EXPECT_TRUE(testing::MatchesGolden(image, "station"));
+  // The HUD strip (top 8 %) is the link-ok green.
+  const cv::Vec3b hud = image.at<cv::Vec3b>(26, 636);
+  EXPECT_NEAR(hud[1], 255 * palette::kHudOk.g, 2);
+}
+
+StationResult RunOn(const fs::path& log) {
+  StationOptions o;
+  o.log = log;
+  o.offscreen = true;
+  o.max_seconds = 1.0;
+  o.speed = 8.0;
+  o.width_px = 640, o.height_px = 360;
+  return RunStation(o);
+}
+
+bool Says(const StationResult& r, const std::string& what) {
+  for (const std::string& p : r.problems) {
+    if (p.find(what) != std::string::npos) return true;
+  }
+  return false;
+}
+
+fs::path LogWith(const std::string& name, const SyntheticRunOptions& o) {
+  const fs::path p = fs::path(testing::OutputDir()) / (name + ".lcmlog");
+  WriteSyntheticLog(p, o);
+  return p;
+}
+
+TEST(Station, KeepsRunningOnAGoodLog) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions o;
+  o.length_m = 3.0;
+  const StationResult r = RunOn(LogWith("station_good", o));
+  EXPECT_GT(r.frames, 10);
+}
+
+TEST(Station, SaysWhatIsWrongWithBadLogs) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions nan;
+  nan.length_m = 2.0;
+  nan.nan_grid_at_s = 0.5;
+  EXPECT_TRUE(Says(RunOn(LogWith("station_nan", nan)), "PLANTSCALE_GRID"));
+
+  SyntheticRunOptions restart;
+  restart.length_m = 4.0;
+  restart.restart_at_s = 2.0;
+  EXPECT_TRUE(Says(RunOn(LogWith("station_restart", restart)), "restarted"));
+
+  const fs::path empty = fs::path(testing::OutputDir()) / "station_empty.lcmlog";
+  { telemetry::LogWriter w(empty); }
+  EXPECT_TRUE(Says(RunOn(empty), "NO MESSAGES"));
+
+  const fs::path foreign = fs::path(testing::OutputDir()) / "station_foreign.lcmlog";
+  {
+    telemetry::LogWriter w(foreign);
+    for (int i = 0; i < 5; ++i) w.Write("OTHER", "abc", 3, 1000 + i * 1000);
+  }
+  EXPECT_TRUE(Says(RunOn(foreign), "no plantscale messages"));
+}
+
+}  // namespace
+}  // namespace plantscale::ui

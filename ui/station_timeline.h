@@ -1,0 +1,50 @@
+#pragma once
+// A log loaded into memory and played into a subscriber and run model at a
+// chosen speed, with pause and seek (seeking back replays from the start,
+// which takes well under a second for a 100 m run).
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "telemetry/log.h"
+#include "ui/run_model.h"
+
+namespace plantscale::ui {
+
+class LogTimeline {
+ public:
+  // `error` is the LogReader's complaint (cut-off log), kept for the HUD.
+  LogTimeline(std::vector<telemetry::LogEvent> events, std::string error);
+  // Throws telemetry::LogError when the log cannot be opened.
+  static LogTimeline Load(const std::filesystem::path& log);
+
+  // Moves the log clock on by wall_s × speed (nothing while paused).
+  void Advance(double wall_s);
+  void Seek(double position_s);  // from the first event, clamped to the log
+  void SetPaused(bool paused) { paused_ = paused; }
+  bool paused() const { return paused_; }
+  void SetSpeed(double speed) { speed_ = speed; }
+  double speed() const { return speed_; }
+  double position_s() const { return position_s_; }
+  double duration_s() const;
+  int64_t now_utime() const;
+  const RunModel& model() const { return *model_; }
+  const std::string& error() const { return error_; }
+  bool empty() const { return events_.empty(); }
+
+ private:
+  void Reset();
+  void FeedUpTo(double position_s);
+
+  std::vector<telemetry::LogEvent> events_;
+  std::string error_;
+  std::unique_ptr<telemetry::Subscriber> subscriber_;
+  std::unique_ptr<RunModel> model_;
+  size_t next_ = 0;
+  double position_s_ = 0.0;
+  double speed_ = 1.0;
+  bool paused_ = false;
+};
+
+}  // namespace plantscale::ui
