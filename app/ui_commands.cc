@@ -123,6 +123,12 @@ void ReexecUnderXvfb(const std::string& self, const DemoArgs& a) {
 // off-screen under xvfb-run), then the report of the log.
 int DemoSystem(const DemoArgs& a) {
   namespace fs = std::filesystem;
+  if (a.lcm_url.rfind("memq://", 0) == 0) {
+    std::cerr << "plantscale: error: demo: --lcm-url " << a.lcm_url
+              << " cannot work: memq:// stays inside one process, and the demo runs the vehicle and the station"
+                 " as separate processes; use a udpm:// URL\n";
+    return 2;
+  }
   const fs::path out = a.out, log = out / "run.lcmlog";
   fs::create_directories(out);
   const std::string self = fs::read_symlink("/proc/self/exe").string();
@@ -186,15 +192,18 @@ void AddUiCommands(CommandRegistry& registry) {
   report->add_option("--closeup-every-m", r.closeup_every_m, "ellipse close-up spacing (default 10 m)");
   report->add_option("--confidence", r.confidence, "ellipse confidence (default 0.95)");
 
-  DemoArgs& d = registry.Keep(DemoArgs{});
-  CLI::App* demo = registry.Add("demo-system",
-                                "the whole system on the simulator: vehicle over LCM, station, log, report",
-                                [&d] { return DemoSystem(d); });
-  demo->add_option("--out", d.out, "output folder")->capture_default_str();
-  demo->add_option("--preset", d.preset, "simulator preset")->capture_default_str();
-  demo->add_option("--length-m", d.length_m, "distance to drive, metres")->capture_default_str();
-  demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
-  demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
+  // `demo` (what ./plantscale.sh demo runs) and `demo-system` are the same command.
+  for (const char* name : {"demo", "demo-system"}) {
+    DemoArgs& d = registry.Keep(DemoArgs{});
+    CLI::App* demo = registry.Add(name,
+                                  "the whole system on the simulator: vehicle over LCM, station, log, report",
+                                  [&d] { return DemoSystem(d); });
+    demo->add_option("--out", d.out, "output folder")->capture_default_str();
+    demo->add_option("--preset", d.preset, "simulator preset")->capture_default_str();
+    demo->add_option("--length-m", d.length_m, "distance to drive, metres")->capture_default_str();
+    demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
+    demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
+  }
 }
 
 }  // namespace plantscale::app
