@@ -166,7 +166,7 @@ void AddExportCommands(CommandRegistry& registry) {
       ->required();
   cmd->add_option("--out", args.out, "output folder")->required();
   cmd->add_option("--format", args.formats,
-                  "comma-separated: gtiff,gpkg,geojson,csv,png,isoxml,map (default: all)");
+                  "comma-separated: gtiff,northup,gpkg,geojson,csv,png,isoxml,map (default: all)");
   cmd->add_option("--origin", args.origin, "WGS84 LAT,LON of the field-frame origin (degrees)");
   cmd->add_option("--heading", args.heading_deg,
                   "direction of the field +y axis (along the rows), degrees clockwise from "
