@@ -24,6 +24,9 @@ struct TreatmentArgs {
   std::optional<double> true_latency_ms;
   std::optional<double> footprint_scale;
   std::optional<double> cell_mm;
+  std::optional<double> min_crop_area_m2;
+  std::optional<double> assoc_chi2;
+  std::optional<int> majority;
   bool mrroc = false;
   double costs_ratio = 1.0;
   bool json = false;
@@ -63,7 +66,7 @@ nlohmann::json MetricsJson(const TreatmentMetrics& m) {
 }
 
 nlohmann::json PointJson(const classify::MrrocPoint& p) {
-  return {{"min_crop_area_m2", p.min_crop_area_m2},
+  return {{"min_crop_area_m2", std::isfinite(p.min_crop_area_m2) ? p.min_crop_area_m2 : -1.0},
           {"assoc_chi2", std::isfinite(p.assoc_chi2) ? p.assoc_chi2 : -1.0},
           {"tpr", p.tpr},
           {"fpr", p.fpr}};
@@ -124,6 +127,9 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
   if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
   if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
+  if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
+  if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
+  if (a.majority) o.treatment.map.majority_threshold = *a.majority;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   o.costs_ratio = a.costs_ratio;
@@ -180,6 +186,12 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.05, 2.0));
   cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default 13.33)")
       ->check(CLI::Range(1.0, 500.0));
+  cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--assoc-chi2", args.assoc_chi2, "classifier association region (chi2)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--majority", args.majority, "votes a map cell needs")
+      ->check(CLI::Range(1, 10000));
   cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
       ->check(CLI::IsMember({"thesis"}));
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");

@@ -215,16 +215,25 @@ treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions&) {
 
 treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& s) {
   treatment::TreatmentOptions o;
-  o.crop_footprint_scale = 1.0;
-  // ς = 50 pixels (fig. 7.1) at the ground footprint of the image centre's pixel.
+  o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
+  // Table 7.2's operating points: size ς in pixels and clustering radius r
+  // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).
+  double size_px = 80.0, radius_m = 0.1;
+  if (s.preset == "A") size_px = 100.0, radius_m = 0.45;
+  if (s.preset == "B" || s.preset == "D") size_px = 30.0;
+  // Pixels to ground area at the image centre's pixel footprint.
   const geometry::CameraModel camera(s.camera);
   const Eigen::Vector2d centre(s.camera.image_width_px / 2.0, s.camera.image_height_px / 2.0);
   const double pixel_m2 =
       std::abs(camera.ImageToPlaneJacobian(centre, s.camera.virtual_plane_height_m).determinant());
-  o.classifier.min_crop_area_m2 = 50.0 * pixel_m2;
-  o.classifier.assoc_chi2 = 5.99;
-  o.classifier.feature_sd_m = 0.01;
+  o.classifier.min_crop_area_m2 = size_px * pixel_m2;
+  // A Euclidean radius r: γ² ≤ 1 with σ = r (the tracker's H P Hᵀ is small).
+  o.classifier.assoc_chi2 = 1.0;
+  o.classifier.feature_sd_m = radius_m;
   o.classifier.plant_sd_m = 0.0;
+  o.classifier.camera_pitch_sd_rad = 0.0;
+  o.classifier.camera_roll_sd_rad = 0.0;
+  o.classifier.camera_height_sd_m = 0.0;
   return o;
 }
 
@@ -259,14 +268,21 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     std::vector<treatment::FieldPose> track;
     sim::SimFrame frame;
     while (simulator.Next(frame)) {
-      for (const sim::OdometrySample& o : frame.odometry) {
-        ours.Odometry(o);
-        if (thesis) thesis->Odometry(o);
-      }
+      // In time order: the odometry up to the capture, the frame, the rest
+      // (the simulator's last sample of a frame may fall after its capture).
+      const auto odometry = [&](bool before) {
+        for (const sim::OdometrySample& o : frame.odometry) {
+          if ((o.utime <= frame.truth.utime) != before) continue;
+          ours.Odometry(o);
+          if (thesis) thesis->Odometry(o);
+        }
+      };
+      odometry(true);
       track.push_back({frame.truth.utime, frame.truth.pose.x_m, frame.truth.pose.y_m,
                        frame.truth.pose.heading_rad});
       ours.Frame(frame, simulator.camera(), roi);
       if (thesis) thesis->Frame(frame, simulator.camera(), roi);
+      odometry(false);
       result.distance_m = frame.truth.distance_m;
     }
     const double last_y = track.empty() ? 0.0 : track.back().y_m;

@@ -2,6 +2,8 @@
 
 #include <Eigen/Dense>
 
+#include "engine/tracking/observation_model.h"
+
 namespace plantscale::classify {
 
 OptionErrors ClassifierOptions::Validate() const {
@@ -10,18 +12,24 @@ OptionErrors ClassifierOptions::Validate() const {
   RequirePositive(e, "assoc_chi2", assoc_chi2);
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "plant_sd_m", plant_sd_m);
+  RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
+  RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
+  RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   return e;
 }
 
 std::vector<PredictedCrop> PredictCrops(const geometry::GridModel& model,
                                         const geometry::GridState& state) {
   std::vector<PredictedCrop> out;
+  const auto& cam = model.camera().options();
+  const double above_plane_m = cam.height_m - cam.virtual_plane_height_m;
   for (const geometry::GridPlant& g : model.PlantsInView(state)) {
     PredictedCrop c;
     c.m = g.m;
     c.n = g.n;
     c.ground_m = geometry::PlantInVehicle(state, g.m, g.n);
     c.jacobian = geometry::PlantInVehicleJacobian(state, g.m, g.n);
+    c.bounce_jacobian = tracking::BounceJacobian(c.ground_m, above_plane_m);
     out.push_back(c);
   }
   return out;
@@ -31,7 +39,11 @@ Eigen::Matrix2d AssociationCovariance(const PredictedCrop& crop, const geometry:
                                       const ClassifierOptions& o) {
   // Eq. 7.4: S_assoc = H P Hᵀ + F_w R F_wᵀ; R on the ground is isotropic.
   const double r = o.feature_sd_m * o.feature_sd_m + o.plant_sd_m * o.plant_sd_m;
-  return crop.jacobian * p * crop.jacobian.transpose() + r * Eigen::Matrix2d::Identity();
+  const Eigen::Vector3d bounce(o.camera_pitch_sd_rad, o.camera_roll_sd_rad, o.camera_height_sd_m);
+  const Eigen::Matrix3d b = bounce.cwiseAbs2().asDiagonal();
+  return crop.jacobian * p * crop.jacobian.transpose() +
+         crop.bounce_jacobian * b * crop.bounce_jacobian.transpose() +
+         r * Eigen::Matrix2d::Identity();
 }
 
 bool IsCrop(double area_m2, bool clipped, double gamma2, double min_crop_area_m2,

@@ -10,7 +10,10 @@
 // ground plane, H = d(plant)/d(t_x, Y, Ψ, r̄, l̄) (eq. A.1), P the tracker's
 // covariance, and F_w R F_wᵀ the centroid noise on the ground (R_w, eq. 4.28)
 // plus each plant's own spread about its grid position (planting error and
-// lean, σ_plant² I), which the thesis folded into R. Blobs clipped by the
+// lean, σ_plant² I), which the thesis folded into R, and the camera's
+// bounce (pitch, roll, height; tracking::BounceJacobian), which moves every
+// centroid of a frame together by centimetres at the far end of the view and
+// which the predictions from the nominal camera leave out. Blobs clipped by the
 // image border skip the size filter (their area is cut) but must associate.
 
 #include <Eigen/Core>
@@ -29,6 +32,9 @@ struct ClassifierOptions {
   double assoc_chi2 = 9.21;         // association region (99 % for 2 dof)
   double feature_sd_m = 0.008;      // R_w per axis
   double plant_sd_m = 0.02;         // a plant's spread about its grid position, per axis
+  double camera_pitch_sd_rad = 0.005;  // bounce, as the tracker's TrackerOptions
+  double camera_roll_sd_rad = 0.0035;
+  double camera_height_sd_m = 0.004;
 
   OptionErrors Validate() const;
 };
@@ -40,6 +46,7 @@ struct PredictedCrop {
   int n = 0;
   Eigen::Vector2d ground_m{0.0, 0.0};
   Eigen::Matrix<double, 2, 5> jacobian = Eigen::Matrix<double, 2, 5>::Zero();
+  Eigen::Matrix<double, 2, 3> bounce_jacobian = Eigen::Matrix<double, 2, 3>::Zero();
 };
 
 // Predictions of every grid plant in view from the tracker's state.
