@@ -48,6 +48,22 @@ bool UnderACrop(const sim::Field& field, const sim::Plant& weed) {
   return false;
 }
 
+// Centre of the bounding box of the sprayed patch holding pixel (col, row),
+// within a window of ± half_size_m so that patches joined to a neighbour's
+// (through a weed between them) are cut at the window.
+Eigen::Vector2d PatchCentre(const Raster& r, int col, int row, double half_size_m) {
+  const int h = std::max(1, static_cast<int>(std::lround(half_size_m / r.cell)));
+  const cv::Rect window = cv::Rect(col - h, row - h, 2 * h + 1, 2 * h + 1) &
+                          cv::Rect(0, 0, r.mask.cols, r.mask.rows);
+  cv::Mat labels, stats, centroids;
+  cv::connectedComponentsWithStats(r.mask(window), labels, stats, centroids, 8, CV_32S);
+  const int k = labels.at<int>(row - window.y, col - window.x);
+  const double left = window.x + stats.at<int>(k, cv::CC_STAT_LEFT);
+  const double top = window.y + stats.at<int>(k, cv::CC_STAT_TOP);
+  return {r.x0 + (left + 0.5 * stats.at<int>(k, cv::CC_STAT_WIDTH)) * r.cell,
+          r.y0 + (top + 0.5 * stats.at<int>(k, cv::CC_STAT_HEIGHT)) * r.cell};
+}
+
 }  // namespace
 
 void SprayScore::Merge(const SprayScore& o) {
@@ -82,8 +98,6 @@ SprayScore ScoreSpray(const sim::Field& field, std::span<const treatment::Shot> 
     }
     if (s.path_field_m.size() == 1) Paint(r, s.path_field_m[0], s.path_field_m[0], s.width_m);
   }
-  cv::Mat labels, stats, centroids;
-  cv::connectedComponentsWithStats(r.mask, labels, stats, centroids, 8, CV_32S);
 
   SprayScore score;
   const auto in_region = [&](const Eigen::Vector2d& p) {
@@ -106,11 +120,7 @@ SprayScore ScoreSpray(const sim::Field& field, std::span<const treatment::Shot> 
     ++score.crop_plants;
     if (!sprayed) continue;
     ++score.crop_hits;
-    const int k = labels.at<int>(row, col);
-    const double left = stats.at<int>(k, cv::CC_STAT_LEFT);
-    const double top = stats.at<int>(k, cv::CC_STAT_TOP);
-    const Eigen::Vector2d centre(r.x0 + (left + 0.5 * stats.at<int>(k, cv::CC_STAT_WIDTH)) * r.cell,
-                                 r.y0 + (top + 0.5 * stats.at<int>(k, cv::CC_STAT_HEIGHT)) * r.cell);
+    const Eigen::Vector2d centre = PatchCentre(r, col, row, region.patch_half_size_m);
     const Eigen::Vector2d e = centre - p.position_m;
     score.error_sum += e;
     score.error2_sum += e.cwiseAbs2();

@@ -2,7 +2,8 @@
 // Scores a simulated spraying run against the field's plant truth (thesis
 // §8.2.1): the simulated bar's shots are painted into a fine raster of the
 // field frame; a plant is hit when the spray covers its root; placement is
-// the centre of the bounding box of the sprayed patch over a plant minus its
+// the centre of the bounding box of the sprayed patch over a plant (within a
+// window around it, so patches joined to a neighbour's are cut) minus its
 // root (x_w across, y_w along the rows, thesis fig. 8.3 and table 8.3), and
 // also minus the plant's footprint centre (root + lean), which is what a
 // camera can see; the treated area is the sprayed fraction of the bed.
@@ -19,6 +20,7 @@ struct SprayScoreRegion {
   double y_end_m = 0.0;
   double bed_half_width_m = 0.7;  // |x| within this is the bed
   double raster_m = 0.005;
+  double patch_half_size_m = 0.15;  // a plant's sprayed patch is looked for this far around its root
 };
 
 struct SprayScore {
