@@ -26,6 +26,7 @@ struct TreatmentArgs {
   std::optional<double> cell_mm;
   std::optional<double> min_crop_area_m2;
   std::optional<double> assoc_chi2;
+  std::optional<double> sure_crop_area_m2;
   std::optional<int> majority;
   bool mrroc = false;
   double costs_ratio = 1.0;
@@ -129,6 +130,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
   if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
   if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
+  if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
@@ -189,6 +191,9 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--assoc-chi2", args.assoc_chi2, "classifier association region (chi2)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--sure-crop-area-m2", args.sure_crop_area_m2,
+                  "blobs this big are crop without association (merged plants)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--majority", args.majority, "votes a map cell needs")
       ->check(CLI::Range(1, 10000));

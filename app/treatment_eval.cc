@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <tuple>
 
@@ -194,6 +195,7 @@ SprayScoreRegion Region(const sim::Simulator& sim, const Chain& c, double last_y
   r.y_end_m = last_y - t.scheduler.bar.bar_offset_m - 0.3;
   const sim::FieldOptions& f = sim.options().field;
   r.bed_half_width_m = 0.5 * f.rows * f.row_spacing_m;
+  r.patch_half_size_m = 0.45 * std::min(f.row_spacing_m, f.plant_spacing_m);
   return r;
 }
 
@@ -231,6 +233,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.classifier.assoc_chi2 = 1.0;
   o.classifier.feature_sd_m = radius_m;
   o.classifier.plant_sd_m = 0.0;
+  o.classifier.sure_crop_area_m2 = std::numeric_limits<double>::infinity();
   o.classifier.camera_pitch_sd_rad = 0.0;
   o.classifier.camera_roll_sd_rad = 0.0;
   o.classifier.camera_height_sd_m = 0.0;

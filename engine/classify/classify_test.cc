@@ -46,6 +46,7 @@ TEST(CropClassifier, SizeFilterThenAssociation) {
   o.assoc_chi2 = 9.21;
   o.feature_sd_m = 0.01;
   o.plant_sd_m = 0.0;
+  o.sure_crop_area_m2 = 0.03;
   const CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.475, 1.0)};
   const std::vector<tracking::Feature> features = {
@@ -64,7 +65,11 @@ TEST(CropClassifier, SizeFilterThenAssociation) {
   EXPECT_FALSE(d[2].crop);
   EXPECT_NEAR(d[2].distance_m, 0.2, 1e-12);
   EXPECT_TRUE(d[3].crop);
-  EXPECT_EQ(d[3].n, 0);  // nearest is the second prediction (n defaults to 0 in CropAt)
+  EXPECT_EQ(d[3].n, 0);
+  // A blob bigger than any weed is crop wherever it lies (merged plants).
+  const std::vector<tracking::Feature> merged = {FeatureAt(0.2, 1.0, 0.05)};
+  classifier.Classify(merged, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_TRUE(d[0].crop);  // nearest is the second prediction (n defaults to 0 in CropAt)
   EXPECT_NEAR(d[3].distance_m, std::hypot(0.005, 0.01), 1e-12);
 }
 
@@ -74,7 +79,7 @@ TEST(CropClassifier, RegionGrowsWithTrackerUncertainty) {
   o.plant_sd_m = 0.0;
   const CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0)};
-  const std::vector<tracking::Feature> f = {FeatureAt(0.06, 1.0, 0.02)};
+  const std::vector<tracking::Feature> f = {FeatureAt(0.06, 1.0, 0.02)};  // below sure_crop_area
   std::vector<BlobDecision> d;
   classifier.Classify(f, crops, geometry::Matrix5d::Zero(), d);
   EXPECT_FALSE(d[0].crop);  // γ² = 36 with σ = 1 cm

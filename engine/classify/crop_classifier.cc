@@ -10,6 +10,7 @@ OptionErrors ClassifierOptions::Validate() const {
   OptionErrors e;
   RequireNonNegative(e, "min_crop_area_m2", min_crop_area_m2);
   RequirePositive(e, "assoc_chi2", assoc_chi2);
+  if (!(sure_crop_area_m2 > 0.0)) e.push_back({"sure_crop_area_m2", "must be > 0 (inf: never)"});
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "plant_sd_m", plant_sd_m);
   RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
@@ -47,8 +48,9 @@ Eigen::Matrix2d AssociationCovariance(const PredictedCrop& crop, const geometry:
 }
 
 bool IsCrop(double area_m2, bool clipped, double gamma2, double min_crop_area_m2,
-            double assoc_chi2) {
+            double assoc_chi2, double sure_crop_area_m2) {
   if (!clipped && area_m2 < min_crop_area_m2) return false;  // size filter first
+  if (area_m2 >= sure_crop_area_m2) return true;             // merged plants
   return gamma2 <= assoc_chi2;
 }
 
@@ -80,8 +82,10 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
         d.n = predictions[i].n;
       }
     }
-    d.crop = IsCrop(d.area_m2, d.clipped, d.gamma2, options_.min_crop_area_m2,
-                    options_.assoc_chi2);
+    d.associated = d.gamma2 <= options_.assoc_chi2;
+    d.crop = !predictions.empty() &&
+             IsCrop(d.area_m2, d.clipped, d.gamma2, options_.min_crop_area_m2,
+                    options_.assoc_chi2, options_.sure_crop_area_m2);
     out.push_back(d);
   }
 }

@@ -65,7 +65,11 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   const BedPose pose = BedPoseFromGrid(utime, state, tracker.forward_distance_m(), 0.0);
   for (size_t i = 0; i < features.size(); ++i) {
     const classify::BlobDecision& d = frame_.decisions[i];
-    AddFootprint(pose, blobs[static_cast<size_t>(blob_of_feature[i])], d.crop);
+    // Crop by size alone (merged plants): its centroid is no plant's centre,
+    // so it marks no cells; the plants in it are mapped from other frames.
+    if (!d.crop || d.associated) {
+      AddFootprint(pose, blobs[static_cast<size_t>(blob_of_feature[i])], d.crop);
+    }
     frame_.plant_ids[i] =
         registry_.Observe(VehicleToBed(pose, features[i].ground_m), d, options_.classifier);
   }

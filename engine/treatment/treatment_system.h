@@ -24,7 +24,8 @@ struct TreatmentOptions {
   TreatmentMapOptions map;
   SchedulerOptions scheduler;
   RegistryOptions registry;
-  // A crop footprint is its blob's bounding box scaled about the centroid by
+  // Crop blobs mark the map only when associated with a predicted crop. A
+  // crop footprint is its blob's bounding box scaled about the centroid by
   // this (1: the thesis's whole box); weeds always use the whole box.
   double crop_footprint_scale = 0.45;
   double weed_footprint_scale = 1.0;
