@@ -86,6 +86,10 @@ TickResult TreatmentSystem::OnPose(int64_t utime, const tracking::GridTracker& t
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
   const BedPose pose =
       BedPoseFromGrid(tracker.utime(), tracker.state(), tracker.forward_distance_m(), speed_m_s);
+  return Tick(utime, pose, safety);
+}
+
+TickResult TreatmentSystem::Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety) {
   TickResult r = scheduler_.Tick(utime, pose, map_, safety);
   for (const NozzleTarget& t : r.opened) registry_.MarkSprayed(t);
   return r;

@@ -56,6 +56,10 @@ class TreatmentSystem {
   // A pose tick (after the tracker took the odometry sample at utime).
   TickResult OnPose(int64_t utime, const tracking::GridTracker& tracker, double speed_m_s,
                     bool odometry_ok, bool camera_ok = true);
+  // The same with the pose and health given (a runner that ticks after the
+  // tracker has moved on dead-reckons the pose back to the tick).
+  TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
+  int64_t last_frame_utime() const { return last_frame_utime_; }
   // Writes every plant record's `why`.
   void Explain() { registry_.Explain(map_, options_.scheduler.mode, options_.classifier); }
 
