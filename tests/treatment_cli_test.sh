@@ -32,12 +32,15 @@ awk -v v="$auc" 'BEGIN { exit !(v > 0.6 && v <= 1) }' || fail "MRROC auc $auc"
   >"$work/thesis.json" || fail "--baseline thesis exited $?"
 grep -q '"baseline_thesis"' "$work/thesis.json" || fail "JSON lacks baseline_thesis"
 
-# Weed mode sprays weeds: far more of them hit than in crop mode.
+# Weed mode sprays weeds (a third of them now: small weeds are lost to
+# segmentation, weeds under a crop's leaves are spared) and spares the crop.
 "$bin" evaluate treatment --preset field --seeds 1 --length-m 12 --mode weed --json \
   >"$work/weed.json" || fail "--mode weed exited $?"
 grep -q '"mode": "weed"' "$work/weed.json" || fail "mode not weed"
 wh=$(num weed_hit_rate "$work/weed.json")
-awk -v v="$wh" 'BEGIN { exit !(v > 0.5) }' || fail "weed mode weed_hit_rate $wh <= 0.5"
+awk -v v="$wh" 'BEGIN { exit !(v > 0.25) }' || fail "weed mode weed_hit_rate $wh <= 0.25"
+ch=$(num crop_hit_rate "$work/weed.json")
+awk -v v="$ch" 'BEGIN { exit !(v < 0.1) }' || fail "weed mode crop_hit_rate $ch >= 0.1"
 
 "$bin" evaluate treatment --preset field --seeds 1 --length-m 10 >"$work/table.txt" \
   || fail "table exited $?"
