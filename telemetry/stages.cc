@@ -205,8 +205,12 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
   last_tick_ = system_.Tick(o.utime, pose, safety);
   status.failsafe = last_tick_.fail_reasons != 0;
-  for (const std::string& m : last_tick_.messages) {
-    if (m.rfind("tracker", 0) != 0) status.faults.push_back("treatment: bar closed: " + m);
+  // The tracker reports its own loss; before the first frame the bar is
+  // closed by design, not by a fault.
+  if (safety.last_frame_utime >= 0) {
+    for (const std::string& m : last_tick_.messages) {
+      if (m.rfind("tracker", 0) != 0) status.faults.push_back("treatment: bar closed: " + m);
+    }
   }
   std::vector<Eigen::Vector2d> centre(open_since_.size(), Eigen::Vector2d::Zero());
   for (const treatment::NozzleTarget& t : last_tick_.opened) {
