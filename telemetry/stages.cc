@@ -161,6 +161,7 @@ void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publish
 namespace {
 
 constexpr int kTileCells = 64;
+constexpr int64_t kPlantListPeriodUs = 400'000;
 
 uint8_t TileCell(treatment::CellClass c) {
   switch (c) {
@@ -247,16 +248,23 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
   PublishTiles(frame.utime, publisher);
 }
 
+// Plants whose record changed since the last message, every 0.4 s of
+// message time (the list is the largest channel: it must fit the budget),
+// leaving out records seen only once (leaf fragments, noise).
 void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
                                    Publisher& publisher) {
+  if (t.map_reset) changed_plants_.clear();
   if (!t.classified) return;
-  std::vector<int> ids = t.plant_ids;
+  changed_plants_.insert(changed_plants_.end(), t.plant_ids.begin(), t.plant_ids.end());
+  if (last_plants_utime_ >= 0 && frame.utime - last_plants_utime_ < kPlantListPeriodUs) return;
+  std::vector<int>& ids = changed_plants_;
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   std::vector<PlantObservation> plants;
   for (int id : ids) {
     if (id < 0) continue;
     const treatment::PlantRecord& r = system_.registry().records()[static_cast<size_t>(id)];
+    if (r.observations < 2) continue;
     PlantObservation p;
     p.id = r.id;
     p.kind = r.crop() ? PlantKind::kCrop : PlantKind::kWeed;
@@ -267,6 +275,8 @@ void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::F
     p.distance_to_crop_m = std::isfinite(r.distance_m) ? r.distance_m : -1.0;
     plants.push_back(p);
   }
+  ids.clear();
+  last_plants_utime_ = frame.utime;
   publisher.Publish(channels::kPlants, ToLcm(plants, frame.utime, frame.frame_index));
 }
 

@@ -96,7 +96,7 @@ class OdometryStage : public Stage {
 
 // Classification, treatment map and nozzle scheduling (engine/treatment) on
 // the tracker's grid and the segmentation's blobs: plants with class and
-// why on PLANTSCALE_PLANTS, nozzle states and finished shots on
+// why on PLANTSCALE_PLANTS (changed records, 2.5 Hz), nozzle states and finished shots on
 // PLANTSCALE_NOZZLES each frame, map tiles on PLANTSCALE_MAP_TILES once the
 // bar has passed them. Positions are in the bed frame (treatment/bed_frame.h).
 // The scheduler ticks once per odometry sample; the tracker has already
@@ -131,6 +131,8 @@ class TreatmentStage : public Stage {
   std::vector<NozzleShot> shots_;         // finished since the last message
   int next_tile_row_ = 0;
   int tile_revision_ = 0;
+  std::vector<int> changed_plants_;  // record ids since the last plant list
+  int64_t last_plants_utime_ = -1;
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on

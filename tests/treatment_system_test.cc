@@ -97,7 +97,7 @@ TEST_P(TreatmentPixels, CropPixelsLabelledCrop) {
 INSTANTIATE_TEST_SUITE_P(Presets, TreatmentPixels,
                          ::testing::Values(PixelCase{"A", 0.43}, PixelCase{"B", 0.74},
                                            PixelCase{"C", 0.73}, PixelCase{"D", 0.74}),
-                         [](const auto& info) { return std::string(info.param.preset); });
+                         [](const auto& test_param) { return std::string(test_param.param.preset); });
 
 }  // namespace
 }  // namespace plantscale::app
