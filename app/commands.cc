@@ -6,6 +6,7 @@
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
 #include "app/tracking_commands.h"
+#include "app/treatment_commands.h"
 #include "app/ui_commands.h"
 
 namespace plantscale::app {
@@ -16,6 +17,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddTelemetryCommands(registry_);
   AddExportCommands(registry_);
   AddTrackingCommands(registry_);
+  AddTreatmentCommands(registry_);
   AddMotionCommands(registry_);
   AddUiCommands(registry_);
 }

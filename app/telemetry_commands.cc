@@ -67,6 +67,7 @@ using SourceFactory =
 struct TrackerSetup {
   const geometry::CameraModel& camera;
   tracking::TrackerOptions options;
+  treatment::NozzleSink nozzle_sink = {};  // a spray bar: every tick's open mask
 };
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
@@ -94,7 +95,11 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   const tm::SegmentationStage* blobs = segmentation.get();
   runner.AddStage(std::move(segmentation));
   if (tracker) {
-    runner.AddStage(std::make_unique<tm::TrackerStage>(tracker->camera, tracker->options, *blobs));
+    auto grid = std::make_unique<tm::TrackerStage>(tracker->camera, tracker->options, *blobs);
+    const tm::TrackerStage& tracked = *grid;
+    runner.AddStage(std::move(grid));
+    runner.AddStage(std::make_unique<tm::TreatmentStage>(
+        tracker->camera, treatment::TreatmentOptions{}, *blobs, tracked, tracker->nozzle_sink));
   }
   runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
   if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());

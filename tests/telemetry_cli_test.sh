@@ -40,6 +40,7 @@ echo "ok: total_kbit_s $total <= 250"
 # The grid tracker publishes on its own channel (issue 5); truth stays on
 # PLANTSCALE_SIM_TRUTH (checked above).
 grep -q '"PLANTSCALE_GRID"' "$work/stats.json" || fail "no grid tracker state on PLANTSCALE_GRID"
+grep -q '"PLANTSCALE_NOZZLES"' "$work/stats.json" || fail "no nozzle states on PLANTSCALE_NOZZLES (treatment stage)"
 
 expect 0 "republished" -- "$plantscale" replay "$log" --speed 100 --lcm-url memq:// --channels 'PLANTSCALE_HEALTH'
 if command -v lcm-logplayer >/dev/null; then
