@@ -85,6 +85,7 @@ maps::CropMap LoadInput(const std::string& input, const ExportArgs& args) {
     bar.Finish();
     return map;
   }
+  if (!fs::exists(path)) throw ConfigError(input, "LOG_OR_MAP", "no such file or folder");
   if (IsLcmLog(path)) {
     ProgressBar bar(std::cerr, "read " + path.filename().string(), 1000, !args.quiet);
     LogMapReport report;
@@ -101,7 +102,17 @@ maps::CropMap LoadInput(const std::string& input, const ExportArgs& args) {
     }
     return map;
   }
-  if (fs::is_regular_file(path)) return maps::LoadMap(path);  // DataError when not a map
+  if (fs::is_regular_file(path)) {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(14, '\0');
+    in.read(head.data(), 14);
+    if (head != "plantscale-map") {
+      throw ConfigError(input, "LOG_OR_MAP",
+                        "neither an LCM log (no LCM sync word at byte 0) nor a plantscale map file (no "
+                        "'plantscale-map' header)");
+    }
+    return maps::LoadMap(path);  // DataError when the map is corrupt
+  }
   throw ConfigError(input, "LOG_OR_MAP",
                     "neither an LCM log, a map file (.psmap) nor a simulator output folder "
                     "(DIR/truth/plants.csv)");

@@ -76,6 +76,7 @@ struct DemoArgs {
   double length_m = 40.0;
   bool real_time = false;
   std::string lcm_url = "udpm://239.255.76.67:7668?ttl=0";  // a port apart from LCM's default
+  std::string origin = "52.0063,-0.4206";  // WGS84 of the field-frame origin for the map exports
 };
 
 bool OnPath(const std::string& program) {
@@ -109,7 +110,8 @@ int Wait(pid_t pid) {
 void ReexecUnderXvfb(const std::string& self, const DemoArgs& a) {
   if (ui::DisplayAvailable() || !OnPath("xvfb-run")) return;
   std::vector<std::string> args{"xvfb-run", "-a", self, "demo-system", "--out", a.out, "--preset", a.preset,
-                                "--length-m", std::to_string(a.length_m), "--lcm-url", a.lcm_url};
+                                "--length-m", std::to_string(a.length_m), "--lcm-url", a.lcm_url,
+                                "--origin", a.origin};
   if (a.real_time) args.push_back("--real-time");
   std::vector<char*> argv;
   for (std::string& s : args) argv.push_back(s.data());
@@ -164,8 +166,16 @@ int DemoSystem(const DemoArgs& a) {
   std::cout << "demo: report          " << (report_status == 0 ? (out / "report" / "index.html").string()
                                                               : "failed, see " + (out / "report.txt").string())
             << '\n';
-  std::cout << "demo: maps            not written: exporting maps from an LCM log comes with the maps issue\n";
-  return report_status == 0 && station_status == 0 ? 0 : 1;
+  // The maps of the run from its log, anchored at a demonstration field
+  // (Silsoe, Bedfordshire, where the thesis's trials were run).
+  const int maps_status = Wait(Spawn({self, "export", log.string(), "--out", (out / "maps").string(), "--origin",
+                                      a.origin, "--heading", "0", "--quiet"},
+                                     out / "maps.txt"));
+  std::cout << "demo: maps            "
+            << (maps_status == 0 ? (out / "maps").string() + "/  (GeoTIFF, GeoPackage, GeoJSON, CSV, PNG, ISOXML)"
+                                 : "not written, see " + (out / "maps.txt").string())
+            << '\n';
+  return report_status == 0 && station_status == 0 && maps_status == 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -203,6 +213,7 @@ void AddUiCommands(CommandRegistry& registry) {
     demo->add_option("--length-m", d.length_m, "distance to drive, metres")->capture_default_str();
     demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
     demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
+    demo->add_option("--origin", d.origin, "WGS84 LAT,LON of the field origin for the maps")->capture_default_str();
   }
 }
 

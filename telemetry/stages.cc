@@ -254,6 +254,8 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
 void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
                                    Publisher& publisher) {
   if (t.map_reset) changed_plants_.clear();
+  const std::vector<int> sprayed = system_.TakeNewlySprayed();
+  changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
   if (!t.classified) return;
   changed_plants_.insert(changed_plants_.end(), t.plant_ids.begin(), t.plant_ids.end());
   if (last_plants_utime_ >= 0 && frame.utime - last_plants_utime_ < kPlantListPeriodUs) return;
@@ -313,9 +315,10 @@ void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher) {
       for (int j = 0; j < kTileCells; ++j) {
         for (int i = 0; i < kTileCells; ++i) {
           const int c = tx * kTileCells + i;
-          d.cells.push_back(c < map.columns()
-                                ? TileCell(map.ClassOf(c, next_tile_row_ * kTileCells + j))
-                                : plantscale_map_tile_t::CELL_UNKNOWN);
+          const int r = next_tile_row_ * kTileCells + j;
+          d.cells.push_back(c >= map.columns() ? plantscale_map_tile_t::CELL_UNKNOWN
+                            : map.Treated(c, r)  ? plantscale_map_tile_t::CELL_TREATED
+                                                 : TileCell(map.ClassOf(c, r)));
         }
       }
       publisher.Publish(channels::kMapTiles, ToLcm(d, utime));

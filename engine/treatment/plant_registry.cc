@@ -47,10 +47,11 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
   return r.id;
 }
 
-void PlantRegistry::MarkSprayed(const NozzleTarget& s) {
+void PlantRegistry::MarkSprayed(const NozzleTarget& s, std::vector<int>* newly) {
   for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < 400; ++it) {
     const Eigen::Vector2d& p = it->bed_m;
     if (p.x() >= s.x0 && p.x() <= s.x1 && p.y() >= s.y0 - 0.01 && p.y() <= s.y1 + 0.01) {
+      if (!it->sprayed && newly) newly->push_back(it->id);
       it->sprayed = true;
     }
   }

@@ -47,8 +47,9 @@ class PlantRegistry {
   // One classified blob at `bed_m`; returns the record's id.
   int Observe(const Eigen::Vector2d& bed_m, const classify::BlobDecision& decision,
               const classify::ClassifierOptions& classifier);
-  // A nozzle covered this bed strip: records inside it are sprayed.
-  void MarkSprayed(const NozzleTarget& strip);
+  // A nozzle covered this bed strip: records inside it are sprayed. Appends
+  // the ids of records that were not sprayed before to `newly` when given.
+  void MarkSprayed(const NozzleTarget& strip, std::vector<int>* newly = nullptr);
   // Reads the map under every record and writes its `why`.
   void Explain(const TreatmentMap& map, SprayMode mode, const classify::ClassifierOptions& c);
   void Clear() { records_.clear(); }

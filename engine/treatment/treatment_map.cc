@@ -52,10 +52,16 @@ TreatmentMap::TreatmentMap(const TreatmentMapOptions& options) : options_(option
 }
 
 void TreatmentMap::GrowTo(int row) {
-  if (row >= rows()) counts_.resize(static_cast<size_t>(row + 1) * columns_);
+  if (row >= rows()) {
+    counts_.resize(static_cast<size_t>(row + 1) * columns_);
+    treated_.resize(counts_.size());
+  }
 }
 
-void TreatmentMap::Clear() { counts_.clear(); }
+void TreatmentMap::Clear() {
+  counts_.clear();
+  treated_.clear();
+}
 
 bool TreatmentMap::CellOf(const Eigen::Vector2d& b, int& column, int& row) const {
   const double c = std::floor((b.x() - origin_x_m()) / options_.cell_m);
@@ -115,28 +121,47 @@ int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
   return counted;
 }
 
-bool TreatmentMap::AnyIn(double x0, double x1, double y0, double y1, CellClass cls) const {
+TreatmentMap::CellRange TreatmentMap::RangeOf(double x0, double x1, double y0, double y1) const {
   const double s = options_.cell_m;
   // Cells whose centre lies in the rectangle: centre = origin + (i + ½) s.
-  int c0 = static_cast<int>(std::ceil((x0 - origin_x_m()) / s - 0.5));
-  int c1 = static_cast<int>(std::floor((x1 - origin_x_m()) / s - 0.5));
-  int r0 = static_cast<int>(std::ceil((y0 - options_.start_y_m) / s - 0.5));
-  int r1 = static_cast<int>(std::floor((y1 - options_.start_y_m) / s - 0.5));
+  CellRange k{static_cast<int>(std::ceil((x0 - origin_x_m()) / s - 0.5)),
+              static_cast<int>(std::floor((x1 - origin_x_m()) / s - 0.5)),
+              static_cast<int>(std::ceil((y0 - options_.start_y_m) / s - 0.5)),
+              static_cast<int>(std::floor((y1 - options_.start_y_m) / s - 0.5))};
   int column = 0, row = 0;
-  if ((c0 > c1 || r0 > r1) && CellOf({0.5 * (x0 + x1), 0.5 * (y0 + y1)}, column, row)) {
-    if (c0 > c1) c0 = c1 = column;
-    if (r0 > r1) r0 = r1 = row;
+  if ((k.c0 > k.c1 || k.r0 > k.r1) && CellOf({0.5 * (x0 + x1), 0.5 * (y0 + y1)}, column, row)) {
+    if (k.c0 > k.c1) k.c0 = k.c1 = column;
+    if (k.r0 > k.r1) k.r0 = k.r1 = row;
   }
-  c0 = std::max(c0, 0);
-  c1 = std::min(c1, columns_ - 1);
-  r0 = std::max(r0, 0);
-  r1 = std::min(r1, rows() - 1);
-  for (int r = r0; r <= r1; ++r) {
-    for (int c = c0; c <= c1; ++c) {
+  k.c0 = std::max(k.c0, 0);
+  k.c1 = std::min(k.c1, columns_ - 1);
+  k.r0 = std::max(k.r0, 0);
+  k.r1 = std::min(k.r1, kMaxRows - 1);
+  return k;
+}
+
+bool TreatmentMap::AnyIn(double x0, double x1, double y0, double y1, CellClass cls) const {
+  const CellRange k = RangeOf(x0, x1, y0, y1);
+  for (int r = k.r0; r <= std::min(k.r1, rows() - 1); ++r) {
+    for (int c = k.c0; c <= k.c1; ++c) {
       if (ClassOf(c, r) == cls) return true;
     }
   }
   return false;
+}
+
+void TreatmentMap::MarkTreated(double x0, double x1, double y0, double y1) {
+  const CellRange k = RangeOf(x0, x1, y0, y1);
+  if (k.c0 > k.c1 || k.r0 > k.r1) return;
+  GrowTo(k.r1);
+  for (int r = k.r0; r <= k.r1; ++r) {
+    for (int c = k.c0; c <= k.c1; ++c) treated_[static_cast<size_t>(r) * columns_ + c] = 1;
+  }
+}
+
+bool TreatmentMap::Treated(int column, int row) const {
+  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return false;
+  return treated_[static_cast<size_t>(row) * columns_ + column] != 0;
 }
 
 }  // namespace plantscale::treatment

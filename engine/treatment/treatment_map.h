@@ -54,6 +54,9 @@ class TreatmentMap {
   // when their centre lies inside; a rectangle narrower than a cell tests the
   // cell under its centre.
   bool AnyIn(double x0, double x1, double y0, double y1, CellClass cls) const;
+  // A nozzle sprayed the bed rectangle: its cells (as AnyIn picks them) are treated.
+  void MarkTreated(double x0, double x1, double y0, double y1);
+  bool Treated(int column, int row) const;
 
   int columns() const { return columns_; }
   int rows() const { return static_cast<int>(counts_.size()) / columns_; }
@@ -62,10 +65,15 @@ class TreatmentMap {
 
  private:
   void GrowTo(int row);
+  struct CellRange {
+    int c0, c1, r0, r1;  // inclusive; empty when c0 > c1 or r0 > r1
+  };
+  CellRange RangeOf(double x0, double x1, double y0, double y1) const;
 
   TreatmentMapOptions options_;
   int columns_ = 0;
   std::vector<CellCounts> counts_;  // row-major, row 0 at start_y_m
+  std::vector<uint8_t> treated_;     // same layout: 1 where a nozzle sprayed
 };
 
 }  // namespace plantscale::treatment

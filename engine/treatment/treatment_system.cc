@@ -91,7 +91,10 @@ TickResult TreatmentSystem::OnPose(int64_t utime, const tracking::GridTracker& t
 
 TickResult TreatmentSystem::Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety) {
   TickResult r = scheduler_.Tick(utime, pose, map_, safety);
-  for (const NozzleTarget& t : r.opened) registry_.MarkSprayed(t);
+  for (const NozzleTarget& t : r.opened) {
+    registry_.MarkSprayed(t, &newly_sprayed_);
+    map_.MarkTreated(t.x0, t.x1, t.y0, t.y1);
+  }
   return r;
 }
 

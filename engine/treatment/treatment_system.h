@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "engine/classify/crop_classifier.h"
@@ -65,6 +66,8 @@ class TreatmentSystem {
 
   const TreatmentMap& map() const { return map_; }
   const PlantRegistry& registry() const { return registry_; }
+  // Ids of the records sprayed since the last call (for publishing them again).
+  std::vector<int> TakeNewlySprayed() { return std::exchange(newly_sprayed_, {}); }
   const TreatmentOptions& options() const { return options_; }
   void set_sink(NozzleSink sink) { scheduler_.set_sink(std::move(sink)); }
   int map_resets() const { return map_resets_; }
@@ -73,6 +76,7 @@ class TreatmentSystem {
   void AddFootprint(const BedPose& pose, const vision::Blob& blob, bool crop);
 
   geometry::CameraModel camera_;
+  std::vector<int> newly_sprayed_;
   TreatmentOptions options_;
   classify::CropClassifier classifier_;
   TreatmentMap map_;

@@ -80,6 +80,29 @@ TEST(TreatmentMap, RotatedQuadCountsCellsInside) {
   EXPECT_NEAR(n, 0.02 / (0.01333 * 0.01333), 8.0);
 }
 
+TEST(TreatmentMap, SprayedStripsMarkExactlyTheirCellsAsTreated) {
+  TreatmentMapOptions o;
+  o.cell_m = 0.01;
+  o.width_m = 1.0;
+  o.start_y_m = 0.0;
+  TreatmentMap map(o);
+  // Centres of columns 49..52 (x −0.005, 0.005, 0.015, 0.025) and rows 10..11 (y 0.105, 0.115).
+  map.MarkTreated(-0.006, 0.026, 0.101, 0.119);
+  int treated = 0;
+  for (int r = 0; r < map.rows(); ++r) {
+    for (int c = 0; c < map.columns(); ++c) treated += map.Treated(c, r);
+  }
+  EXPECT_EQ(treated, 8);
+  EXPECT_TRUE(map.Treated(49, 10));
+  EXPECT_FALSE(map.Treated(48, 10));
+  EXPECT_TRUE(map.Treated(52, 11));
+  EXPECT_FALSE(map.Treated(53, 11));
+  EXPECT_FALSE(map.Treated(50, 12));
+  EXPECT_EQ(map.ClassOf(50, 10), CellClass::kSoil);  // treating does not vote
+  map.Clear();
+  EXPECT_FALSE(map.Treated(50, 10));
+}
+
 TEST(TreatmentMap, BadOptionsAreNamed) {
   TreatmentMapOptions o;
   o.cell_m = 0.0;
