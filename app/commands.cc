@@ -2,6 +2,7 @@
 
 #include "app/export_commands.h"
 #include "app/motion_commands.h"
+#include "app/rows_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
@@ -17,6 +18,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddExportCommands(registry_);
   AddTrackingCommands(registry_);
   AddMotionCommands(registry_);
+  AddRowsCommands(registry_);
   AddUiCommands(registry_);
 }
 
