@@ -76,6 +76,7 @@ nlohmann::json DetectionJson(const fs::path& file, const rows::RowDetection& det
     j["reason"] = det.reason;
   }
   j["coherence"] = det.coherence;
+  j["alignment"] = det.alignment;
   return j;
 }
 

@@ -1,5 +1,6 @@
 #include "app/rows_eval.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -100,6 +101,29 @@ TrueRows TrueRowsInFrame(const sim::Simulator& sim, const sim::FrameTruth& truth
       }
     }
   }
+  // A human labels the centre of the plants as seen, not a line on the
+  // soil: where the frame shows enough of a row's crop plants, its true line
+  // is the least-squares line u = a + b·v through their visible centroids.
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    int count = 0;
+    for (const sim::PlantTruth& p : truth.plants) {
+      if (p.cls != sim::PlantClass::kCrop || p.row != k - 1 || p.area_px < 30) continue;
+      const Eigen::Vector2d& c = p.centroid_px;
+      if (c.x() < 10.0 || c.x() > camera.width() - 10.0 || c.y() > H - 10.0) continue;
+      const Eigen::Vector2d row(1.0, c.y());
+      a += row * row.transpose();
+      b += c.x() * row;
+      ++count;
+    }
+    if (count < 4 || std::abs(a.determinant()) < 1e-6) continue;
+    const Eigen::Vector2d line = a.ldlt().solve(b);
+    for (int vi = 0; vi < H; ++vi) {
+      double& u = rows.u[static_cast<size_t>(vi)][static_cast<size_t>(k)];
+      if (!std::isnan(u)) u = line(0) + line(1) * (vi + 0.5);
+    }
+  }
   return rows;
 }
 
@@ -189,7 +213,7 @@ RowsEvaluation EvaluateRows(const RowsEvalOptions& options) {
       const FrameScore f = ScoreFrame(det, TrueRowsInFrame(sim, frame.truth, options), options);
       if (std::getenv("ROWS_DUMP")) {  // DEBUG-REMOVE
         cv::imwrite(std::string(std::getenv("ROWS_DUMP")) + "/f" + std::to_string(k) + "_" + std::to_string(scored) + ".png", frame.rendered.image);
-        std::fprintf(stderr, "seed %d frame %d crda %.3f conf %.2f rows %zu d %.1f g %.5f\n", k, scored, f.rows ? f.sum / f.rows : -1.0, det.confidence, det.rows.size(), det.spacing_px, det.convergence);
+        std::fprintf(stderr, "seed %d frame %d crda %.3f conf %.2f rows %zu d %.1f g %.5f al %.3f coh %.3f\n", k, scored, f.rows ? f.sum / f.rows : -1.0, det.confidence, det.rows.size(), det.spacing_px, det.convergence, det.alignment, det.coherence);
       }
       if (f.rows == 0) continue;
       ++scored;

@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 
 #include "engine/rows/comb.h"
@@ -27,6 +29,9 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "row_halfwidth_fraction", row_halfwidth_fraction, 0.0, 0.5, false);
   RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
   RequireInRange(e, "min_coherence", min_coherence, 0.0, 1.0);
+  RequireInRange(e, "min_alignment", min_alignment, 0.0, 1.0);
+  RequireInRange(e, "fit_halfwidth_fraction", fit_halfwidth_fraction, 0.0, 0.5, false);
+  if (fit_iterations < 0) e.push_back({"fit_iterations", "must be >= 0"});
   RequireInRange(e, "min_row_occupancy", min_row_occupancy, 0.0, 1.0);
   RequirePositive(e, "min_visible_spacing_px", min_visible_spacing_px);
   return e;
@@ -332,7 +337,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   const int fh = fit_.rows;
   const double kfw = W / fw;
   const double kfh = H / fh;
-  for (int iteration = 0; iteration < 3; ++iteration) {
+  for (int iteration = 0; iteration < o.fit_iterations; ++iteration) {
     const int n_first = found.rows.front().n;
     const int n_last = found.rows.back().n;
     std::vector<char> is_kept(static_cast<size_t>(n_last - n_first + 1), 0);
@@ -353,13 +358,16 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
         const double u = (x + 0.5) * kfw;
         const double nf = ((u - geo.c * dv) / shrink - sc) / d;
         const double n = std::round(nf);
-        if (std::abs(nf - n) > hw || n < n_first || n > n_last ||
+        if (std::abs(nf - n) > o.fit_halfwidth_fraction || n < n_first || n > n_last ||
             !is_kept[static_cast<size_t>(static_cast<int>(n) - n_first)]) {
           continue;
         }
+        // Residuals measured in s (u / shrink): a pixel's error counts as
+        // much at the top of the rows as at the bottom.
+        const double ws = wt / (shrink * shrink);
         const Eigen::Vector4d z(1.0, n, dv, -n * dv);
-        a.noalias() += wt * z * z.transpose();
-        rhs.noalias() += wt * u * z;
+        a.noalias() += ws * z * z.transpose();
+        rhs.noalias() += ws * u * z;
         mass += wt;
       }
     }
@@ -388,6 +396,26 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   for (DetectedRow& r : found.rows) r.n -= n_central;
   build(geo, H);
   const CombFit final_fit = CombAt(histogram_, s0, kw, d);
+  // Agreement of the bands' comb phases: |Σ z_k| / Σ |z_k| with z_k the
+  // comb phasor of band k. Rows of any width agree from band to band;
+  // scattered plant matter does not, whatever comb fits it best overall.
+  std::complex<double> z_sum(0.0, 0.0);
+  double z_abs = 0.0;
+  for (int k = 0; k < n_bands; ++k) {
+    const Band& b = bands[static_cast<size_t>(k)];
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink < kMinShrink || d * shrink < min_spacing) continue;
+    const float* p = &profiles_[static_cast<size_t>(k) * w];
+    std::complex<double> z(0.0, 0.0);
+    for (int x = 0; x < w; ++x) {
+      if (p[x] <= 0.0F) continue;
+      const double s = ((x + 0.5) * kw - geo.c * b.dv) / shrink;
+      z += static_cast<double>(p[x]) * std::polar(1.0, -2.0 * std::numbers::pi * (s - sc) / d);
+    }
+    z_sum += z;
+    z_abs += std::abs(z);
+  }
+  const double alignment = z_abs > 0.0 ? std::abs(z_sum) / z_abs : 0.0;
   double occupancy = 0.0;
   for (const DetectedRow& r : found.rows) occupancy += r.occupancy;
   occupancy /= static_cast<double>(found.rows.size());
@@ -397,10 +425,12 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   out.convergence = geo.g;
   out.lean = geo.c;
   out.coherence = final_fit.coherence;
+  out.alignment = alignment;
   out.top_v_px = found.top_v;
-  if (final_fit.coherence < o.min_coherence) {
+  if (final_fit.coherence < o.min_coherence || alignment < o.min_alignment) {
     out.reason = "no rows: plant matter does not follow evenly spaced rows (coherence " +
-                 std::to_string(final_fit.coherence) + ")";
+                 std::to_string(final_fit.coherence) + ", band agreement " +
+                 std::to_string(alignment) + ")";
     return out;
   }
   out.rows = std::move(found.rows);

@@ -53,7 +53,10 @@ struct RowDetectorOptions {
   int candidates = 8;                // best Hough cells taken on to the comb
   double row_halfwidth_fraction = 0.25;  // plant matter within ± this × spacing supports a row
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
-  double min_coherence = 0.3;        // comb phase coherence below this: no rows
+  double min_coherence = 0.2;        // comb phase coherence below this: no rows
+  double min_alignment = 0.85;       // agreement of the bands' comb phases below this: no rows
+  double fit_halfwidth_fraction = 0.5;  // the refit takes plant pixels this near a kept row
+  int fit_iterations = 6;
   double min_row_occupancy = 0.4;    // fraction of its bands in which a row has plant matter
   double min_visible_spacing_px = 6.0;  // rows are reported up to where they are this close
 
@@ -76,6 +79,7 @@ struct RowDetection {
   double convergence = 0.0;    // g, 1/px
   double lean = 0.0;           // c
   double coherence = 0.0;      // |Σ w e^{2πi s/d}| / Σ w of the plant matter
+  double alignment = 0.0;      // |Σ z_k| / Σ |z_k| of the bands' comb phasors z_k
   double top_v_px = 0.0;       // rows are told apart from the bottom up to this v
   std::vector<DetectedRow> rows;  // left to right
 
