@@ -44,13 +44,13 @@ struct RowDetectorOptions {
   int fit_width_px = 320;            // ... and to this width for the least-squares refit
   int strips = 16;                   // horizontal bands of the Hough
   double max_convergence = 1.5;      // g × image height: vanishing point no lower than this
-  int convergence_steps = 16;
+  int convergence_steps = 13;
   double max_lean = 1.2;             // |du/dv| of the rows at the image's centre column
-  int lean_steps = 33;
+  int lean_steps = 25;
   double min_spacing_fraction = 0.05;  // spacing at the bottom row, of the image width
   double max_spacing_fraction = 1.0;
-  double spacing_step = 0.015;       // relative step of the period search
-  int candidates = 8;                // best Hough cells taken on to the comb
+  double spacing_step = 0.025;       // relative step of the period search
+  int candidates = 4;                // best Hough cells taken on to the comb
   double row_halfwidth_fraction = 0.25;  // plant matter within ± this × spacing supports a row
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
   double min_coherence = 0.2;        // comb phase coherence below this: no rows
