@@ -30,7 +30,7 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
   RequireInRange(e, "min_coherence", min_coherence, 0.0, 1.0);
   RequireInRange(e, "min_alignment", min_alignment, 0.0, 1.0);
-  RequireInRange(e, "fit_halfwidth_fraction", fit_halfwidth_fraction, 0.0, 0.5, false);
+  RequireInRange(e, "gap_search_fraction", gap_search_fraction, 0.0, 0.5, false);
   if (fit_iterations < 0) e.push_back({"fit_iterations", "must be >= 0"});
   RequireInRange(e, "min_row_occupancy", min_row_occupancy, 0.0, 1.0);
   RequirePositive(e, "min_visible_spacing_px", min_visible_spacing_px);
@@ -331,47 +331,83 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     return out;
   }
 
-  // 4. Weighted least squares on the plant pixels near the kept rows:
-  // u = s_c + n·d + Δv·(c − g·s_c) − n·Δv·(g·d).
+  // 4. Weighted least squares on each row's centre in thin bands: the
+  // centroid of its plant matter between the gaps on either side (the
+  // lowest columns between it and its neighbours), so that rows whose
+  // plants nearly touch are centred by their edges, narrow rows by their
+  // mass. Linear in (s_c, d, c − g·s_c, g·d):
+  //   u = s_c + n·d + Δv·(c − g·s_c) − n·Δv·(g·d).
   const int fw = fit_.cols;
   const int fh = fit_.rows;
   const double kfw = W / fw;
   const double kfh = H / fh;
+  const int fit_bands = std::max(4, fh / 4);
+  fit_profiles_.assign(static_cast<size_t>(fit_bands) * fw, 0.0F);
+  std::vector<Band> fbands(static_cast<size_t>(fit_bands));
+  for (int k = 0; k < fit_bands; ++k) {
+    const int r0 = k * fh / fit_bands;
+    const int r1 = (k + 1) * fh / fit_bands;
+    Band& b = fbands[static_cast<size_t>(k)];
+    b.rows = r1 - r0;
+    b.v_top = r0 * kfh;
+    b.dv = v_bottom - 0.5 * (r0 + r1) * kfh;
+    float* p = &fit_profiles_[static_cast<size_t>(k) * fw];
+    for (int r = r0; r < r1; ++r) {
+      const float* row = fit_.ptr<float>(r);
+      for (int x = 0; x < fw; ++x) p[x] += row[x];
+    }
+  }
   for (int iteration = 0; iteration < o.fit_iterations; ++iteration) {
-    const int n_first = found.rows.front().n;
-    const int n_last = found.rows.back().n;
-    std::vector<char> is_kept(static_cast<size_t>(n_last - n_first + 1), 0);
-    for (const DetectedRow& r : found.rows) is_kept[static_cast<size_t>(r.n - n_first)] = 1;
     Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
     Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
-    double mass = 0.0;
-    for (int y = 0; y < fh; ++y) {
-      const double v = (y + 0.5) * kfh;
-      if (v < found.top_v) continue;
-      const double dv = v_bottom - v;
-      const double shrink = 1.0 - geo.g * dv;
-      if (shrink < kMinShrink || d * shrink < min_spacing) continue;
-      const float* row = fit_.ptr<float>(y);
-      for (int x = 0; x < fw; ++x) {
-        const double wt = row[x];
-        if (wt <= 0.0) continue;
-        const double u = (x + 0.5) * kfw;
-        const double nf = ((u - geo.c * dv) / shrink - sc) / d;
-        const double n = std::round(nf);
-        if (std::abs(nf - n) > o.fit_halfwidth_fraction || n < n_first || n > n_last ||
-            !is_kept[static_cast<size_t>(static_cast<int>(n) - n_first)]) {
-          continue;
+    int observations = 0;
+    for (int k = 0; k < fit_bands; ++k) {
+      const Band& b = fbands[static_cast<size_t>(k)];
+      if (b.v_top + b.rows * kfh < found.top_v) continue;
+      const double shrink = 1.0 - geo.g * b.dv;
+      const double ds = d * shrink;
+      if (shrink < kMinShrink || ds < min_spacing) continue;
+      const float* p = &fit_profiles_[static_cast<size_t>(k) * fw];
+      const auto column = [&](double u) { return static_cast<int>(std::floor(u / kfw)); };
+      // Lowest column in [u0, u1), or −1 when the range leaves the image.
+      const auto gap = [&](double u0, double u1) {
+        const int x0 = column(u0);
+        const int x1 = column(u1);
+        if (x0 < 0 || x1 >= fw) return -1;
+        int lowest = x0;
+        for (int x = x0 + 1; x <= x1; ++x) {
+          if (p[x] < p[lowest] || (p[x] == p[lowest] && std::abs(x - 0.5 * (x0 + x1)) <
+                                                        std::abs(lowest - 0.5 * (x0 + x1)))) {
+            lowest = x;
+          }
         }
-        // Residuals measured in s (u / shrink): a pixel's error counts as
-        // much at the top of the rows as at the bottom.
-        const double ws = wt / (shrink * shrink);
-        const Eigen::Vector4d z(1.0, n, dv, -n * dv);
+        return lowest;
+      };
+      for (const DetectedRow& row : found.rows) {
+        const int n = row.n;
+        const double u = (sc + n * d) * shrink + geo.c * b.dv;
+        const double f = o.gap_search_fraction;
+        const int left = gap(u - (0.5 + f) * ds, u - (0.5 - f) * ds);
+        const int right = gap(u + (0.5 - f) * ds, u + (0.5 + f) * ds);
+        if (left < 0 || right <= left + 1) continue;
+        double mass = 0.0, moment = 0.0;
+        for (int x = left + 1; x < right; ++x) {
+          mass += static_cast<double>(p[x]);
+          moment += static_cast<double>(p[x]) * (x + 0.5) * kfw;
+        }
+        // A band where the row has little plant matter says little.
+        if (mass < 0.1 * (right - left - 1) * b.rows) continue;
+        const double u_obs = moment / mass;
+        // Residuals measured in s (u / shrink): a band counts as much at
+        // the top of the rows as at the bottom.
+        const double ws = mass / (shrink * shrink);
+        const Eigen::Vector4d z(1.0, n, b.dv, -n * b.dv);
         a.noalias() += ws * z * z.transpose();
-        rhs.noalias() += ws * u * z;
-        mass += wt;
+        rhs.noalias() += ws * u_obs * z;
+        ++observations;
       }
     }
-    if (mass <= 0.0) break;
+    if (observations < 6) break;
     const Eigen::LDLT<Eigen::Matrix4d> ldlt(a);
     if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) break;
     const Eigen::Vector4d p = ldlt.solve(rhs);

@@ -55,7 +55,8 @@ struct RowDetectorOptions {
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
   double min_coherence = 0.2;        // comb phase coherence below this: no rows
   double min_alignment = 0.85;       // agreement of the bands' comb phases below this: no rows
-  double fit_halfwidth_fraction = 0.5;  // the refit takes plant pixels this near a kept row
+  double gap_search_fraction = 0.25;  // the refit looks for the gap between two rows within
+                                      // ± this × spacing of their midpoint
   int fit_iterations = 6;
   double min_row_occupancy = 0.4;    // fraction of its bands in which a row has plant matter
   double min_visible_spacing_px = 6.0;  // rows are reported up to where they are this close
@@ -108,6 +109,7 @@ class RowDetector {
   cv::Mat work_;  // CV_32F plant fraction at the Hough resolution
   cv::Mat fit_;   // CV_32F at the refit resolution
   std::vector<float> profiles_;
+  std::vector<float> fit_profiles_;
   std::vector<double> histogram_;
 };
 
