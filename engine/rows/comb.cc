@@ -9,19 +9,25 @@ namespace plantscale::rows {
 
 CombFit CombAt(std::span<const double> histogram, double x0, double bin_width, double period) {
   // e^{−2πi x_b / period}, advanced by a constant rotation from bin to bin.
+  // Only the span that holds weight.
+  size_t first = 0;
+  size_t last = histogram.size();
+  while (first < last && histogram[first] == 0.0) ++first;
+  while (last > first && histogram[last - 1] == 0.0) --last;
   const double omega = -2.0 * std::numbers::pi * bin_width / period;
   const std::complex<double> step = std::polar(1.0, omega);
-  std::complex<double> phasor = std::polar(1.0, -2.0 * std::numbers::pi * x0 / period);
+  std::complex<double> phasor = std::polar(
+      1.0, -2.0 * std::numbers::pi * (x0 + static_cast<double>(first) * bin_width) / period);
   std::complex<double> sum(0.0, 0.0);
   double total = 0.0;
-  for (size_t b = 0; b < histogram.size(); ++b) {
+  for (size_t b = first; b < last; ++b) {
     const double w = histogram[b];
     if (w != 0.0) {
       sum += w * phasor;
       total += w;
     }
     phasor *= step;
-    if ((b & 63U) == 63U) phasor /= std::abs(phasor);  // keep the rotation on the unit circle
+    if (((b - first) & 63U) == 63U) phasor /= std::abs(phasor);  // keep the rotation on the unit circle
   }
   CombFit fit;
   fit.period = period;

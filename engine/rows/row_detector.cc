@@ -67,6 +67,13 @@ struct Band {
   int rows = 0;        // work rows in the band
 };
 
+double MeanOccupancy(const std::vector<DetectedRow>& rows) {
+  if (rows.empty()) return 0.0;
+  double sum = 0.0;
+  for (const DetectedRow& r : rows) sum += r.occupancy;
+  return sum / static_cast<double>(rows.size());
+}
+
 }  // namespace
 
 RowDetector::RowDetector(const RowDetectorOptions& options) : options_(options) {
@@ -250,11 +257,10 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   const int nl = o.lean_steps;
   const double g_step = g_max / (ng - 1);
   const double l_step = nl > 1 ? 2.0 * o.max_lean / (nl - 1) : 0.0;
-  const double coarse_dv = g_max > 0.0 ? (1.0 - kMinShrink) / g_max : H;
   std::vector<double> sharpness(static_cast<size_t>(ng) * nl, 0.0);
   for (int i = 0; i < ng; ++i) {
     for (int j = 0; j < nl; ++j) {
-      build(geometry_at(i * g_step, -o.max_lean + j * l_step), coarse_dv);
+      build(geometry_at(i * g_step, -o.max_lean + j * l_step), H);
       double sum = 0.0, sum2 = 0.0;
       for (int b = 0; b < n_bins; ++b) {
         const double l = b > 0 ? histogram_[static_cast<size_t>(b - 1)] : 0.0;
@@ -279,11 +285,63 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     });
     if (!near) chosen.push_back(index);
   }
+  // Sharpness alone favours little convergence when wide rows merge far
+  // away; every convergence keeps its sharpest lean as a candidate too.
+  for (int i = 0; i < ng; ++i) {
+    int best_j = 0;
+    for (int j = 1; j < nl; ++j) {
+      if (sharpness[static_cast<size_t>(i) * nl + j] > sharpness[static_cast<size_t>(i) * nl + best_j]) best_j = j;
+    }
+    const int index = i * nl + best_j;
+    if (std::find(chosen.begin(), chosen.end(), index) == chosen.end()) chosen.push_back(index);
+  }
+
+  // The comb on the bands one by one: z_k = Σ w e^{−2πi s/d} over band k.
+  // Rows agree in phase from band to band whatever their width; a comb
+  // forced onto scattered matter or onto the wrong geometry does not. The
+  // score is the comb's coherence times that agreement.
+  struct BandComb {
+    double coherence = 0.0, alignment = 0.0, phase = 0.0;
+    double score() const { return coherence * alignment; }
+  };
+  const auto band_comb = [&](const Geometry& geo, double d) {
+    std::complex<double> z_sum(0.0, 0.0);
+    double z_abs = 0.0, mass = 0.0;
+    for (int k = 0; k < n_bands; ++k) {
+      const Band& b = bands[static_cast<size_t>(k)];
+      const double shrink = 1.0 - geo.g * b.dv;
+      if (shrink < kMinShrink || d * shrink < min_spacing) continue;
+      const float* p = &profiles_[static_cast<size_t>(k) * w];
+      const double s_first = (0.5 * kw - geo.c * b.dv) / shrink;
+      std::complex<double> phasor = std::polar(1.0, -2.0 * std::numbers::pi * s_first / d);
+      const std::complex<double> step = std::polar(1.0, -2.0 * std::numbers::pi * kw / (shrink * d));
+      std::complex<double> z(0.0, 0.0);
+      double m = 0.0;
+      for (int x = 0; x < w; ++x) {
+        const double wx = static_cast<double>(p[x]);
+        z += wx * phasor;
+        m += wx;
+        phasor *= step;
+      }
+      z_sum += z;
+      z_abs += std::abs(z);
+      mass += m;
+    }
+    BandComb r;
+    if (mass <= 0.0 || z_abs <= 0.0) return r;
+    r.coherence = std::abs(z_sum) / mass;
+    r.alignment = std::abs(z_sum) / z_abs;
+    double phase = -std::arg(z_sum) * d / (2.0 * std::numbers::pi);
+    phase = std::fmod(phase, d);
+    if (phase < 0.0) phase += d;
+    r.phase = phase;
+    return r;
+  };
 
   // 2. The row comb on each candidate: the best period whose rows are
   // really there (two neighbouring rows with plant matter along them).
   struct Hypothesis {
-    double g = 0.0, lean = 0.0, d = 0.0, sc = 0.0, coherence = -1.0;
+    double g = 0.0, lean = 0.0, d = 0.0, sc = 0.0, score = -1.0;
   };
   Hypothesis best;
   for (int index : chosen) {
@@ -291,19 +349,22 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     const double lean = -o.max_lean + (index % nl) * l_step;
     const Geometry geo = geometry_at(g, lean);
     build(geo, H);
-    for (const CombFit& fit : BestCombs(histogram_, s0, kw, d_min, d_max, o.spacing_step, 3)) {
-      if (fit.coherence <= best.coherence) break;
-      if (!find_rows(geo, fit.period, fit.phase).adjacent) continue;
-      best = {g, lean, fit.period, fit.phase, fit.coherence};
-      break;
+    for (const CombFit& fit :
+         BestCombs(histogram_, s0, kw, d_min, d_max, 2.0 * o.spacing_step, 3)) {
+      const BandComb bc = band_comb(geo, fit.period);
+      if (bc.score() <= best.score) continue;
+      const Rows rows = find_rows(geo, fit.period, bc.phase);
+      if (!rows.adjacent) continue;
+      const double score = bc.score() * MeanOccupancy(rows.rows);
+      if (score > best.score) best = {g, lean, fit.period, bc.phase, score};
     }
   }
-  if (best.coherence < 0.0) {
+  if (best.score < 0.0) {
     out.reason = "no rows: no comb of evenly spaced rows with plant matter along them";
     return out;
   }
 
-  // 3. Local search on (g, lean, d) by the comb's coherence.
+  // 3. Local search on (g, lean, d) by the same score.
   double step_g = g_step, step_l = l_step, step_d = o.spacing_step;
   for (int level = 0; level < 4; ++level) {
     step_g *= 0.5;
@@ -313,10 +374,14 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       for (int j = -1; j <= 1; ++j) {
         const double g = std::max(0.0, centre.g + i * step_g);
         const double lean = centre.lean + j * step_l;
-        build(geometry_at(g, lean), H);
         for (int k = -1; k <= 1; ++k) {
-          const CombFit fit = CombAt(histogram_, s0, kw, centre.d * (1.0 + k * step_d));
-          if (fit.coherence > best.coherence) best = {g, lean, fit.period, fit.phase, fit.coherence};
+          const double d = centre.d * (1.0 + k * step_d);
+          const BandComb bc = band_comb(geometry_at(g, lean), d);
+          if (bc.score() <= best.score) continue;
+          const Rows rows = find_rows(geometry_at(g, lean), d, bc.phase);
+          if (!rows.adjacent) continue;
+          const double score = bc.score() * MeanOccupancy(rows.rows);
+          if (score > best.score) best = {g, lean, d, bc.phase, score};
         }
       }
     }
@@ -432,26 +497,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   for (DetectedRow& r : found.rows) r.n -= n_central;
   build(geo, H);
   const CombFit final_fit = CombAt(histogram_, s0, kw, d);
-  // Agreement of the bands' comb phases: |Σ z_k| / Σ |z_k| with z_k the
-  // comb phasor of band k. Rows of any width agree from band to band;
-  // scattered plant matter does not, whatever comb fits it best overall.
-  std::complex<double> z_sum(0.0, 0.0);
-  double z_abs = 0.0;
-  for (int k = 0; k < n_bands; ++k) {
-    const Band& b = bands[static_cast<size_t>(k)];
-    const double shrink = 1.0 - geo.g * b.dv;
-    if (shrink < kMinShrink || d * shrink < min_spacing) continue;
-    const float* p = &profiles_[static_cast<size_t>(k) * w];
-    std::complex<double> z(0.0, 0.0);
-    for (int x = 0; x < w; ++x) {
-      if (p[x] <= 0.0F) continue;
-      const double s = ((x + 0.5) * kw - geo.c * b.dv) / shrink;
-      z += static_cast<double>(p[x]) * std::polar(1.0, -2.0 * std::numbers::pi * (s - sc) / d);
-    }
-    z_sum += z;
-    z_abs += std::abs(z);
-  }
-  const double alignment = z_abs > 0.0 ? std::abs(z_sum) / z_abs : 0.0;
+  const BandComb final_comb = band_comb(geo, d);
+  const double alignment = final_comb.alignment;
   double occupancy = 0.0;
   for (const DetectedRow& r : found.rows) occupancy += r.occupancy;
   occupancy /= static_cast<double>(found.rows.size());
