@@ -33,6 +33,7 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "gap_search_fraction", gap_search_fraction, 0.0, 0.5, false);
   if (fit_iterations < 0) e.push_back({"fit_iterations", "must be >= 0"});
   RequireInRange(e, "min_row_occupancy", min_row_occupancy, 0.0, 1.0);
+  RequireInRange(e, "min_gap_row_occupancy", min_gap_row_occupancy, 0.0, 1.0);
   RequirePositive(e, "min_visible_spacing_px", min_visible_spacing_px);
   return e;
 }
@@ -183,6 +184,9 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     std::vector<DetectedRow> rows;
     double top_v = 0.0;
     bool adjacent = false;  // two neighbouring teeth both kept
+    // 1 − (plant matter half-way between kept rows) / (on them): a comb of
+    // twice the spacing has a row half-way between its teeth.
+    double contrast = 0.0;
   };
   const auto find_rows = [&](const Geometry& geo, double d, double sc) {
     Rows result;
@@ -194,6 +198,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     std::vector<int> in_image(n_rows, 0), occupied(n_rows, 0);
     std::vector<int> highest(n_rows, -1);
     std::vector<double> density(n_rows);
+    std::vector<double> on_sum(n_rows, 0.0), between_sum(n_rows, 0.0);
+    std::vector<int> on_count(n_rows, 0), between_count(n_rows, 0);
     const auto window = [&](const float* p, double u, double half, int rows_in_band) {
       const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw - 0.5)));
       const int x1 = std::min(w - 1, static_cast<int>(std::floor((u + half) / kw - 0.5)));
@@ -218,6 +224,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
         if (between >= 0.0 && u + 0.5 * d * shrink >= 0.0 && u + 0.5 * d * shrink <= W) {
           background += between;
           ++n_background;
+          between_sum[r] += between;
+          ++between_count[r];
         }
       }
       background = n_background > 0 ? background / n_background : 0.0;
@@ -225,25 +233,55 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       for (size_t r = 0; r < n_rows; ++r) {
         if (density[r] < 0.0) continue;
         ++in_image[r];
+        on_sum[r] += density[r];
+        ++on_count[r];
         if (density[r] >= level) {
           ++occupied[r];
           highest[r] = highest[r] < 0 ? k : std::min(highest[r], k);
         }
       }
     }
-    int top_band = n_bands;
-    int previous = n_lo - 2;
+    // Rows with plant matter along most of their length; between two of
+    // them, a tooth with some (a row with many plants missing) is a row
+    // too. A comb of half the rows' spacing keeps only every other tooth.
+    std::vector<double> occupancy(n_rows, -1.0);
+    int first = -1, last = -1;
     for (size_t r = 0; r < n_rows; ++r) {
       if (in_image[r] < 2) continue;
-      const double occupancy = static_cast<double>(occupied[r]) / in_image[r];
-      if (occupancy < o.min_row_occupancy) continue;
-      const int n = n_lo + static_cast<int>(r);
+      occupancy[r] = static_cast<double>(occupied[r]) / in_image[r];
+      if (occupancy[r] < o.min_row_occupancy) continue;
+      if (first < 0) first = static_cast<int>(r);
+      last = static_cast<int>(r);
+    }
+    int top_band = n_bands;
+    int previous = n_lo - 2;
+    for (int r = std::max(first, 0); first >= 0 && r <= last; ++r) {
+      const double occ = occupancy[static_cast<size_t>(r)];
+      if (occ < o.min_row_occupancy && occ < o.min_gap_row_occupancy) continue;
+      const int n = n_lo + r;
       if (n == previous + 1) result.adjacent = true;
       previous = n;
-      result.rows.push_back({n, sc + n * d, occupancy});
-      top_band = std::min(top_band, highest[r]);
+      result.rows.push_back({n, sc + n * d, occ});
+      if (highest[static_cast<size_t>(r)] >= 0) {
+        top_band = std::min(top_band, highest[static_cast<size_t>(r)]);
+      }
     }
     if (result.rows.empty()) return result;
+    if (last > first) {
+      double on = 0.0, between = 0.0;
+      int n_on = 0, n_between = 0;
+      for (int r = first; r <= last; ++r) {
+        on += on_sum[static_cast<size_t>(r)];
+        n_on += on_count[static_cast<size_t>(r)];
+        if (r < last) {
+          between += between_sum[static_cast<size_t>(r)];
+          n_between += between_count[static_cast<size_t>(r)];
+        }
+      }
+      if (n_on > 0 && n_between > 0 && on > 0.0) {
+        result.contrast = std::max(0.0, 1.0 - (between / n_between) / (on / n_on));
+      }
+    }
     double top = bands[static_cast<size_t>(top_band)].v_top;
     if (geo.g > 0.0) top = std::max(top, v_bottom - (1.0 - min_spacing / d) / geo.g);
     result.top_v = std::clamp(top, 0.0, v_bottom);
@@ -288,12 +326,24 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   // Sharpness alone favours little convergence when wide rows merge far
   // away; every convergence keeps its sharpest lean as a candidate too.
   for (int i = 0; i < ng; ++i) {
-    int best_j = 0;
-    for (int j = 1; j < nl; ++j) {
-      if (sharpness[static_cast<size_t>(i) * nl + j] > sharpness[static_cast<size_t>(i) * nl + best_j]) best_j = j;
+    const double* row = &sharpness[static_cast<size_t>(i) * nl];
+    // The two sharpest leans that are local maxima along the lean axis.
+    int first = -1, second = -1;
+    for (int j = 0; j < nl; ++j) {
+      const bool peak = (j == 0 || row[j] >= row[j - 1]) && (j + 1 == nl || row[j] > row[j + 1]);
+      if (!peak) continue;
+      if (first < 0 || row[j] > row[first]) {
+        second = first;
+        first = j;
+      } else if (second < 0 || row[j] > row[second]) {
+        second = j;
+      }
     }
-    const int index = i * nl + best_j;
-    if (std::find(chosen.begin(), chosen.end(), index) == chosen.end()) chosen.push_back(index);
+    for (const int j : {first, second}) {
+      if (j < 0) continue;
+      const int index = i * nl + j;
+      if (std::find(chosen.begin(), chosen.end(), index) == chosen.end()) chosen.push_back(index);
+    }
   }
 
   // The comb on the bands one by one: z_k = Σ w e^{−2πi s/d} over band k.
@@ -349,14 +399,21 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     const double lean = -o.max_lean + (index % nl) * l_step;
     const Geometry geo = geometry_at(g, lean);
     build(geo, H);
+    std::vector<double> periods;
     for (const CombFit& fit :
          BestCombs(histogram_, s0, kw, d_min, d_max, 2.0 * o.spacing_step, 3)) {
-      const BandComb bc = band_comb(geo, fit.period);
+      // A comb of twice the rows' spacing can fit rows too (every other
+      // tooth empty, or two rows between teeth); its half is tried as well.
+      periods.push_back(fit.period);
+      if (fit.period / 2.0 >= d_min) periods.push_back(fit.period / 2.0);
+    }
+    for (const double period : periods) {
+      const BandComb bc = band_comb(geo, period);
       if (bc.score() <= best.score) continue;
-      const Rows rows = find_rows(geo, fit.period, bc.phase);
+      const Rows rows = find_rows(geo, period, bc.phase);
       if (!rows.adjacent) continue;
-      const double score = bc.score() * MeanOccupancy(rows.rows);
-      if (score > best.score) best = {g, lean, fit.period, bc.phase, score};
+      const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast;
+      if (score > best.score) best = {g, lean, period, bc.phase, score};
     }
   }
   if (best.score < 0.0) {
@@ -380,7 +437,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
           if (bc.score() <= best.score) continue;
           const Rows rows = find_rows(geometry_at(g, lean), d, bc.phase);
           if (!rows.adjacent) continue;
-          const double score = bc.score() * MeanOccupancy(rows.rows);
+          const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast;
           if (score > best.score) best = {g, lean, d, bc.phase, score};
         }
       }

@@ -59,6 +59,7 @@ struct RowDetectorOptions {
                                       // ± this × spacing of their midpoint
   int fit_iterations = 6;
   double min_row_occupancy = 0.4;    // fraction of its bands in which a row has plant matter
+  double min_gap_row_occupancy = 0.15;  // ... for a row between two such rows (plants missing)
   double min_visible_spacing_px = 6.0;  // rows are reported up to where they are this close
 
   OptionErrors Validate() const;
