@@ -5,8 +5,6 @@
 #include <cmath>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/imgcodecs.hpp>  // DEBUG-REMOVE
-#include <cstdio>  // DEBUG-REMOVE
 
 #include "app/photo_segmentation.h"
 #include "engine/vision/segmenter.h"
@@ -211,10 +209,6 @@ RowsEvaluation EvaluateRows(const RowsEvalOptions& options) {
       if (!render) continue;
       const rows::RowDetection det = DetectRowsInPhoto(frame.rendered.image, detector);
       const FrameScore f = ScoreFrame(det, TrueRowsInFrame(sim, frame.truth, options), options);
-      if (std::getenv("ROWS_DUMP")) {  // DEBUG-REMOVE
-        cv::imwrite(std::string(std::getenv("ROWS_DUMP")) + "/f" + std::to_string(k) + "_" + std::to_string(scored) + ".png", frame.rendered.image);
-        std::fprintf(stderr, "seed %d frame %d crda %.3f conf %.2f rows %zu d %.1f g %.5f al %.3f coh %.3f\n", k, scored, f.rows ? f.sum / f.rows : -1.0, det.confidence, det.rows.size(), det.spacing_px, det.convergence, det.alignment, det.coherence);
-      }
       if (f.rows == 0) continue;
       ++scored;
       if (det.confidence > 0.0) ++e.frames_with_rows;
