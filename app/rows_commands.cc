@@ -77,6 +77,7 @@ nlohmann::json DetectionJson(const fs::path& file, const rows::RowDetection& det
   }
   j["coherence"] = det.coherence;
   j["alignment"] = det.alignment;
+  j["contrast"] = det.contrast;
   return j;
 }
 

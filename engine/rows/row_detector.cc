@@ -30,6 +30,7 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
   RequireInRange(e, "min_coherence", min_coherence, 0.0, 1.0);
   RequireInRange(e, "min_alignment", min_alignment, 0.0, 1.0);
+  RequireInRange(e, "min_contrast", min_contrast, 0.0, 1.0);
   RequireInRange(e, "gap_search_fraction", gap_search_fraction, 0.0, 0.5, false);
   if (fit_iterations < 0) e.push_back({"fit_iterations", "must be >= 0"});
   RequireInRange(e, "min_row_occupancy", min_row_occupancy, 0.0, 1.0);
@@ -567,10 +568,13 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   out.coherence = final_fit.coherence;
   out.alignment = alignment;
   out.top_v_px = found.top_v;
-  if (final_fit.coherence < o.min_coherence || alignment < o.min_alignment) {
+  out.contrast = found.contrast;
+  if (final_fit.coherence < o.min_coherence || alignment < o.min_alignment ||
+      found.contrast < o.min_contrast) {
     out.reason = "no rows: plant matter does not follow evenly spaced rows (coherence " +
                  std::to_string(final_fit.coherence) + ", band agreement " +
-                 std::to_string(alignment) + ")";
+                 std::to_string(alignment) + ", contrast " + std::to_string(found.contrast) +
+                 ")";
     return out;
   }
   out.rows = std::move(found.rows);

@@ -53,8 +53,9 @@ struct RowDetectorOptions {
   int candidates = 4;                // best Hough cells taken on to the comb
   double row_halfwidth_fraction = 0.25;  // plant matter within ± this × spacing supports a row
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
-  double min_coherence = 0.2;        // comb phase coherence below this: no rows
+  double min_coherence = 0.15;       // comb phase coherence below this: no rows
   double min_alignment = 0.85;       // agreement of the bands' comb phases below this: no rows
+  double min_contrast = 0.2;         // 1 − (matter half-way between rows) / (on them)
   double gap_search_fraction = 0.25;  // the refit looks for the gap between two rows within
                                       // ± this × spacing of their midpoint
   int fit_iterations = 6;
@@ -82,6 +83,7 @@ struct RowDetection {
   double lean = 0.0;           // c
   double coherence = 0.0;      // |Σ w e^{2πi s/d}| / Σ w of the plant matter
   double alignment = 0.0;      // |Σ z_k| / Σ |z_k| of the bands' comb phasors z_k
+  double contrast = 0.0;       // 1 − (matter half-way between the rows) / (on the rows)
   double top_v_px = 0.0;       // rows are told apart from the bottom up to this v
   std::vector<DetectedRow> rows;  // left to right
 
