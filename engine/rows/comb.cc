@@ -8,27 +8,35 @@
 namespace plantscale::rows {
 
 CombFit CombAt(std::span<const double> histogram, double x0, double bin_width, double period) {
-  // e^{−2πi x_b / period}, advanced by a constant rotation from bin to bin.
   // Only the span that holds weight.
   size_t first = 0;
   size_t last = histogram.size();
   while (first < last && histogram[first] == 0.0) ++first;
   while (last > first && histogram[last - 1] == 0.0) --last;
+  // e^{−2πi x_b / period}, advanced by a fixed rotation from bin to bin
+  // (written out: std::complex's product checks for NaN at every step).
   const double omega = -2.0 * std::numbers::pi * bin_width / period;
-  const std::complex<double> step = std::polar(1.0, omega);
-  std::complex<double> phasor = std::polar(
-      1.0, -2.0 * std::numbers::pi * (x0 + static_cast<double>(first) * bin_width) / period);
-  std::complex<double> sum(0.0, 0.0);
+  const double sr = std::cos(omega), si = std::sin(omega);
+  const double a0 =
+      -2.0 * std::numbers::pi * (x0 + static_cast<double>(first) * bin_width) / period;
+  double pr = std::cos(a0), pi = std::sin(a0);
+  double zr = 0.0, zi = 0.0;
   double total = 0.0;
   for (size_t b = first; b < last; ++b) {
     const double w = histogram[b];
-    if (w != 0.0) {
-      sum += w * phasor;
-      total += w;
+    zr += w * pr;
+    zi += w * pi;
+    total += w;
+    const double next_r = pr * sr - pi * si;
+    pi = pr * si + pi * sr;
+    pr = next_r;
+    if (((b - first) & 63U) == 63U) {  // keep the rotation on the unit circle
+      const double norm = std::hypot(pr, pi);
+      pr /= norm;
+      pi /= norm;
     }
-    phasor *= step;
-    if (((b - first) & 63U) == 63U) phasor /= std::abs(phasor);  // keep the rotation on the unit circle
   }
+  const std::complex<double> sum(zr, zi);
   CombFit fit;
   fit.period = period;
   if (total <= 0.0) return fit;

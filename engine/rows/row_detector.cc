@@ -156,16 +156,21 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       const double m = 1.0 / shrink;
       const int pieces = std::max(1, static_cast<int>(std::ceil(m - 1e-9)));
       const float* p = &profiles_[static_cast<size_t>(k) * w];
+      // Bin coordinate t = (s − s0)/kw of column position x (in columns):
+      // t = x·m + offset.
+      const double offset = (-geo.c * b.dv * m - s0) / kw;
+      const double last_t = n_bins - 1.0;
+      double* bins = histogram_.data();
       for (int x = 0; x < w; ++x) {
         if (p[x] <= 0.0F) continue;
-        const double mass = p[x] / pieces;
+        const double mass = static_cast<double>(p[x]) / pieces;
         for (int q = 0; q < pieces; ++q) {
-          const double u = (x + (q + 0.5) / pieces) * kw;
-          const double t = ((u - geo.c * b.dv) * m - s0) / kw;
-          const int i = static_cast<int>(std::floor(t));
+          const double t = (x + (q + 0.5) / pieces) * m + offset;
+          if (!(t >= 0.0 && t < last_t)) continue;  // beyond [−W, 2W): dropped
+          const int i = static_cast<int>(t);
           const double f = t - i;
-          if (i >= 0 && i < n_bins) histogram_[static_cast<size_t>(i)] += mass * (1.0 - f);
-          if (i + 1 >= 0 && i + 1 < n_bins) histogram_[static_cast<size_t>(i + 1)] += mass * f;
+          bins[i] += mass * (1.0 - f);
+          bins[i + 1] += mass * f;
         }
       }
     }
@@ -364,16 +369,23 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       if (shrink < kMinShrink || d * shrink < min_spacing) continue;
       const float* p = &profiles_[static_cast<size_t>(k) * w];
       const double s_first = (0.5 * kw - geo.c * b.dv) / shrink;
-      std::complex<double> phasor = std::polar(1.0, -2.0 * std::numbers::pi * s_first / d);
-      const std::complex<double> step = std::polar(1.0, -2.0 * std::numbers::pi * kw / (shrink * d));
-      std::complex<double> z(0.0, 0.0);
-      double m = 0.0;
+      // The phasor advances by a fixed rotation per column (written out:
+      // std::complex's product checks for NaN at every step).
+      const double a0 = -2.0 * std::numbers::pi * s_first / d;
+      const double da = -2.0 * std::numbers::pi * kw / (shrink * d);
+      double pr = std::cos(a0), pi = std::sin(a0);
+      const double sr = std::cos(da), si = std::sin(da);
+      double zr = 0.0, zi = 0.0, m = 0.0;
       for (int x = 0; x < w; ++x) {
         const double wx = static_cast<double>(p[x]);
-        z += wx * phasor;
+        zr += wx * pr;
+        zi += wx * pi;
         m += wx;
-        phasor *= step;
+        const double next_r = pr * sr - pi * si;
+        pi = pr * si + pi * sr;
+        pr = next_r;
       }
+      const std::complex<double> z(zr, zi);
       z_sum += z;
       z_abs += std::abs(z);
       mass += m;
