@@ -579,7 +579,31 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   out.lean = geo.c;
   out.coherence = final_fit.coherence;
   out.alignment = alignment;
-  out.top_v_px = found.top_v;
+  // Rows are reported up to where they can no longer be told apart: the
+  // spacing is still min_spacing and a reported row still has plant matter
+  // in the band (above the bands the fit used, towards the vanishing point).
+  double top_v = found.top_v;
+  for (int k = n_bands - 1; k >= 0; --k) {
+    const Band& b = bands[static_cast<size_t>(k)];
+    if (b.v_top >= top_v) continue;
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink <= 0.0 || d * shrink < min_spacing) break;
+    const float* p = &profiles_[static_cast<size_t>(k) * w];
+    const double half = std::max(0.5 * kw, hw * d * shrink);
+    bool any = false;
+    for (const DetectedRow& r : found.rows) {
+      const double u = (sc + r.n * d) * shrink + geo.c * b.dv;
+      const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw - 0.5)));
+      const int x1 = std::min(w - 1, static_cast<int>(std::floor((u + half) / kw - 0.5)));
+      double sum = 0.0;
+      for (int x = x0; x <= x1; ++x) sum += static_cast<double>(p[x]);
+      if (x1 >= x0 && sum / ((x1 - x0 + 1) * b.rows) >= 0.05) any = true;
+    }
+    if (!any) break;
+    top_v = b.v_top;
+  }
+  if (geo.g > 0.0) top_v = std::max(top_v, v_bottom - (1.0 - min_spacing / d) / geo.g);
+  out.top_v_px = std::clamp(top_v, 0.0, v_bottom);
   out.contrast = found.contrast;
   if (final_fit.coherence < o.min_coherence || alignment < o.min_alignment ||
       found.contrast < o.min_contrast) {
