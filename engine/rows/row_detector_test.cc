@@ -122,6 +122,52 @@ TEST(RowDetectorTest, RowsAreNumberedLeftToRightAndCentralIsNearestTheMiddle) {
   EXPECT_NEAR(det.U(0, 479.5), 300.0, 5.0);  // the row at 300 is nearest u = 320
 }
 
+TEST(RowDetectorTest, WideRowsThatNearlyTouchAreCentredByTheirGaps) {
+  Scene scene;
+  scene.g = 1.0 / 520.0;
+  scene.c = scene.g * 330.0;
+  scene.plant_radius = 0.42;  // rows 84 % of their spacing wide
+  scene.missing = 0.1;
+  scene.n_min = -1;
+  scene.n_max = 1;  // one bed of three rows on bare soil
+  scene.top_v = 60.0;
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(scene.Draw(4));
+  ASSERT_GT(det.confidence, 0.0) << det.reason;
+  EXPECT_EQ(det.rows.size(), 3U);
+  EXPECT_NEAR(det.spacing_px, 180.0, 180.0 * 0.04);
+  EXPECT_LT(WorstError(det, scene, 479.5), 0.06);
+  EXPECT_LT(WorstError(det, scene, 200.0), 0.06);
+}
+
+TEST(RowDetectorTest, ARowWithMorePlantsMissingThanPresentIsStillARow) {
+  // Outer rows full, the central row with 60 % of its plants missing: the
+  // comb of twice the spacing through the outer rows must not win.
+  Scene outer;
+  outer.g = 1.0 / 600.0;
+  outer.c = outer.g * 320.0;
+  outer.n_min = -1;
+  outer.n_max = 1;
+  outer.missing = 0.05;
+  Scene centre = outer;
+  centre.n_min = 0;
+  centre.n_max = 0;
+  centre.missing = 0.6;
+  Scene sides = outer;
+  cv::Mat mask = cv::Mat::zeros(480, 640, CV_8UC1);
+  for (int n : {-1, 1}) {
+    sides.n_min = sides.n_max = n;
+    cv::bitwise_or(mask, sides.Draw(static_cast<uint32_t>(5 + n)), mask);
+  }
+  cv::bitwise_or(mask, centre.Draw(9), mask);
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(mask);
+  ASSERT_GT(det.confidence, 0.0) << det.reason;
+  EXPECT_NEAR(det.spacing_px, 180.0, 180.0 * 0.04);
+  EXPECT_EQ(det.rows.size(), 3U);
+  EXPECT_LT(WorstError(det, outer, 479.5), 0.05);
+}
+
 TEST(RowDetectorTest, NoPlantMatterGivesNoRows) {
   RowDetector detector{RowDetectorOptions{}};
   const RowDetection det = detector.Detect(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0)));
