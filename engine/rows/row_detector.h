@@ -19,15 +19,23 @@
 // all rows at once (the perspective constraint ties them together, as the
 // tracker's initialiser does on the calibrated ground plane):
 //   1. a Hough over (g, lean) scoring how sharply the plant matter piles up
-//      in s (all rows must converge on one point),
-//   2. the row comb (RowComb, shared with the ground-plane initialiser) over
-//      the period and phase for the best few,
-//   3. a local search and a weighted least-squares refit of the four
-//      parameters to the plant pixels near the rows (linear in
-//      (s_c, d, c − g·s_c, g·d)).
-// Weeds between rows add a floor to the comb, missing plants, shadows and
-// tyre tracks take teeth or parts of teeth away; rows are reported only
-// where their tooth has plant matter along its length.
+//      in s (all rows must converge on one point); the sharpest cells and
+//      the sharpest leans of every convergence go on,
+//   2. the row comb (comb.h, whose votes the ground-plane initialiser
+//      shares) over period and phase, each hypothesis scored by the comb's
+//      coherence × the agreement of its phase from band to band × the
+//      occupancy of its rows × their contrast against the matter half-way
+//      between them (which rules out a comb of twice the spacing),
+//   3. a local search of that score and a weighted least-squares refit of
+//      the four parameters (linear in (s_c, d, c − g·s_c, g·d)) to each
+//      row's centre in thin bands, the centroid of its plant matter between
+//      the gaps on either side: narrow rows are centred by their mass, rows
+//      whose plants nearly touch by their edges.
+// Weeds between rows add a floor to the comb; missing plants, shadows and
+// tyre tracks take parts of teeth away; rows are reported only where their
+// tooth has plant matter along its length (or, between two such rows, some).
+// No rows (confidence 0) when the band agreement, contrast or coherence is
+// too low: bare soil, sky, walls, scattered plants.
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -75,7 +83,7 @@ struct DetectedRow {
 struct RowDetection {
   int width_px = 0;
   int height_px = 0;
-  double confidence = 0.0;     // 0: no rows
+  double confidence = 0.0;     // 0: no rows; else comb coherence × mean row occupancy (≥ 0.001)
   std::string reason;          // why no rows, when confidence is 0
   double centre_u_px = 0.0;    // s_c
   double spacing_px = 0.0;     // d, at the bottom row
