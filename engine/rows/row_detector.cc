@@ -76,6 +76,14 @@ double MeanOccupancy(const std::vector<DetectedRow>& rows) {
   return sum / static_cast<double>(rows.size());
 }
 
+// Two rows fix a vanishing point whatever it is; every further row is a
+// test of the perspective constraint, so hypotheses with more rows found
+// are trusted more: n / (n + 1).
+double RowCountFactor(const std::vector<DetectedRow>& rows) {
+  const double n = static_cast<double>(rows.size());
+  return n / (n + 1.0);
+}
+
 }  // namespace
 
 RowDetector::RowDetector(const RowDetectorOptions& options) : options_(options) {
@@ -425,7 +433,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       if (bc.score() <= best.score) continue;
       const Rows rows = find_rows(geo, period, bc.phase);
       if (!rows.adjacent) continue;
-      const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast;
+      const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows);
       if (score > best.score) best = {g, lean, period, bc.phase, score};
     }
   }
@@ -450,7 +458,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
           if (bc.score() <= best.score) continue;
           const Rows rows = find_rows(geometry_at(g, lean), d, bc.phase);
           if (!rows.adjacent) continue;
-          const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast;
+          const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows);
           if (score > best.score) best = {g, lean, d, bc.phase, score};
         }
       }

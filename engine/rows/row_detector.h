@@ -25,7 +25,8 @@
 //      shares) over period and phase, each hypothesis scored by the comb's
 //      coherence × the agreement of its phase from band to band × the
 //      occupancy of its rows × their contrast against the matter half-way
-//      between them (which rules out a comb of twice the spacing),
+//      between them (which rules out a comb of twice the spacing) × n/(n+1)
+//      for n rows (two rows fit any vanishing point; more rows test it),
 //   3. a local search of that score and a weighted least-squares refit of
 //      the four parameters (linear in (s_c, d, c − g·s_c, g·d)) to each
 //      row's centre in thin bands, the centroid of its plant matter between
