@@ -2,6 +2,7 @@
 
 #include "app/export_commands.h"
 #include "app/motion_commands.h"
+#include "app/rows_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/telemetry_commands.h"
@@ -19,6 +20,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddTrackingCommands(registry_);
   AddTreatmentCommands(registry_);
   AddMotionCommands(registry_);
+  AddRowsCommands(registry_);
   AddUiCommands(registry_);
 }
 
