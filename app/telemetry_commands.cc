@@ -88,6 +88,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
   tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
   clock = &runner;
+  runner.ListenForCommands(*transport);  // start, pause and mode from the station
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
   auto segmentation = std::make_unique<tm::SegmentationStage>(

@@ -1,10 +1,12 @@
 #include "telemetry/runner.h"
 
 #include <chrono>
+#include <plantscale_lcmtypes/plantscale_command_t.hpp>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <thread>
 
 #include "telemetry/channels.h"
+#include "telemetry/codec.h"
 
 namespace plantscale::telemetry {
 
@@ -39,6 +41,47 @@ void VehicleRunner::Event(int8_t severity, const std::string& kind, const std::s
   publisher_.Publish(channels::kEvents, e);
 }
 
+void VehicleRunner::ListenForCommands(Transport& transport) {
+  commands_ = &transport;
+  transport.Subscribe(channels::kCommand, [this](const ReceivedMessage& m) { Apply(m); });
+}
+
+void VehicleRunner::Apply(const ReceivedMessage& m) {
+  std::string error;
+  const auto c = Decode<plantscale_command_t>(m.channel, m.data, m.size, &error);
+  OperatorCommands& k = status_.commands;
+  const auto refuse = [&](const std::string& why) {
+    ++k.refused;
+    Event(plantscale_event_t::SEVERITY_WARNING, "command_refused", why);
+  };
+  if (!c) return refuse(error);
+  const std::string from = c->origin.empty() ? "the station" : c->origin;
+  std::string did;
+  if (c->command == plantscale_command_t::COMMAND_START) {
+    k.paused = false;
+    did = "started (spraying resumed)";
+  } else if (c->command == plantscale_command_t::COMMAND_PAUSE) {
+    k.paused = true;
+    did = "paused (nozzles closed)";
+  } else if (c->command == plantscale_command_t::COMMAND_SET_MODE) {
+    if (c->mode == plantscale_command_t::MODE_SPRAY_OFF) {
+      k.spray_off = true;
+      did = "spraying switched off";
+    } else if (c->mode == plantscale_command_t::MODE_SPRAY_CROP ||
+               c->mode == plantscale_command_t::MODE_SPRAY_WEED) {
+      k.spray_off = false;
+      k.mode = c->mode;
+      did = c->mode == plantscale_command_t::MODE_SPRAY_CROP ? "mode: spray the crop" : "mode: spray the weeds";
+    } else {
+      return refuse("command from " + from + ": unknown mode " + std::to_string(c->mode));
+    }
+  } else {
+    return refuse("command from " + from + ": unknown command " + std::to_string(c->command));
+  }
+  ++k.received;
+  Event(plantscale_event_t::SEVERITY_INFO, "command", did + " by " + from);
+}
+
 RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop) {
   using Clock = std::chrono::steady_clock;
   status_.source = source.name();
@@ -67,6 +110,10 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
     status_.dropped_frames = dropped;
     status_.faults = source.faults(frame.utime);
     ++status_.frames;
+    if (commands_ != nullptr) {
+      while (commands_->Handle(0)) {
+      }
+    }
     for (const std::unique_ptr<Stage>& stage : stages_) stage->Process(frame, status_, publisher_);
     summary.seconds = 1e-6 * static_cast<double>(frame.utime - first_utime);
   }

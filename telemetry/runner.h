@@ -53,6 +53,17 @@ class SimFrameSource : public FrameSource {
   sim::FrameTruth truth_;
 };
 
+// What the operator asked for on PLANTSCALE_COMMAND (the vehicle is safe
+// without it: a station that never speaks leaves spraying on).
+struct OperatorCommands {
+  bool paused = false;     // COMMAND_PAUSE until COMMAND_START
+  bool spray_off = false;  // MODE_SPRAY_OFF until another mode
+  int8_t mode = 0;         // plantscale_command_t::MODE_SPRAY_CROP/WEED; 0: as configured
+  int64_t received = 0;    // commands applied
+  int64_t refused = 0;     // undecodable or unknown commands
+  bool held() const { return paused || spray_off; }
+};
+
 // What the stages know about the run; stages update it, HealthStage sends it.
 struct RunStatus {
   std::string source;
@@ -62,6 +73,7 @@ struct RunStatus {
   double distance_m = 0.0;
   bool failsafe = true;  // nozzles closed until a treatment stage says otherwise
   std::vector<std::string> faults;
+  OperatorCommands commands;
 };
 
 class Stage {
@@ -85,6 +97,10 @@ class VehicleRunner {
  public:
   VehicleRunner(Publisher& publisher, const RunnerOptions& options, int64_t boot_utime);
   void AddStage(std::unique_ptr<Stage> stage);
+  // Acts on station commands (PLANTSCALE_COMMAND) received on `transport`,
+  // polled before every frame; each applied or refused command is an event.
+  void ListenForCommands(Transport& transport);
+  const RunStatus& status() const { return status_; }
   // Runs until the source ends or `stop` becomes true. Publishes run_started,
   // frame_dropped and run_finished events.
   RunSummary Run(FrameSource& source, const std::atomic<bool>* stop = nullptr);
@@ -93,12 +109,14 @@ class VehicleRunner {
 
  private:
   void Event(int8_t severity, const std::string& kind, const std::string& text);
+  void Apply(const ReceivedMessage& message);
 
   Publisher& publisher_;
   RunnerOptions options_;
   RunStatus status_;
   std::vector<std::unique_ptr<Stage>> stages_;
   int64_t now_utime_;
+  Transport* commands_ = nullptr;
 };
 
 }  // namespace plantscale::telemetry

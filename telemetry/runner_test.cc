@@ -163,3 +163,80 @@ TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {
 
 }  // namespace
 }  // namespace plantscale::telemetry
+
+namespace plantscale::telemetry {
+namespace {
+
+// Plays the station: publishes a command while frame `at` is processed.
+class StationScript : public Stage {
+ public:
+  StationScript(Transport& t, std::vector<OperatorCommands>& seen) : t_(t), seen_(seen) {}
+  std::string name() const override { return "station_script"; }
+  void Process(const VehicleFrame&, RunStatus& status, Publisher&) override {
+    seen_.push_back(status.commands);
+    const int frame = static_cast<int>(seen_.size());
+    plantscale_command_t c{};
+    c.origin = "test station";
+    if (frame == 3) c.command = plantscale_command_t::COMMAND_PAUSE;
+    if (frame == 5) c.command = plantscale_command_t::COMMAND_START;
+    if (frame == 7) c.command = plantscale_command_t::COMMAND_SET_MODE, c.mode = plantscale_command_t::MODE_SPRAY_WEED;
+    if (frame == 9) c.command = plantscale_command_t::COMMAND_SET_MODE, c.mode = plantscale_command_t::MODE_SPRAY_OFF;
+    if (frame == 11) c.command = 42;  // unknown
+    if (frame == 13) {
+      const uint8_t junk[3] = {1, 2, 3};
+      t_.Publish(channels::kCommand, junk, sizeof junk);
+      return;
+    }
+    if (c.command != 0) {
+      const Bytes b = Encode(c);
+      t_.Publish(channels::kCommand, b.data(), b.size());
+    }
+  }
+
+ private:
+  Transport& t_;
+  std::vector<OperatorCommands>& seen_;
+};
+
+TEST(VehicleRunner, ActsOnStationCommandsAndRefusesBadOnes) {
+  LcmTransport t("memq://");
+  std::vector<std::string> events;
+  t.Subscribe(channels::kEvents, [&](const ReceivedMessage& m) {
+    const auto e = Decode<plantscale_event_t>(m.channel, m.data, m.size);
+    if (e) events.push_back(e->kind + ": " + e->text);
+  });
+  Publisher publisher(t, PublisherOptions{});
+  sim::SimulatorOptions o = SmallPass();
+  o.length_m = 1.5;
+  sim::Simulator simulator(o);
+  SimFrameSource source(simulator, 1'700'000'000'000'000);
+  VehicleRunner runner(publisher, RunnerOptions{false}, 1'700'000'000'000'000);
+  runner.ListenForCommands(t);
+  std::vector<OperatorCommands> seen;
+  runner.AddStage(std::make_unique<StationScript>(t, seen));
+  runner.Run(source);
+  ASSERT_GE(seen.size(), 15u);
+  // A command sent during frame k is applied before frame k + 1.
+  EXPECT_FALSE(seen[2].paused);
+  EXPECT_TRUE(seen[3].paused);
+  EXPECT_TRUE(seen[3].held());
+  EXPECT_FALSE(seen[5].paused);
+  EXPECT_EQ(seen[6].mode, 0);
+  EXPECT_EQ(seen[7].mode, int8_t{plantscale_command_t::MODE_SPRAY_WEED});
+  EXPECT_FALSE(seen[8].held());
+  EXPECT_TRUE(seen[9].spray_off);
+  EXPECT_TRUE(seen[9].held());
+  EXPECT_EQ(seen[9].mode, int8_t{plantscale_command_t::MODE_SPRAY_WEED});  // off keeps the last mode
+  EXPECT_EQ(seen.back().received, 4);
+  EXPECT_EQ(seen.back().refused, 2);
+  const auto has = [&](const std::string& text) {
+    return std::any_of(events.begin(), events.end(), [&](const std::string& e) { return e.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(has("command: paused (nozzles closed) by test station"));
+  EXPECT_TRUE(has("command: mode: spray the weeds by test station"));
+  EXPECT_TRUE(has("command_refused: command from test station: unknown command 42"));
+  EXPECT_TRUE(has("command_refused: channel PLANTSCALE_COMMAND: cannot decode 3 bytes"));
+}
+
+}  // namespace
+}  // namespace plantscale::telemetry

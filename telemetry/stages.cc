@@ -1,5 +1,7 @@
 #include "telemetry/stages.h"
 
+#include <plantscale_lcmtypes/plantscale_command_t.hpp>
+
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -204,13 +206,21 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
   safety.last_frame_utime = system_.last_frame_utime();
   safety.odometry_valid = odometry_ok;
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
+  safety.held = status.commands.held();
+  const int8_t mode = status.commands.mode;
+  if (mode != 0) {
+    system_.set_mode(mode == plantscale_command_t::MODE_SPRAY_WEED ? treatment::SprayMode::kWeed
+                                                                   : treatment::SprayMode::kCrop);
+  }
   last_tick_ = system_.Tick(o.utime, pose, safety);
   status.failsafe = last_tick_.fail_reasons != 0;
   // The tracker reports its own loss; before the first frame the bar is
   // closed by design, not by a fault.
   if (safety.last_frame_utime >= 0) {
     for (const std::string& m : last_tick_.messages) {
-      if (m.rfind("tracker", 0) != 0) status.faults.push_back("treatment: bar closed: " + m);
+      if (m.rfind("tracker", 0) != 0 && m.rfind("held", 0) != 0) {
+        status.faults.push_back("treatment: bar closed: " + m);
+      }
     }
   }
   std::vector<Eigen::Vector2d> centre(open_since_.size(), Eigen::Vector2d::Zero());

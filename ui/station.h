@@ -5,7 +5,8 @@
 //
 // Keys: m map, p plants, g grid, l ellipses, v vehicle, f follow/free camera,
 // c ellipse confidence (50/90/95/99 %), space pause, + / − speed, ← / → seek
-// 5 s, Home restart, r measure tool, q or Esc quit. A left click on the map
+// 5 s, Home restart, r measure tool, q or Esc quit; to the vehicle (live):
+// S start, P pause, C spray the crop, W spray the weeds, O spraying off. A left click on the map
 // shows the nearest plant's record (or, with the measure tool, the ground
 // distance between two clicks); a click on the timeline seeks there.
 

@@ -79,6 +79,13 @@ class StationController {
     if (key == "Right") source_.Seek(5.0, true);
     if (key == "Home") source_.Seek(0.0, false);
     if (key == "r") measuring_ = !measuring_, first_.reset(), tool_text_.clear();
+    // Commands to the vehicle: upper case, so that no view key sends one by mistake.
+    using C = plantscale_command_t;
+    if (key == "S") tool_text_ = source_.SendCommand(C::COMMAND_START, 0);
+    if (key == "P") tool_text_ = source_.SendCommand(C::COMMAND_PAUSE, 0);
+    if (key == "C") tool_text_ = source_.SendCommand(C::COMMAND_SET_MODE, C::MODE_SPRAY_CROP);
+    if (key == "W") tool_text_ = source_.SendCommand(C::COMMAND_SET_MODE, C::MODE_SPRAY_WEED);
+    if (key == "O") tool_text_ = source_.SendCommand(C::COMMAND_SET_MODE, C::MODE_SPRAY_OFF);
     return key == "q" || key == "Escape";
   }
 

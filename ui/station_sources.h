@@ -3,6 +3,8 @@
 // (pause, speed, seek), or live LCM with the subscriber on its own thread.
 // The mutex guards the model between that thread and the UI thread.
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
@@ -10,8 +12,11 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
 #include "telemetry/transport.h"
+#include "telemetry/channels.h"
+#include "telemetry/codec.h"
 #include "ui/station_timeline.h"
 
 namespace plantscale::ui {
@@ -29,6 +34,11 @@ class Source {
   virtual void ScaleSpeed(double) {}
   virtual std::string Status() const = 0;
   virtual std::string LogError() const { return ""; }  // the log could not be read to its end
+  // Sends a station command to the vehicle (plantscale_command_t COMMAND_*,
+  // MODE_* with COMMAND_SET_MODE); returns what happened, for the HUD.
+  virtual std::string SendCommand(int8_t /*command*/, int8_t /*mode*/) {
+    return "vehicle commands need a live station (--lcm-url), not a log";
+  }
   std::mutex mutex;  // held while the model is read or changed
 };
 
@@ -84,8 +94,34 @@ class LiveSource : public Source {
   const RunModel& model() const override { return model_; }
   int64_t now_utime() const override { return telemetry::WallUtime(); }
   std::string Status() const override { return "live " + transport_.url(); }
+  std::string SendCommand(int8_t command, int8_t mode) override {
+    plantscale_command_t c{};
+    c.utime = telemetry::WallUtime();
+    c.seq = ++command_seq_;
+    c.command = command;
+    c.mode = mode;
+    char host[256] = "station";
+    gethostname(host, sizeof host - 1);
+    c.origin = std::string("station@") + host;
+    const telemetry::Bytes bytes = telemetry::Encode(c);
+    try {
+      transport_.Publish(telemetry::channels::kCommand, bytes.data(), bytes.size());
+    } catch (const telemetry::TransportError& e) {
+      return std::string("command not sent: ") + e.what();
+    }
+    return "sent to the vehicle: " + CommandText(command, mode);
+  }
+  static std::string CommandText(int8_t command, int8_t mode) {
+    if (command == plantscale_command_t::COMMAND_START) return "start";
+    if (command == plantscale_command_t::COMMAND_PAUSE) return "pause";
+    if (mode == plantscale_command_t::MODE_SPRAY_CROP) return "spray the crop";
+    if (mode == plantscale_command_t::MODE_SPRAY_WEED) return "spray the weeds";
+    return "spraying off";
+  }
+  const telemetry::Subscriber& subscriber() const { return subscriber_; }
 
  private:
+  int64_t command_seq_ = 0;
   telemetry::LcmTransport transport_;
   telemetry::Subscriber subscriber_;
   RunModel model_;

@@ -9,6 +9,7 @@
 #include "ui/palette.h"
 #include "ui/scene_test_util.h"
 #include "ui/station.h"
+#include "ui/station_sources.h"
 
 namespace plantscale::ui {
 namespace {
@@ -83,6 +84,40 @@ TEST(Station, SaysWhatIsWrongWithBadLogs) {
     for (int i = 0; i < 5; ++i) w.Write("OTHER", "abc", 3, 1000 + i * 1000);
   }
   EXPECT_TRUE(Says(RunOn(foreign), "no plantscale messages"));
+}
+
+}  // namespace
+}  // namespace plantscale::ui
+
+namespace plantscale::ui {
+namespace {
+
+// A live station's command keys publish on PLANTSCALE_COMMAND (here over
+// memq://, which the live source's own subscriber also hears); a log
+// source says commands need a live vehicle. No display needed.
+TEST(StationSources, LiveSourceSendsCommandsALogSourceDoesNot) {
+  LiveSource live("memq://");
+  EXPECT_EQ(live.SendCommand(plantscale_command_t::COMMAND_PAUSE, 0), "sent to the vehicle: pause");
+  EXPECT_EQ(live.SendCommand(plantscale_command_t::COMMAND_SET_MODE, plantscale_command_t::MODE_SPRAY_WEED),
+            "sent to the vehicle: spray the weeds");
+  std::optional<plantscale_command_t> got;
+  for (int i = 0; i < 100 && !(got && got->seq == 2); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    got = live.subscriber().Snapshot().command;
+  }
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(got->seq, 2);
+  EXPECT_EQ(got->command, int8_t{plantscale_command_t::COMMAND_SET_MODE});
+  EXPECT_EQ(got->mode, int8_t{plantscale_command_t::MODE_SPRAY_WEED});
+  EXPECT_EQ(got->origin.rfind("station@", 0), 0u) << got->origin;
+
+  SyntheticRunOptions o;
+  o.length_m = 2.0;
+  const std::filesystem::path log = std::filesystem::temp_directory_path() / ("plantscale_cmd_" + std::to_string(::getpid()) + ".lcmlog");
+  WriteSyntheticLog(log, o);
+  LogSource replay(log, 1.0);
+  EXPECT_NE(replay.SendCommand(plantscale_command_t::COMMAND_PAUSE, 0).find("need a live station"), std::string::npos);
+  std::filesystem::remove(log);
 }
 
 }  // namespace

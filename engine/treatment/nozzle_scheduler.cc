@@ -78,6 +78,7 @@ uint32_t CheckFailSafe(int64_t now, const SafetyInputs& in, const FailSafeOption
   }
   if (!in.odometry_valid) say(kOdometryInvalid, "odometry invalid (last sample refused)");
   if (!in.tracking) say(kTrackerLost, "tracker has lost the grid");
+  if (in.held) say(kOperatorHold, "held by the operator (paused or spraying off)");
   return reasons;
 }
 
@@ -87,6 +88,7 @@ std::vector<std::string> FailReasonMessages(uint32_t reasons) {
   if (reasons & kCameraLost) out.emplace_back("camera lost");
   if (reasons & kOdometryInvalid) out.emplace_back("odometry invalid");
   if (reasons & kTrackerLost) out.emplace_back("tracker lost");
+  if (reasons & kOperatorHold) out.emplace_back("held by the operator");
   return out;
 }
 

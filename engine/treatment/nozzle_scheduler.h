@@ -59,6 +59,7 @@ struct SafetyInputs {
   bool camera_ok = true;          // the camera source reports no fault
   bool odometry_valid = true;     // the last odometry sample was accepted
   bool tracking = false;          // the tracker holds the grid
+  bool held = false;              // the operator paused spraying or switched it off
 };
 
 enum FailReason : uint32_t {
@@ -66,6 +67,7 @@ enum FailReason : uint32_t {
   kCameraLost = 1u << 1,
   kOdometryInvalid = 1u << 2,
   kTrackerLost = 1u << 3,
+  kOperatorHold = 1u << 4,
 };
 // "pose stale (130 ms > 100 ms)", ...: one message per reason set in `reasons`.
 std::vector<std::string> FailReasonMessages(uint32_t reasons);
@@ -103,6 +105,7 @@ class NozzleScheduler {
 
   const SchedulerOptions& options() const { return options_; }
   void set_sink(NozzleSink sink) { sink_ = std::move(sink); }
+  void set_mode(SprayMode mode) { options_.mode = mode; }
 
  private:
   SchedulerOptions options_;

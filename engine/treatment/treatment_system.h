@@ -70,6 +70,11 @@ class TreatmentSystem {
   std::vector<int> TakeNewlySprayed() { return std::exchange(newly_sprayed_, {}); }
   const TreatmentOptions& options() const { return options_; }
   void set_sink(NozzleSink sink) { scheduler_.set_sink(std::move(sink)); }
+  // Spray the crop or the weeds from the next tick on (a station command).
+  void set_mode(SprayMode mode) {
+    scheduler_.set_mode(mode);
+    options_.scheduler.mode = mode;
+  }
   int map_resets() const { return map_resets_; }
 
  private:

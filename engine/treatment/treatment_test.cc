@@ -201,6 +201,9 @@ TEST(NozzleScheduler, FailSafeClosesEveryNozzleAndSaysWhy) {
   SafetyInputs lost = Healthy(now);
   lost.tracking = false;
   cases.push_back({lost, kTrackerLost, "tracker has lost the grid"});
+  SafetyInputs held = Healthy(now);
+  held.held = true;
+  cases.push_back({held, kOperatorHold, "held by the operator (paused or spraying off)"});
   for (const Case& c : cases) {
     const TickResult r = scheduler.Tick(now, pose, map, c.in);
     EXPECT_EQ(r.open_mask, 0u) << c.text;
@@ -227,6 +230,9 @@ TEST(NozzleScheduler, WeedModeSpraysWeedCellsOnly) {
   // Bar over bed y = 0: s = 0.5 (latency lead at speed 0 is nil).
   const TickResult r = scheduler.Tick(0, Pose(0.0, 0.0, 0.5, 0.0), map, Healthy(0));
   EXPECT_EQ(r.open_mask, uint64_t{1} << 1);  // x = −0.125
+  // The station switches to the crop: the other nozzle from the next tick.
+  scheduler.set_mode(SprayMode::kCrop);
+  EXPECT_EQ(scheduler.Tick(1, Pose(0.0, 0.0, 0.5, 0.0), map, Healthy(1)).open_mask, uint64_t{1} << 6);  // x = +0.125
 }
 
 TEST(NozzleScheduler, BadOptionsAreNamed) {
