@@ -292,6 +292,9 @@ void SprayBar::Evaluate(int64_t utime) {
       active.push_back("command seq " + std::to_string(outstanding_.front().seq) +
                        " not acknowledged in " + Seconds(waited_s) + " (timeout " +
                        Seconds(options_.ack_timeout_s) + ")");
+      // Given up as lost (the reason stays latched): later acknowledgements
+      // of newer commands are then in sequence again.
+      outstanding_.clear();
     }
   }
   // Lasting conditions latch too: after they clear the bar must prove
