@@ -12,6 +12,8 @@
 #include "app/camera_source.h"
 #include "app/config_loader.h"
 #include "app/tracking_eval.h"
+#include "telemetry/can/spray_bar.h"
+#include "telemetry/can/spray_bar_stage.h"
 #include "telemetry/log.h"
 #include "telemetry/log_stats.h"
 #include "telemetry/replay.h"
@@ -54,6 +56,23 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
   cmd->add_option("--lcm-url", a.lcm_url,
                   "with --publish: LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
+  AddCanOption(cmd, a);
+}
+
+void AddCanOption(CLI::App* cmd, PublishArgs& a) {
+  cmd->add_option("--can", a.can,
+                  "SocketCAN interface of the spray bar (e.g. can0; telemetry/can/PROTOCOL.md); "
+                  "not with --fast");
+}
+
+std::unique_ptr<telemetry::can::SprayBar> OpenSprayBar(const PublishArgs& args) {
+  if (args.can.empty()) return nullptr;
+  if (args.fast) {
+    throw ConfigError("command line", "--can",
+                      "not with --fast: the spray bar's heartbeat watchdog needs real time");
+  }
+  return std::make_unique<telemetry::can::SprayBar>(
+      telemetry::can::SprayBar::Open(args.can, telemetry::can::SprayBarOptions{}));
 }
 
 namespace {
@@ -70,7 +89,8 @@ struct TrackerSetup {
 };
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
-               const std::string& title, const std::optional<TrackerSetup>& tracker = {}) {
+               const std::string& title, tm::can::SprayBar* bar,
+               const std::optional<TrackerSetup>& tracker = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
@@ -87,6 +107,16 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
   tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
   clock = &runner;
+  // The spray bar (--can): the treatment scheduler drives it through
+  // `nozzle_sink`; until a scheduler does, its stage commands every nozzle
+  // closed each frame so the bar stays supervised. Before HealthStage, which
+  // reports its fail-safe state and faults.
+  std::function<void(int64_t, uint64_t)> nozzle_sink;
+  if (bar != nullptr) {
+    nozzle_sink = bar->Sink();
+    const bool scheduler_drives_bar = false;
+    runner.AddStage(std::make_unique<tm::can::SprayBarStage>(*bar, !scheduler_drives_bar));
+  }
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
   auto segmentation = std::make_unique<tm::SegmentationStage>(
@@ -109,6 +139,14 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
             << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
   PrintPublisherTraffic(publisher, s.seconds);
   if (log) std::cout << "  log               " << args.log << " (" << log->events() << " events)\n";
+  if (bar != nullptr) {
+    const tm::can::SprayBarStatus& b = bar->status();
+    std::cout << "  spray bar         " << bar->endpoint() << ": " << b.commands_sent
+              << " commands, " << b.acks << " acks, " << b.heartbeats << " heartbeats, "
+              << b.frames_rejected << " frames rejected, " << b.sequence_gaps
+              << " sequence gaps" << (b.failsafe ? ", fail-safe" : "") << '\n';
+    for (const std::string& line : bar->HealthFaults()) std::cout << "    " << line << '\n';
+  }
   return 0;
 }
 
@@ -118,17 +156,19 @@ struct RunArgs {
 };
 
 int Run(const RunArgs& a) {
+  std::unique_ptr<tm::can::SprayBar> bar = OpenSprayBar(a.publish);  // before anything else
   return RunVehicle(
       a.publish,
       [&a](tm::Transport& t, int64_t boot) {
         return std::make_unique<CameraFrameSource>(a.camera, t, boot);
       },
-      false, "plantscale run: camera " + a.camera.camera);
+      false, "plantscale run: camera " + a.camera.camera, bar.get());
 }
 
 }  // namespace
 
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+  std::unique_ptr<tm::can::SprayBar> bar = OpenSprayBar(args);  // before anything else
   sim::Simulator simulator(options);
   return RunVehicle(
       args,
@@ -138,7 +178,7 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
+      bar.get(), TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
 }
 
 namespace {
@@ -216,6 +256,7 @@ void AddTelemetryCommands(CommandRegistry& registry) {
   rc->add_option("--lcm-url", run.publish.lcm_url,
                  "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
+  AddCanOption(rc, run.publish);
 
   ReplayArgs& replay = registry.Keep(ReplayArgs{});
   CLI::App* r = registry.Add("replay", "republish an LCM log with its original timing",

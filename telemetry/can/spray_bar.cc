@@ -68,20 +68,20 @@ UniqueFd OpenSocketCan(const std::string& interface, const ProtocolIds& ids) {
     throw CanError(what + "name longer than " + std::to_string(IFNAMSIZ - 1) +
                    " characters (IFNAMSIZ)");
   }
-  // Whether the interface exists does not depend on CAN support: say so first.
-  if (::if_nametoindex(interface.c_str()) == 0) {
-    const int e = errno;
-    throw CanError(what + "no such network interface (" + Errno(e) +
-                   "; `ip link` lists them, a virtual bus is `ip link add dev " + interface +
-                   " type vcan`)");
-  }
+  // Whether the interface exists does not depend on CAN support: say both.
+  const bool exists = ::if_nametoindex(interface.c_str()) != 0;
+  const std::string missing = "no such network interface (" + Errno(ENODEV) +
+                              "; `ip link` lists them, a virtual bus is `ip link add dev " +
+                              interface + " type vcan`)";
   UniqueFd fd(::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW));
   if (fd.get() < 0) {
     const int e = errno;
     std::string hint;
     if (e == EAFNOSUPPORT) hint = " (this kernel has no SocketCAN: modules can and can_raw)";
-    throw CanError(what + "socket(PF_CAN, SOCK_RAW, CAN_RAW): " + Errno(e) + hint);
+    throw CanError(what + "socket(PF_CAN, SOCK_RAW, CAN_RAW): " + Errno(e) + hint +
+                   (exists ? "" : "; and " + missing));
   }
+  if (!exists) throw CanError(what + missing);
   ifreq ifr;
   std::memset(&ifr, 0, sizeof ifr);
   std::memcpy(ifr.ifr_name, interface.c_str(), interface.size());

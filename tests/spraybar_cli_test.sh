@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Command-line contract of --can IFACE (issue 6, telemetry/can): the spray
+# bar is opened before anything else, and an interface that cannot be opened
+# ends `plantscale run` and `plantscale simulate --publish` with exit 1 and a
+# message naming the interface, the call and the errno text, before any
+# telemetry is published or logged. This machine's kernel has no SocketCAN;
+# the interface names used here never exist, so the expectations hold on a
+# kernel with SocketCAN too.
+set -uo pipefail
+plantscale="$1"
+work="$2"
+rm -rf "$work" && mkdir -p "$work"
+failures=0
+source "$(dirname "$0")/cli_lib.sh"
+
+missing="cannot open CAN interface 'nocanbus9': .*no such network interface \(No such device"
+expect 1 "$missing" -- "$plantscale" simulate --preset testbed --length-m 2 --publish \
+  --lcm-url memq:// --log "$work/sim.lcmlog" --can nocanbus9
+[[ -e "$work/sim.lcmlog" ]] && fail "simulate wrote a log although the spray bar could not be opened"
+mkdir -p "$work/empty"
+expect 1 "$missing" -- "$plantscale" run --camera "$work/empty" --lcm-url memq:// \
+  --log "$work/run.lcmlog" --can nocanbus9
+[[ -e "$work/run.lcmlog" ]] && fail "run wrote a log although the spray bar could not be opened"
+
+# `lo` exists everywhere and is not a CAN interface: without SocketCAN the
+# socket call fails (this machine), with it the bind does.
+expect 1 "cannot open CAN interface 'lo': (socket\(PF_CAN, SOCK_RAW, CAN_RAW\): Address family not supported by protocol \(this kernel has no SocketCAN|bind: )" \
+  -- "$plantscale" simulate --preset testbed --length-m 2 --publish --lcm-url memq:// --can lo
+if python3 -c 'import socket,sys; socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)' 2>/dev/null; then
+  echo "skip: this kernel has SocketCAN (no EAFNOSUPPORT case)"
+else
+  expect 1 "socket\(PF_CAN, SOCK_RAW, CAN_RAW\): Address family not supported by protocol" \
+    -- "$plantscale" run --camera "$work/empty" --lcm-url memq:// --can lo
+fi
+
+expect 1 "cannot open CAN interface 'a_very_long_can_name0': name longer than 15 characters" \
+  -- "$plantscale" simulate --preset testbed --publish --lcm-url memq:// --can a_very_long_can_name0
+expect 2 "--can: not with --fast" -- "$plantscale" simulate --preset testbed --publish --fast \
+  --lcm-url memq:// --can nocanbus9
+expect 2 "--can: only with --publish" -- "$plantscale" simulate --preset testbed --out "$work/x" \
+  --can nocanbus9
+[[ -e "$work/x" ]] && fail "simulate wrote output with a bad --can"
+
+echo "$failures failure(s)"
+exit $((failures > 0))
