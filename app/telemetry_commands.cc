@@ -61,18 +61,31 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
 
 void AddCanOption(CLI::App* cmd, PublishArgs& a) {
   cmd->add_option("--can", a.can,
-                  "SocketCAN interface of the spray bar (e.g. can0; telemetry/can/PROTOCOL.md); "
-                  "not with --fast");
+                  "SocketCAN interface of the spray bar (e.g. can0; telemetry/can/PROTOCOL.md), "
+                  "not with --fast; simulate also takes 'simulated' (a simulated bar)");
 }
 
-std::unique_ptr<telemetry::can::SprayBar> OpenSprayBar(const PublishArgs& args) {
-  if (args.can.empty()) return nullptr;
+SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated) {
+  namespace can = telemetry::can;
+  SprayBarEndpoint e;
+  if (args.can.empty()) return e;
+  if (args.can == kSimulatedBar) {
+    if (!allow_simulated) {
+      throw ConfigError("command line", "--can", "'simulated' only with simulate --publish");
+    }
+    auto [vehicle_end, bar_end] = can::CanFramePipe();
+    e.bar = std::make_unique<can::SprayBar>(std::move(vehicle_end), can::SprayBarOptions{},
+                                            kSimulatedBar);
+    e.simulated =
+        std::make_unique<can::SimulatedBar>(std::move(bar_end), can::SimulatedBarOptions{});
+    return e;
+  }
   if (args.fast) {
     throw ConfigError("command line", "--can",
                       "not with --fast: the spray bar's heartbeat watchdog needs real time");
   }
-  return std::make_unique<telemetry::can::SprayBar>(
-      telemetry::can::SprayBar::Open(args.can, telemetry::can::SprayBarOptions{}));
+  e.bar = std::make_unique<can::SprayBar>(can::SprayBar::Open(args.can, can::SprayBarOptions{}));
+  return e;
 }
 
 namespace {
@@ -89,7 +102,7 @@ struct TrackerSetup {
 };
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
-               const std::string& title, tm::can::SprayBar* bar,
+               const std::string& title, const SprayBarEndpoint& endpoint,
                const std::optional<TrackerSetup>& tracker = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
@@ -111,11 +124,15 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   // `nozzle_sink`; until a scheduler does, its stage commands every nozzle
   // closed each frame so the bar stays supervised. Before HealthStage, which
   // reports its fail-safe state and faults.
+  tm::can::SprayBar* bar = endpoint.bar.get();
   std::function<void(int64_t, uint64_t)> nozzle_sink;
   if (bar != nullptr) {
     nozzle_sink = bar->Sink();
     const bool scheduler_drives_bar = false;
     runner.AddStage(std::make_unique<tm::can::SprayBarStage>(*bar, !scheduler_drives_bar));
+  }
+  if (endpoint.simulated) {
+    runner.AddStage(std::make_unique<tm::can::SimulatedBarStage>(*endpoint.simulated));
   }
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
@@ -147,6 +164,11 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
               << " sequence gaps" << (b.failsafe ? ", fail-safe" : "") << '\n';
     for (const std::string& line : bar->HealthFaults()) std::cout << "    " << line << '\n';
   }
+  if (endpoint.simulated) {
+    std::cout << "  simulated bar     " << endpoint.simulated->commands().size()
+              << " commands received, " << endpoint.simulated->history().size()
+              << " valve changes, " << endpoint.simulated->errors().size() << " bad frames\n";
+  }
   return 0;
 }
 
@@ -156,19 +178,19 @@ struct RunArgs {
 };
 
 int Run(const RunArgs& a) {
-  std::unique_ptr<tm::can::SprayBar> bar = OpenSprayBar(a.publish);  // before anything else
+  const SprayBarEndpoint bar = OpenSprayBar(a.publish, false);  // before anything else
   return RunVehicle(
       a.publish,
       [&a](tm::Transport& t, int64_t boot) {
         return std::make_unique<CameraFrameSource>(a.camera, t, boot);
       },
-      false, "plantscale run: camera " + a.camera.camera, bar.get());
+      false, "plantscale run: camera " + a.camera.camera, bar);
 }
 
 }  // namespace
 
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
-  std::unique_ptr<tm::can::SprayBar> bar = OpenSprayBar(args);  // before anything else
+  const SprayBarEndpoint bar = OpenSprayBar(args, true);  // before anything else
   sim::Simulator simulator(options);
   return RunVehicle(
       args,
@@ -178,7 +200,7 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      bar.get(), TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
+      bar, TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
 }
 
 namespace {

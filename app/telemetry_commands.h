@@ -11,6 +11,7 @@
 
 #include "app/command_registry.h"
 #include "engine/sim/simulator.h"
+#include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
 
 namespace plantscale::app {
@@ -26,9 +27,17 @@ struct PublishArgs {
 void AddPublishOptions(CLI::App* command, PublishArgs& args);
 // --can IFACE (in AddPublishOptions and on `run`).
 void AddCanOption(CLI::App* command, PublishArgs& args);
-// The spray bar on args.can (nullptr when empty). Throws CanError naming the
-// interface and why it cannot be opened; ConfigError with --fast.
-std::unique_ptr<telemetry::can::SprayBar> OpenSprayBar(const PublishArgs& args);
+// The spray bar of --can: a SocketCAN interface, or (simulate only) the
+// word `simulated` for a SimulatedBar in process over a socketpair.
+struct SprayBarEndpoint {
+  std::unique_ptr<telemetry::can::SprayBar> bar;  // nullptr: no --can
+  std::unique_ptr<telemetry::can::SimulatedBar> simulated;
+};
+inline constexpr char kSimulatedBar[] = "simulated";
+// Throws CanError naming the interface and why it cannot be opened;
+// ConfigError for --fast with a real interface, or `simulated` without
+// `allow_simulated`.
+SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated);
 // Runs the simulator through the vehicle runner and publishes; prints a
 // summary with the traffic per channel. Returns the exit code.
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args);

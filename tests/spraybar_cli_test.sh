@@ -41,5 +41,30 @@ expect 2 "--can: only with --publish" -- "$plantscale" simulate --preset testbed
   --can nocanbus9
 [[ -e "$work/x" ]] && fail "simulate wrote output with a bad --can"
 
+# The whole vehicle path with the bar played in process over a socketpair
+# (same codec and SprayBar as on SocketCAN): every frame commands the bar,
+# every command but the last is acknowledged, heartbeats arrive, nothing is
+# malformed, and the bar is out of fail-safe at the end.
+out=$("$plantscale" simulate --preset testbed --length-m 2 --publish --fast --lcm-url memq:// \
+  --can simulated 2>&1)
+status=$?
+[[ $status -eq 0 ]] || fail "simulate --can simulated exited $status"
+line=$(grep -E "^  spray bar +simulated: " <<<"$out")
+read -r commands acks heartbeats rejected gaps < <(sed -E \
+  's/.*: ([0-9]+) commands, ([0-9]+) acks, ([0-9]+) heartbeats, ([0-9]+) frames rejected, ([0-9]+) sequence gaps.*/\1 \2 \3 \4 \5/' <<<"$line")
+frames=$(grep -oE "[0-9]+ frames \(" <<<"$out" | grep -oE "^[0-9]+")
+if [[ -z "${commands:-}" || -z "${frames:-}" ]]; then
+  fail "no spray bar summary in: $out"
+else
+  [[ $commands -eq $frames ]] || fail "spray bar: $commands commands for $frames frames"
+  [[ $acks -eq $((commands - 1)) ]] || fail "spray bar: $acks acks for $commands commands"
+  [[ $heartbeats -ge $((frames - 1)) ]] || fail "spray bar: $heartbeats heartbeats over $frames frames"
+  [[ $rejected -eq 0 && $gaps -eq 0 ]] || fail "spray bar: $rejected rejected, $gaps gaps"
+  grep -q "fail-safe" <<<"$line" && fail "spray bar fail-safe at the end: $line"
+  echo "ok: simulated bar: $commands commands, $acks acks, $heartbeats heartbeats over $frames frames"
+fi
+expect 2 "--can: 'simulated' only with simulate --publish" -- "$plantscale" run --camera "$work/empty" \
+  --lcm-url memq:// --can simulated
+
 echo "$failures failure(s)"
 exit $((failures > 0))

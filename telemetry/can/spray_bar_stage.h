@@ -9,6 +9,7 @@
 // one does, the stage commands all nozzles closed every frame
 // (`command_closed` true) so the bar stays supervised and its hold is fed.
 
+#include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
 #include "telemetry/runner.h"
 #include "telemetry/types.h"
@@ -27,6 +28,18 @@ class SprayBarStage : public Stage {
  private:
   SprayBar& bar_;
   bool command_closed_;
+};
+
+// Plays the bar's end in a simulated run: steps `bar` on the frame's
+// message time (reads and acknowledges commands, sends heartbeats and faults).
+class SimulatedBarStage : public Stage {
+ public:
+  explicit SimulatedBarStage(SimulatedBar& bar) : bar_(bar) {}
+  std::string name() const override { return "simulated_bar"; }
+  void Process(const VehicleFrame& frame, RunStatus&, Publisher&) override { bar_.Step(frame.utime); }
+
+ private:
+  SimulatedBar& bar_;
 };
 
 // Open nozzles as the bar acknowledged them, per-nozzle fault codes

@@ -8,11 +8,14 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <plantscale_lcmtypes/plantscale_health_t.hpp>
 #include <plantscale_lcmtypes/plantscale_nozzles_t.hpp>
 
 #include "engine/common/check.h"
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar_stage.h"
+#include "telemetry/channels.h"
+#include "telemetry/stages.h"
 #include "telemetry/testing.h"
 
 namespace plantscale::telemetry::can {
@@ -340,6 +343,74 @@ TEST_F(SprayBarTest, StageReportsTheBarInTheHeartbeatAndCommandsClosed) {
   sim_->Step(t_);
   EXPECT_EQ(sim_->commands().size(), 11u);  // one per frame
   EXPECT_EQ(sim_->commands().back().open_mask, 0u);
+}
+
+// Frames every 40 ms with no image: enough for the bar and heartbeat stages.
+class TickSource : public FrameSource {
+ public:
+  TickSource(int64_t start_utime, int frames) : utime_(start_utime), left_(frames) {}
+  bool Next(VehicleFrame& frame) override {
+    if (left_-- <= 0) return false;
+    frame.utime = utime_;
+    frame.frame_index = index_++;
+    utime_ += 40'000;
+    return true;
+  }
+  int dropped_frames() const override { return 0; }
+  std::string name() const override { return "test"; }
+
+ private:
+  int64_t utime_;
+  int left_;
+  int index_ = 0;
+};
+
+std::vector<plantscale_health_t> HealthMessages(const testing::RecordingTransport& transport) {
+  std::vector<plantscale_health_t> out;
+  for (const auto& sent : transport.sent) {
+    if (sent.channel != channels::kHealth) continue;
+    plantscale_health_t m;
+    EXPECT_GT(m.decode(sent.bytes.data(), 0, static_cast<int>(sent.bytes.size())), 0);
+    out.push_back(m);
+  }
+  return out;
+}
+
+TEST_F(SprayBarTest, HeartbeatChannelCarriesTheBarsFailSafeReasonsAndNozzleFaults) {
+  testing::RecordingTransport transport;
+  Publisher publisher(transport, PublisherOptions{});
+  {
+    VehicleRunner runner(publisher, RunnerOptions{false}, t_);
+    runner.AddStage(std::make_unique<SprayBarStage>(*vehicle_, true));
+    runner.AddStage(std::make_unique<SimulatedBarStage>(*sim_));
+    runner.AddStage(std::make_unique<HealthStage>());
+    TickSource source(t_, 50);  // 2 s: health at 2 Hz
+    runner.Run(source);
+    t_ += 50 * 40'000;
+  }
+  std::vector<plantscale_health_t> health = HealthMessages(transport);
+  ASSERT_GE(health.size(), 4u);
+  EXPECT_EQ(health.front().failsafe, 1);
+  EXPECT_THAT(health.front().faults,
+              Contains("spray bar socketpair: fail-safe: waiting for the bar's first heartbeat"));
+  EXPECT_THAT(health.back().faults, IsEmpty());  // bar heard and healthy
+  EXPECT_FALSE(status().failsafe);
+
+  sim_->InjectFault(3, NozzleFault::kShortCircuit);
+  transport.sent.clear();
+  {
+    VehicleRunner runner(publisher, RunnerOptions{false}, t_);
+    runner.AddStage(std::make_unique<SprayBarStage>(*vehicle_, true));
+    runner.AddStage(std::make_unique<SimulatedBarStage>(*sim_));
+    runner.AddStage(std::make_unique<HealthStage>());
+    TickSource source(t_, 25);
+    runner.Run(source);
+  }
+  health = HealthMessages(transport);
+  ASSERT_GE(health.size(), 1u);
+  EXPECT_THAT(health.back().faults,
+              Contains("spray bar socketpair: nozzle 3: valve coil short circuit"));
+  EXPECT_FALSE(status().failsafe);
 }
 
 TEST(SprayBarOpenTest, InterfaceThatDoesNotExistIsAClearError) {
