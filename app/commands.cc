@@ -4,6 +4,7 @@
 #include "app/motion_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
+#include "app/spraybar_commands.h"
 #include "app/telemetry_commands.h"
 #include "app/tracking_commands.h"
 #include "app/ui_commands.h"
@@ -18,6 +19,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddTrackingCommands(registry_);
   AddMotionCommands(registry_);
   AddUiCommands(registry_);
+  AddSprayBarCommands(registry_);
 }
 
 }  // namespace plantscale::app

@@ -65,7 +65,8 @@ void AddCanOption(CLI::App* cmd, PublishArgs& a) {
                   "not with --fast; simulate also takes 'simulated' (a simulated bar)");
 }
 
-SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated) {
+SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
+                              const telemetry::can::SprayBarOptions& options) {
   namespace can = telemetry::can;
   SprayBarEndpoint e;
   if (args.can.empty()) return e;
@@ -74,17 +75,18 @@ SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated) {
       throw ConfigError("command line", "--can", "'simulated' only with simulate --publish");
     }
     auto [vehicle_end, bar_end] = can::CanFramePipe();
-    e.bar = std::make_unique<can::SprayBar>(std::move(vehicle_end), can::SprayBarOptions{},
-                                            kSimulatedBar);
-    e.simulated =
-        std::make_unique<can::SimulatedBar>(std::move(bar_end), can::SimulatedBarOptions{});
+    e.bar = std::make_unique<can::SprayBar>(std::move(vehicle_end), options, kSimulatedBar);
+    can::SimulatedBarOptions sim;
+    sim.num_nozzles = options.num_nozzles;
+    sim.ids = options.ids;
+    e.simulated = std::make_unique<can::SimulatedBar>(std::move(bar_end), sim);
     return e;
   }
   if (args.fast) {
     throw ConfigError("command line", "--can",
                       "not with --fast: the spray bar's heartbeat watchdog needs real time");
   }
-  e.bar = std::make_unique<can::SprayBar>(can::SprayBar::Open(args.can, can::SprayBarOptions{}));
+  e.bar = std::make_unique<can::SprayBar>(can::SprayBar::Open(args.can, options));
   return e;
 }
 

@@ -37,7 +37,9 @@ inline constexpr char kSimulatedBar[] = "simulated";
 // Throws CanError naming the interface and why it cannot be opened;
 // ConfigError for --fast with a real interface, or `simulated` without
 // `allow_simulated`.
-SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated);
+// A simulated bar has options.num_nozzles nozzles.
+SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
+                              const telemetry::can::SprayBarOptions& options = {});
 // Runs the simulator through the vehicle runner and publishes; prints a
 // summary with the traffic per channel. Returns the exit code.
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args);

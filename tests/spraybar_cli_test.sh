@@ -66,5 +66,29 @@ fi
 expect 2 "--can: 'simulated' only with simulate --publish" -- "$plantscale" run --camera "$work/empty" \
   --lcm-url memq:// --can simulated
 
+# The diagnostic command: the same error for a missing interface; on the
+# simulated bar, a walking test pattern in real time, every command
+# acknowledged and the bar healthy at the end.
+expect 1 "$missing" -- "$plantscale" spraybar --can nocanbus9 --seconds 0.2
+expect 2 "num_nozzles: must be in \[1, 32\] \(got 40\)" -- "$plantscale" spraybar --can simulated --nozzles 40
+json=$("$plantscale" spraybar --can simulated --nozzles 4 --seconds 0.6 --test-pattern --json)
+status=$?
+[[ $status -eq 0 ]] || fail "spraybar --can simulated exited $status: $json"
+for key in interface nozzles commands acks heartbeats frames_rejected sequence_gaps failsafe reasons \
+  nozzle_faults; do
+  grep -q "\"$key\"" <<<"$json" || fail "spraybar --json lacks $key"
+done
+python3 - "$json" <<'PY' || fail "spraybar --json values"
+import json, sys
+j = json.loads(sys.argv[1])
+assert j["commands"] == 30, j            # 0.6 s at 50 Hz
+assert j["acks"] == j["commands"], j
+assert j["heartbeats"] >= 6, j           # 20 Hz bar, allowing for a loaded machine
+assert j["frames_rejected"] == 0 and j["sequence_gaps"] == 0, j
+assert j["failsafe"] is False and j["reasons"] == [], j
+assert j["nozzle_faults"] == ["ok"] * 4, j
+print("ok: spraybar simulated:", j["commands"], "commands,", j["heartbeats"], "heartbeats")
+PY
+
 echo "$failures failure(s)"
 exit $((failures > 0))

@@ -38,7 +38,8 @@ std::string Hex(uint32_t v) {
 
 void RequireZero(const can_frame& f, const char* what, int from, int to) {
   for (int i = from; i < to; ++i) {
-    if (f.data[i] != 0) Fail(f, std::string(what) + ": reserved byte " + std::to_string(i) + " is not 0");
+    if (f.data[i] != 0)
+      Fail(f, std::string(what) + ": reserved byte " + std::to_string(i) + " is not 0");
   }
 }
 
@@ -62,10 +63,14 @@ can_filter ProtocolIds::Filter() const {
 
 const char* NozzleFaultName(NozzleFault fault) {
   switch (fault) {
-    case NozzleFault::kNone: return "ok";
-    case NozzleFault::kOpenCircuit: return "valve coil open circuit";
-    case NozzleFault::kShortCircuit: return "valve coil short circuit";
-    case NozzleFault::kStuck: return "valve stuck (flow disagrees with command)";
+    case NozzleFault::kNone:
+      return "ok";
+    case NozzleFault::kOpenCircuit:
+      return "valve coil open circuit";
+    case NozzleFault::kShortCircuit:
+      return "valve coil short circuit";
+    case NozzleFault::kStuck:
+      return "valve stuck (flow disagrees with command)";
   }
   return "unknown";
 }
@@ -100,7 +105,8 @@ can_frame Encode(const ProtocolIds& ids, const BarHeartbeat& m) {
 can_frame Encode(const ProtocolIds& ids, const NozzleFaults& m) {
   can_frame f = Frame(ids, MessageKind::kFaults);
   for (int i = 0; i < kMaxNozzles; ++i) {
-    f.data[i / 4] |= static_cast<uint8_t>((static_cast<unsigned>(m.fault[i]) & 0x3u) << (2 * (i % 4)));
+    f.data[i / 4] |=
+        static_cast<uint8_t>((static_cast<unsigned>(m.fault[i]) & 0x3u) << (2 * (i % 4)));
   }
   return f;
 }
@@ -127,7 +133,8 @@ BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
       m.flags = f.data[1];
       m.open_mask = GetU32(f.data + 2);
       m.hold_ms = static_cast<uint16_t>(f.data[6] | (f.data[7] << 8));
-      if ((m.flags & ~NozzleCommand::kFlagFailsafe) != 0) Fail(f, "nozzle command: unknown flag bits");
+      if ((m.flags & ~NozzleCommand::kFlagFailsafe) != 0)
+        Fail(f, "nozzle command: unknown flag bits");
       if (m.hold_ms == 0) Fail(f, "nozzle command: hold_ms is 0");
       if ((m.flags & NozzleCommand::kFlagFailsafe) != 0 && m.open_mask != 0) {
         Fail(f, "nozzle command: fail-safe flag with nozzles open");

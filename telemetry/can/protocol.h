@@ -5,7 +5,8 @@
 //   base+0  NozzleCommand   vehicle -> bar  DLC 8  seq, flags, open mask (u32 LE), hold ms (u16 LE)
 //   base+1  NozzleAck       bar -> vehicle  DLC 8  seq, status, applied mask (u32 LE), 0, 0
 //   base+2  BarHeartbeat    bar -> vehicle  DLC 4  counter, state, nozzles, protocol version
-//   base+3  NozzleFaults    bar -> vehicle  DLC 8  2-bit fault code per nozzle, nozzle 0 in bits 0-1
+//   base+3  NozzleFaults    bar -> vehicle  DLC 8  2-bit fault code per nozzle, nozzle 0 in bits
+//   0-1
 //
 // Encode() builds a `struct can_frame` (linux/can.h); Decode() checks the
 // identifier, flags, DLC and every field and throws CanProtocolError naming
@@ -24,7 +25,7 @@
 namespace plantscale::telemetry::can {
 
 inline constexpr uint8_t kProtocolVersion = 1;
-inline constexpr int kMaxNozzles = 32;        // one bit each in a u32 mask
+inline constexpr int kMaxNozzles = 32;  // one bit each in a u32 mask
 inline constexpr uint32_t kDefaultBaseId = 0x210;
 
 // A frame that does not follow the protocol (wrong identifier, DLC, flags or
@@ -51,7 +52,7 @@ struct ProtocolIds {
 // `hold_ms` (the bar-side dead-man).
 struct NozzleCommand {
   static constexpr uint8_t kFlagFailsafe = 0x01;  // vehicle is fail-safe: mask is all closed
-  uint8_t seq = 0;                                 // +1 per command, modulo 256
+  uint8_t seq = 0;                                // +1 per command, modulo 256
   uint8_t flags = 0;
   uint32_t open_mask = 0;
   uint16_t hold_ms = 0;  // > 0

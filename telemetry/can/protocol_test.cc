@@ -81,7 +81,8 @@ TEST(CanProtocolTest, WrongIdentifierIsRejectedNamingIt) {
   const ProtocolIds ids;
   can_frame f = Encode(ids, BarHeartbeat{0, BarState::kReady, 8, kProtocolVersion});
   f.can_id = 0x214;
-  EXPECT_THAT(DecodeError(ids, f), AllOf(HasSubstr("id 0x214"), HasSubstr("not in the bar's block 0x210..0x213")));
+  EXPECT_THAT(DecodeError(ids, f),
+              AllOf(HasSubstr("id 0x214"), HasSubstr("not in the bar's block 0x210..0x213")));
   f.can_id = 0x20F;
   EXPECT_THAT(DecodeError(ids, f), HasSubstr("id 0x20F"));
   f.can_id = 0x212 | CAN_EFF_FLAG;
@@ -96,7 +97,8 @@ TEST(CanProtocolTest, WrongLengthIsRejectedNamingMessageAndDlc) {
   const ProtocolIds ids;
   can_frame f = Encode(ids, BarHeartbeat{0, BarState::kReady, 8, kProtocolVersion});
   f.can_dlc = 8;
-  EXPECT_THAT(DecodeError(ids, f), AllOf(HasSubstr("bar heartbeat: DLC 8, expected 4"), HasSubstr("id 0x212")));
+  EXPECT_THAT(DecodeError(ids, f),
+              AllOf(HasSubstr("bar heartbeat: DLC 8, expected 4"), HasSubstr("id 0x212")));
   can_frame c = Encode(ids, NozzleCommand{1, 0, 0x3, 200});
   c.can_dlc = 6;
   EXPECT_THAT(DecodeError(ids, c), HasSubstr("nozzle command: DLC 6, expected 8"));
@@ -123,10 +125,13 @@ TEST(CanProtocolTest, BadFieldsAreRejected) {
   a.data[7] = 0;
   a.data[1] = 9;
   EXPECT_THAT(DecodeError(ids, a), HasSubstr("unknown status 9"));
-  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, 0, 0x1, 0})), HasSubstr("hold_ms is 0"));
-  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, NozzleCommand::kFlagFailsafe, 0x1, 100})),
-              HasSubstr("fail-safe flag with nozzles open"));
-  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, 0x80, 0x0, 100})), HasSubstr("unknown flag"));
+  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, 0, 0x1, 0})),
+              HasSubstr("hold_ms is 0"));
+  EXPECT_THAT(
+      DecodeError(ids, Encode(ids, NozzleCommand{1, NozzleCommand::kFlagFailsafe, 0x1, 100})),
+      HasSubstr("fail-safe flag with nozzles open"));
+  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, 0x80, 0x0, 100})),
+              HasSubstr("unknown flag"));
 }
 
 TEST(CanProtocolTest, IdBlockValidationAndKernelFilter) {
@@ -136,7 +141,9 @@ TEST(CanProtocolTest, IdBlockValidationAndKernelFilter) {
   EXPECT_THAT(ProtocolIds{0x211}.Validate()[0].reason, HasSubstr("multiple of 4"));
   EXPECT_EQ(ProtocolIds{0x800}.Validate().size(), 1u);
   const can_filter filter = ProtocolIds{0x210}.Filter();
-  const auto passes = [&](canid_t id) { return (id & filter.can_mask) == (filter.can_id & filter.can_mask); };
+  const auto passes = [&](canid_t id) {
+    return (id & filter.can_mask) == (filter.can_id & filter.can_mask);
+  };
   for (canid_t id = 0x210; id <= 0x213; ++id) EXPECT_TRUE(passes(id)) << std::hex << id;
   EXPECT_FALSE(passes(0x20F));
   EXPECT_FALSE(passes(0x214));

@@ -175,8 +175,9 @@ void SprayBar::ReadAll(int64_t utime) {
 
 void SprayBar::Handle(int64_t utime, const BarMessage& message) {
   if (std::holds_alternative<NozzleCommand>(message)) {
-    throw CanProtocolError("CAN frame " + Describe(Encode(options_.ids, std::get<NozzleCommand>(message))) +
-                           ": nozzle command received from the bar side (another master on the bus?)");
+    throw CanProtocolError(
+        "CAN frame " + Describe(Encode(options_.ids, std::get<NozzleCommand>(message))) +
+        ": nozzle command received from the bar side (another master on the bus?)");
   }
   if (const auto* ack = std::get_if<NozzleAck>(&message)) OnAck(*ack);
   if (const auto* hb = std::get_if<BarHeartbeat>(&message)) OnHeartbeat(utime, *hb);
@@ -194,9 +195,9 @@ void SprayBar::OnAck(const NozzleAck& ack) {
   }
   if (index > 0) {
     ++status_.sequence_gaps;
-    Trouble("acknowledgement sequence gap: expected seq " + std::to_string(outstanding_.front().seq) +
-            ", got " + std::to_string(ack.seq) + " (" + std::to_string(index) +
-            " command(s) never acknowledged)");
+    Trouble("acknowledgement sequence gap: expected seq " +
+            std::to_string(outstanding_.front().seq) + ", got " + std::to_string(ack.seq) + " (" +
+            std::to_string(index) + " command(s) never acknowledged)");
   }
   const uint32_t commanded = outstanding_[index].mask;
   outstanding_.erase(outstanding_.begin(), outstanding_.begin() + static_cast<long>(index) + 1);
@@ -274,8 +275,8 @@ void SprayBar::Evaluate(int64_t utime) {
   if (!status_.heard) {
     const double waited_s = 1e-6 * static_cast<double>(utime - start_utime_);
     if (waited_s > timeout_s) {
-      active.push_back("no heartbeat from the bar in " + Seconds(waited_s) + " since start (timeout " +
-                       Seconds(timeout_s) + ")");
+      active.push_back("no heartbeat from the bar in " + Seconds(waited_s) +
+                       " since start (timeout " + Seconds(timeout_s) + ")");
     } else {
       active.push_back("waiting for the bar's first heartbeat");
     }
@@ -340,9 +341,9 @@ void SprayBar::Poll(int64_t utime) {
 }
 
 void SprayBar::Command(int64_t utime, uint64_t open_mask) {
-  PLANTSCALE_CHECK((open_mask >> options_.num_nozzles) == 0,
-                   "nozzle mask has bits beyond the bar's " +
-                       std::to_string(options_.num_nozzles) + " nozzles");
+  PLANTSCALE_CHECK(
+      (open_mask >> options_.num_nozzles) == 0,
+      "nozzle mask has bits beyond the bar's " + std::to_string(options_.num_nozzles) + " nozzles");
   Evaluate(utime);
   status_.requested_mask = static_cast<uint32_t>(open_mask);
   Send(utime, status_.failsafe ? 0u : status_.requested_mask & ~FaultyMask());

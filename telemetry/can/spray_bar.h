@@ -65,16 +65,16 @@ struct SprayBarOptions {
   double heartbeat_timeout_s = 0.25;  // bar silent longer: fail-safe (bar sends every 50 ms)
   double ack_timeout_s = 0.1;         // a command unacknowledged longer: fail-safe
   double hold_s = 0.2;                // sent to the bar: it closes on its own after this
-  int recover_heartbeats = 3;         // good heartbeats after any trouble (and at start) before opening
+  int recover_heartbeats = 3;  // good heartbeats after any trouble (and at start) before opening
 
   OptionErrors Validate() const;
 };
 
 struct SprayBarStatus {
-  bool failsafe = true;              // nozzles commanded closed
-  std::vector<std::string> reasons;  // why fail-safe, one line each (empty when not)
+  bool failsafe = true;                    // nozzles commanded closed
+  std::vector<std::string> reasons;        // why fail-safe, one line each (empty when not)
   std::vector<NozzleFault> nozzle_faults;  // per nozzle, as last reported by the bar
-  uint32_t requested_mask = 0;  // what the caller asked for last
+  uint32_t requested_mask = 0;             // what the caller asked for last
   uint32_t commanded_mask = 0;  // what was last sent (requested minus faulty, 0 in fail-safe)
   uint32_t applied_mask = 0;    // what the bar last acknowledged driving
   bool heard = false;           // any heartbeat so far

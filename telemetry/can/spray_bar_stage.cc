@@ -17,9 +17,10 @@ NozzleBar ToNozzleBar(const SprayBarStatus& s) {
   const size_t n = s.nozzle_faults.size();
   bar.open.resize(n);
   bar.fault.resize(n);
-  const bool silent = !s.heard || std::any_of(s.reasons.begin(), s.reasons.end(), [](const std::string& r) {
-    return r.rfind("no heartbeat", 0) == 0 || r.rfind("waiting", 0) == 0;
-  });
+  const bool silent =
+      !s.heard || std::any_of(s.reasons.begin(), s.reasons.end(), [](const std::string& r) {
+        return r.rfind("no heartbeat", 0) == 0 || r.rfind("waiting", 0) == 0;
+      });
   for (size_t i = 0; i < n; ++i) {
     bar.open[i] = ((s.applied_mask >> i) & 1u) != 0;
     if (silent) {

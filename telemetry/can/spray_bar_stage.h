@@ -36,7 +36,9 @@ class SimulatedBarStage : public Stage {
  public:
   explicit SimulatedBarStage(SimulatedBar& bar) : bar_(bar) {}
   std::string name() const override { return "simulated_bar"; }
-  void Process(const VehicleFrame& frame, RunStatus&, Publisher&) override { bar_.Step(frame.utime); }
+  void Process(const VehicleFrame& frame, RunStatus&, Publisher&) override {
+    bar_.Step(frame.utime);
+  }
 
  private:
   SimulatedBar& bar_;

@@ -197,7 +197,8 @@ TEST_F(SprayBarTest, FrameWithWrongIdentifierFailsSafeUntilThreeGoodHeartbeats) 
   vehicle_->Poll(t_);
   EXPECT_TRUE(status().failsafe);
   EXPECT_EQ(status().frames_rejected, 1);
-  EXPECT_THAT(status().last_error, AllOf(HasSubstr("id 0x215"), HasSubstr("not in the bar's block")));
+  EXPECT_THAT(status().last_error,
+              AllOf(HasSubstr("id 0x215"), HasSubstr("not in the bar's block")));
   EXPECT_THAT(status().reasons, Contains(HasSubstr("recovering from: CAN frame id 0x215")));
   // Nozzles were commanded closed in that Poll.
   sim_->Step(t_);
@@ -229,8 +230,8 @@ TEST_F(SprayBarTest, HeartbeatSequenceGapFailsSafe) {
   sim_->Step(t_);
   EXPECT_TRUE(status().failsafe);
   EXPECT_EQ(status().sequence_gaps, 1);
-  EXPECT_THAT(status().last_error, AllOf(HasSubstr("heartbeat sequence gap: expected counter"),
-                                         HasSubstr("(2 lost)")));
+  EXPECT_THAT(status().last_error,
+              AllOf(HasSubstr("heartbeat sequence gap: expected counter"), HasSubstr("(2 lost)")));
   EXPECT_EQ(sim_->open_mask(), 0u);
 }
 
@@ -239,19 +240,24 @@ TEST_F(SprayBarTest, AcknowledgementSequenceGapAndUnknownSequence) {
   // Two commands the bar never sees answered in order: the ack of the
   // second arrives first.
   vehicle_->Command(t_, 0x1);
-  const uint8_t first = sim_->commands().empty() ? 0 : static_cast<uint8_t>(sim_->commands().back().seq + 1);
+  const uint8_t first =
+      sim_->commands().empty() ? 0 : static_cast<uint8_t>(sim_->commands().back().seq + 1);
   vehicle_->Command(t_, 0x1);
-  sim_->SendRaw(Encode(ProtocolIds{}, NozzleAck{static_cast<uint8_t>(first + 1), AckStatus::kApplied, 0x1}));
+  sim_->SendRaw(
+      Encode(ProtocolIds{}, NozzleAck{static_cast<uint8_t>(first + 1), AckStatus::kApplied, 0x1}));
   vehicle_->Poll(t_);
   EXPECT_EQ(status().sequence_gaps, 1);
-  EXPECT_THAT(status().last_error,
-              HasSubstr("acknowledgement sequence gap: expected seq " + std::to_string(first) + ", got " +
-                        std::to_string(first + 1) + " (1 command(s) never acknowledged)"));
+  EXPECT_THAT(
+      status().last_error,
+      HasSubstr("acknowledgement sequence gap: expected seq " + std::to_string(first) + ", got " +
+                std::to_string(first + 1) + " (1 command(s) never acknowledged)"));
   EXPECT_TRUE(status().failsafe);
-  sim_->SendRaw(Encode(ProtocolIds{}, NozzleAck{static_cast<uint8_t>(first + 100), AckStatus::kApplied, 0}));
+  sim_->SendRaw(
+      Encode(ProtocolIds{}, NozzleAck{static_cast<uint8_t>(first + 100), AckStatus::kApplied, 0}));
   vehicle_->Poll(t_);
-  EXPECT_THAT(status().last_error, HasSubstr("seq " + std::to_string(static_cast<uint8_t>(first + 100)) +
-                                             ", which is not an outstanding command"));
+  EXPECT_THAT(status().last_error,
+              HasSubstr("seq " + std::to_string(static_cast<uint8_t>(first + 100)) +
+                        ", which is not an outstanding command"));
 }
 
 TEST_F(SprayBarTest, PerNozzleFaultsAreReportedAndHeldClosedWithoutFailSafe) {
@@ -329,7 +335,8 @@ TEST_F(SprayBarTest, StageReportsTheBarInTheHeartbeatAndCommandsClosed) {
   frame.utime = t_;
   stage.Process(frame, run, publisher);
   EXPECT_TRUE(run.failsafe);
-  EXPECT_TRUE(AnyHas(run.faults, "spray bar socketpair: fail-safe: waiting for the bar's first heartbeat"));
+  EXPECT_TRUE(
+      AnyHas(run.faults, "spray bar socketpair: fail-safe: waiting for the bar's first heartbeat"));
   for (int i = 0; i < 10; ++i) {
     sim_->Step(t_);
     t_ += 40'000;
@@ -419,8 +426,8 @@ TEST(SprayBarOpenTest, InterfaceThatDoesNotExistIsAClearError) {
     FAIL() << "opened a CAN interface that does not exist";
   } catch (const CanError& e) {
     EXPECT_THAT(std::string(e.what()),
-                AllOf(HasSubstr("cannot open CAN interface 'nosuchcan0'"), HasSubstr("no such network interface"),
-                      HasSubstr("No such device")));
+                AllOf(HasSubstr("cannot open CAN interface 'nosuchcan0'"),
+                      HasSubstr("no such network interface"), HasSubstr("No such device")));
   }
 }
 
@@ -434,8 +441,9 @@ TEST(SprayBarOpenTest, NoSocketCanOrNotACanInterfaceIsAClearError) {
     const std::string what = e.what();
     EXPECT_THAT(what, HasSubstr("cannot open CAN interface 'lo'"));
     const bool no_socketcan =
-        what.find("socket(PF_CAN, SOCK_RAW, CAN_RAW): Address family not supported by protocol "
-                  "(this kernel has no SocketCAN") != std::string::npos;
+        what.find(
+            "socket(PF_CAN, SOCK_RAW, CAN_RAW): Address family not supported by protocol "
+            "(this kernel has no SocketCAN") != std::string::npos;
     const bool not_can = what.find("bind: ") != std::string::npos;
     EXPECT_TRUE(no_socketcan || not_can) << what;
   }
