@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -119,6 +120,33 @@ void SimulatedBar::Step(int64_t utime) {
     }
     ++counter_;
   }
+}
+
+std::vector<NozzleShot> ShotsFromValves(const std::vector<SimulatedBar::Valves>& history,
+                                        int64_t end_utime) {
+  std::vector<NozzleShot> shots;
+  std::array<int64_t, kMaxNozzles> opened;
+  opened.fill(-1);
+  const auto close = [&](int nozzle, int64_t utime) {
+    NozzleShot s;
+    s.nozzle = nozzle;
+    s.open_utime = opened[static_cast<size_t>(nozzle)];
+    s.close_utime = utime;
+    shots.push_back(s);
+    opened[static_cast<size_t>(nozzle)] = -1;
+  };
+  for (const SimulatedBar::Valves& v : history) {
+    for (int i = 0; i < kMaxNozzles; ++i) {
+      const bool open = ((v.open_mask >> i) & 1u) != 0;
+      const bool was_open = opened[static_cast<size_t>(i)] >= 0;
+      if (open && !was_open) opened[static_cast<size_t>(i)] = v.utime;
+      if (!open && was_open) close(i, v.utime);
+    }
+  }
+  for (int i = 0; i < kMaxNozzles; ++i) {
+    if (opened[static_cast<size_t>(i)] >= 0) close(i, end_utime);
+  }
+  return shots;
 }
 
 }  // namespace plantscale::telemetry::can

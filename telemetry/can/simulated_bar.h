@@ -13,6 +13,7 @@
 
 #include "telemetry/can/protocol.h"
 #include "telemetry/can/spray_bar.h"
+#include "telemetry/types.h"
 
 namespace plantscale::telemetry::can {
 
@@ -77,5 +78,12 @@ class SimulatedBar {
   std::vector<Valves> history_;
   std::vector<std::string> errors_;
 };
+
+// Every shot in `history`: one NozzleShot per nozzle and opening, from the
+// change that opened it to the one that closed it (`end_utime` for shots
+// still open). position_m is left at zero and plant_id at -1 for the caller,
+// who knows the pose and the nozzle's footprint, to fill in.
+std::vector<NozzleShot> ShotsFromValves(const std::vector<SimulatedBar::Valves>& history,
+                                        int64_t end_utime);
 
 }  // namespace plantscale::telemetry::can

@@ -143,7 +143,9 @@ void SprayBar::Trouble(const std::string& text) {
 }
 
 void SprayBar::ReadAll(int64_t utime) {
-  while (!peer_closed_) {
+  // Bounded: a babbling bus cannot keep the caller here.
+  constexpr int kMaxFramesPerPoll = 1024;
+  for (int frames = 0; frames < kMaxFramesPerPoll && !peer_closed_; ++frames) {
     can_frame frame;
     const ssize_t n = ::read(fd_.get(), &frame, sizeof frame);
     if (n < 0) {

@@ -108,6 +108,7 @@ class SprayBar {
   void Command(int64_t utime, uint64_t open_mask);
 
   // The nozzle sink of the treatment scheduler: Poll then Command every tick.
+  // It refers to this SprayBar: do not move the bar after taking its sink.
   std::function<void(int64_t utime, uint64_t open_mask)> Sink();
 
   const SprayBarStatus& status() const { return status_; }

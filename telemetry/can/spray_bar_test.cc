@@ -104,6 +104,28 @@ TEST_F(SprayBarTest, FollowsCommandsAndTheBarRecordsEveryValveChange) {
   EXPECT_THAT(sim_->errors(), IsEmpty());
 }
 
+TEST(ShotsFromValvesTest, OneShotPerNozzleAndOpening) {
+  // Nozzle 0 open 100..300, nozzle 1 open 200..400 and 500..end, nozzle 3 a
+  // shot that is open at the end.
+  const std::vector<SimulatedBar::Valves> history = {
+      {100, 0b0001}, {200, 0b0011}, {300, 0b0010}, {400, 0b0000}, {500, 0b1010}};
+  const std::vector<NozzleShot> shots = ShotsFromValves(history, 900);
+  ASSERT_EQ(shots.size(), 4u);
+  EXPECT_EQ(shots[0].nozzle, 0);
+  EXPECT_EQ(shots[0].open_utime, 100);
+  EXPECT_EQ(shots[0].close_utime, 300);
+  EXPECT_EQ(shots[1].nozzle, 1);
+  EXPECT_EQ(shots[1].open_utime, 200);
+  EXPECT_EQ(shots[1].close_utime, 400);
+  EXPECT_EQ(shots[2].nozzle, 1);
+  EXPECT_EQ(shots[2].open_utime, 500);
+  EXPECT_EQ(shots[2].close_utime, 900);
+  EXPECT_EQ(shots[3].nozzle, 3);
+  EXPECT_EQ(shots[3].open_utime, 500);
+  EXPECT_EQ(shots[3].close_utime, 900);
+  EXPECT_EQ(shots[3].plant_id, -1);
+}
+
 TEST_F(SprayBarTest, SilentBarTimesOutAndNozzlesAreCommandedClosed) {
   ASSERT_GT(TicksUntilReady(0xF), 0);
   Tick(0xF);
