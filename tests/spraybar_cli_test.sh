@@ -70,7 +70,7 @@ expect 2 "--can: 'simulated' only with simulate --publish" -- "$plantscale" run 
 # simulated bar, a walking test pattern in real time, every command
 # acknowledged and the bar healthy at the end.
 expect 1 "$missing" -- "$plantscale" spraybar --can nocanbus9 --seconds 0.2
-expect 2 "num_nozzles: must be in \[1, 32\] \(got 40\)" -- "$plantscale" spraybar --can simulated --nozzles 40
+expect 2 "num_nozzles: must be in \[1, 64\] \(got 65\)" -- "$plantscale" spraybar --can simulated --nozzles 65
 json=$("$plantscale" spraybar --can simulated --nozzles 4 --seconds 0.6 --test-pattern --json)
 status=$?
 [[ $status -eq 0 ]] || fail "spraybar --can simulated exited $status: $json"

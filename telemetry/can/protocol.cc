@@ -3,11 +3,15 @@
 #include <cstdio>
 #include <cstring>
 
+#include "engine/common/check.h"
+
 namespace plantscale::telemetry::can {
 namespace {
 
-constexpr uint8_t kDlc[4] = {8, 8, 4, 8};  // by MessageKind
-const char* const kNames[4] = {"nozzle command", "nozzle ack", "bar heartbeat", "nozzle faults"};
+constexpr int kKinds = 5;
+constexpr uint8_t kDlc[kKinds] = {8, 8, 4, 8, 8};  // by MessageKind
+const char* const kNames[kKinds] = {"nozzle command", "nozzle ack", "bar heartbeat",
+                                    "nozzle faults (section 0)", "nozzle faults (section 1)"};
 
 can_frame Frame(const ProtocolIds& ids, MessageKind kind) {
   can_frame f;
@@ -47,8 +51,8 @@ void RequireZero(const can_frame& f, const char* what, int from, int to) {
 
 OptionErrors ProtocolIds::Validate() const {
   OptionErrors errors;
-  if ((base_id & 0x3u) != 0 || base_id + 3 > CAN_SFF_MASK) {
-    errors.push_back({"base_id", "must be a multiple of 4 with base_id + 3 <= 0x7FF (got " +
+  if ((base_id & 0x7u) != 0 || base_id + 7 > CAN_SFF_MASK) {
+    errors.push_back({"base_id", "must be a multiple of 8 with base_id + 7 <= 0x7FF (got " +
                                      Hex(base_id) + ")"});
   }
   return errors;
@@ -57,7 +61,7 @@ OptionErrors ProtocolIds::Validate() const {
 can_filter ProtocolIds::Filter() const {
   can_filter f;
   f.can_id = base_id;
-  f.can_mask = CAN_EFF_FLAG | CAN_RTR_FLAG | (CAN_SFF_MASK & ~0x3u);
+  f.can_mask = CAN_EFF_FLAG | CAN_RTR_FLAG | (CAN_SFF_MASK & ~0x7u);
   return f;
 }
 
@@ -76,9 +80,10 @@ const char* NozzleFaultName(NozzleFault fault) {
 }
 
 can_frame Encode(const ProtocolIds& ids, const NozzleCommand& m) {
+  PLANTSCALE_CHECK(m.section < kMaxSections && m.flags <= 0x0F, "nozzle command section/flags");
   can_frame f = Frame(ids, MessageKind::kCommand);
   f.data[0] = m.seq;
-  f.data[1] = m.flags;
+  f.data[1] = static_cast<uint8_t>((m.flags & 0x0F) | (m.section << 4));
   PutU32(f.data + 2, m.open_mask);
   f.data[6] = static_cast<uint8_t>(m.hold_ms & 0xFF);
   f.data[7] = static_cast<uint8_t>(m.hold_ms >> 8);
@@ -86,10 +91,12 @@ can_frame Encode(const ProtocolIds& ids, const NozzleCommand& m) {
 }
 
 can_frame Encode(const ProtocolIds& ids, const NozzleAck& m) {
+  PLANTSCALE_CHECK(m.section < kMaxSections, "nozzle ack section");
   can_frame f = Frame(ids, MessageKind::kAck);
   f.data[0] = m.seq;
   f.data[1] = static_cast<uint8_t>(m.status);
   PutU32(f.data + 2, m.applied_mask);
+  f.data[6] = m.section;
   return f;
 }
 
@@ -103,8 +110,9 @@ can_frame Encode(const ProtocolIds& ids, const BarHeartbeat& m) {
 }
 
 can_frame Encode(const ProtocolIds& ids, const NozzleFaults& m) {
-  can_frame f = Frame(ids, MessageKind::kFaults);
-  for (int i = 0; i < kMaxNozzles; ++i) {
+  PLANTSCALE_CHECK(m.section < kMaxSections, "nozzle faults section");
+  can_frame f = Frame(ids, m.section == 0 ? MessageKind::kFaults : MessageKind::kFaultsHigh);
+  for (int i = 0; i < kSectionNozzles; ++i) {
     f.data[i / 4] |=
         static_cast<uint8_t>((static_cast<unsigned>(m.fault[i]) & 0x3u) << (2 * (i % 4)));
   }
@@ -118,8 +126,12 @@ BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
   if ((f.can_id & CAN_EFF_FLAG) != 0) Fail(f, "extended (29-bit) identifier; the bar uses 11-bit");
   if ((f.can_id & CAN_RTR_FLAG) != 0) Fail(f, "remote request frame; the bar protocol has none");
   const uint32_t id = f.can_id & CAN_SFF_MASK;
-  if (id < ids.base_id || id > ids.base_id + 3) {
-    Fail(f, "identifier not in the bar's block " + Hex(ids.base_id) + ".." + Hex(ids.base_id + 3));
+  if (id < ids.base_id || id > ids.base_id + 7) {
+    Fail(f, "identifier not in the bar's block " + Hex(ids.base_id) + ".." + Hex(ids.base_id + 7));
+  }
+  if (id >= ids.base_id + kKinds) {
+    Fail(f, "identifier reserved in the bar's block (defined: " + Hex(ids.base_id) + ".." +
+                Hex(ids.base_id + kKinds - 1) + ")");
   }
   const int k = static_cast<int>(id - ids.base_id);
   if (f.can_dlc != kDlc[k]) {
@@ -130,11 +142,16 @@ BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
     case MessageKind::kCommand: {
       NozzleCommand m;
       m.seq = f.data[0];
-      m.flags = f.data[1];
+      m.flags = f.data[1] & 0x0F;
+      m.section = f.data[1] >> 4;
       m.open_mask = GetU32(f.data + 2);
       m.hold_ms = static_cast<uint16_t>(f.data[6] | (f.data[7] << 8));
-      if ((m.flags & ~NozzleCommand::kFlagFailsafe) != 0)
+      if ((m.flags & ~NozzleCommand::kFlagFailsafe) != 0) {
         Fail(f, "nozzle command: unknown flag bits");
+      }
+      if (m.section >= kMaxSections) {
+        Fail(f, "nozzle command: section " + std::to_string(m.section) + " beyond 0..1");
+      }
       if (m.hold_ms == 0) Fail(f, "nozzle command: hold_ms is 0");
       if ((m.flags & NozzleCommand::kFlagFailsafe) != 0 && m.open_mask != 0) {
         Fail(f, "nozzle command: fail-safe flag with nozzles open");
@@ -149,7 +166,11 @@ BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
       }
       m.status = static_cast<AckStatus>(f.data[1]);
       m.applied_mask = GetU32(f.data + 2);
-      RequireZero(f, "nozzle ack", 6, 8);
+      m.section = f.data[6];
+      if (m.section >= kMaxSections) {
+        Fail(f, "nozzle ack: section " + std::to_string(m.section) + " beyond 0..1");
+      }
+      RequireZero(f, "nozzle ack", 7, 8);
       return m;
     }
     case MessageKind::kHeartbeat: {
@@ -167,9 +188,11 @@ BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
       m.protocol_version = f.data[3];
       return m;
     }
-    case MessageKind::kFaults: {
+    case MessageKind::kFaults:
+    case MessageKind::kFaultsHigh: {
       NozzleFaults m;
-      for (int i = 0; i < kMaxNozzles; ++i) {
+      m.section = k == static_cast<int>(MessageKind::kFaults) ? 0 : 1;
+      for (int i = 0; i < kSectionNozzles; ++i) {
         m.fault[i] = static_cast<NozzleFault>((f.data[i / 4] >> (2 * (i % 4))) & 0x3u);
       }
       return m;

@@ -74,15 +74,49 @@ TEST(CanProtocolTest, AckHeartbeatFaultsRoundTripAtAnotherBase) {
   EXPECT_EQ(fn.can_id, 0x303u);
   EXPECT_EQ(Bytes(fn), (std::vector<int>{0x01, 0x0C, 0, 0, 0, 0, 0, 0x80}));
   const auto nb = std::get<NozzleFaults>(Decode(ids, fn));
-  for (int i = 0; i < kMaxNozzles; ++i) EXPECT_EQ(nb.fault[i], n.fault[i]) << "nozzle " << i;
+  EXPECT_EQ(nb.section, 0);
+  for (int i = 0; i < kSectionNozzles; ++i) EXPECT_EQ(nb.fault[i], n.fault[i]) << "nozzle " << i;
+  // Section 1 (nozzles 32..63) on its own identifier.
+  n.section = 1;
+  const can_frame fn1 = Encode(ids, n);
+  EXPECT_EQ(fn1.can_id, 0x304u);
+  EXPECT_EQ(Bytes(fn1), Bytes(fn));
+  EXPECT_EQ(std::get<NozzleFaults>(Decode(ids, fn1)).section, 1);
+}
+
+TEST(CanProtocolTest, SectionsOfABarOfMoreThan32Nozzles) {
+  const ProtocolIds ids;
+  EXPECT_EQ(Sections(1), 1);
+  EXPECT_EQ(Sections(32), 1);
+  EXPECT_EQ(Sections(33), 2);
+  EXPECT_EQ(Sections(64), 2);
+  NozzleCommand c{9, NozzleCommand::kFlagFailsafe, 0, 150, 1};
+  const can_frame f = Encode(ids, c);
+  EXPECT_EQ(f.data[1], 0x11);  // fail-safe flag, section 1 in the high nibble
+  const auto back = std::get<NozzleCommand>(Decode(ids, f));
+  EXPECT_EQ(back.section, 1);
+  EXPECT_EQ(back.flags, NozzleCommand::kFlagFailsafe);
+  NozzleAck a{3, AckStatus::kApplied, 0xF0u, 1};
+  const can_frame fa = Encode(ids, a);
+  EXPECT_EQ(fa.data[6], 1);
+  EXPECT_EQ(std::get<NozzleAck>(Decode(ids, fa)).section, 1);
+  can_frame bad = f;
+  bad.data[1] = 0x20;  // section 2
+  EXPECT_THAT(DecodeError(ids, bad), HasSubstr("nozzle command: section 2 beyond 0..1"));
+  bad = fa;
+  bad.data[6] = 2;
+  EXPECT_THAT(DecodeError(ids, bad), HasSubstr("nozzle ack: section 2 beyond 0..1"));
 }
 
 TEST(CanProtocolTest, WrongIdentifierIsRejectedNamingIt) {
   const ProtocolIds ids;
   can_frame f = Encode(ids, BarHeartbeat{0, BarState::kReady, 8, kProtocolVersion});
-  f.can_id = 0x214;
+  f.can_id = 0x218;
   EXPECT_THAT(DecodeError(ids, f),
-              AllOf(HasSubstr("id 0x214"), HasSubstr("not in the bar's block 0x210..0x213")));
+              AllOf(HasSubstr("id 0x218"), HasSubstr("not in the bar's block 0x210..0x217")));
+  f.can_id = 0x215;
+  EXPECT_THAT(DecodeError(ids, f),
+              AllOf(HasSubstr("id 0x215"), HasSubstr("reserved in the bar's block")));
   f.can_id = 0x20F;
   EXPECT_THAT(DecodeError(ids, f), HasSubstr("id 0x20F"));
   f.can_id = 0x212 | CAN_EFF_FLAG;
@@ -116,9 +150,9 @@ TEST(CanProtocolTest, BadFieldsAreRejected) {
   EXPECT_THAT(DecodeError(ids, h), HasSubstr("unknown state 3"));
   h.data[1] = 0;
   h.data[2] = 0;
-  EXPECT_THAT(DecodeError(ids, h), HasSubstr("nozzle count 0 not in 1..32"));
-  h.data[2] = 33;
-  EXPECT_THAT(DecodeError(ids, h), HasSubstr("nozzle count 33"));
+  EXPECT_THAT(DecodeError(ids, h), HasSubstr("nozzle count 0 not in 1..64"));
+  h.data[2] = 65;
+  EXPECT_THAT(DecodeError(ids, h), HasSubstr("nozzle count 65 not in 1..64"));
   can_frame a = Encode(ids, NozzleAck{});
   a.data[7] = 1;
   EXPECT_THAT(DecodeError(ids, a), HasSubstr("reserved byte 7 is not 0"));
@@ -130,23 +164,23 @@ TEST(CanProtocolTest, BadFieldsAreRejected) {
   EXPECT_THAT(
       DecodeError(ids, Encode(ids, NozzleCommand{1, NozzleCommand::kFlagFailsafe, 0x1, 100})),
       HasSubstr("fail-safe flag with nozzles open"));
-  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, 0x80, 0x0, 100})),
+  EXPECT_THAT(DecodeError(ids, Encode(ids, NozzleCommand{1, 0x02, 0x0, 100})),
               HasSubstr("unknown flag"));
 }
 
 TEST(CanProtocolTest, IdBlockValidationAndKernelFilter) {
   EXPECT_TRUE(ProtocolIds{0x210}.Validate().empty());
-  EXPECT_TRUE(ProtocolIds{0x7FC}.Validate().empty());
-  ASSERT_EQ(ProtocolIds{0x211}.Validate().size(), 1u);
-  EXPECT_THAT(ProtocolIds{0x211}.Validate()[0].reason, HasSubstr("multiple of 4"));
+  EXPECT_TRUE(ProtocolIds{0x7F8}.Validate().empty());
+  ASSERT_EQ(ProtocolIds{0x214}.Validate().size(), 1u);
+  EXPECT_THAT(ProtocolIds{0x214}.Validate()[0].reason, HasSubstr("multiple of 8"));
   EXPECT_EQ(ProtocolIds{0x800}.Validate().size(), 1u);
   const can_filter filter = ProtocolIds{0x210}.Filter();
   const auto passes = [&](canid_t id) {
     return (id & filter.can_mask) == (filter.can_id & filter.can_mask);
   };
-  for (canid_t id = 0x210; id <= 0x213; ++id) EXPECT_TRUE(passes(id)) << std::hex << id;
+  for (canid_t id = 0x210; id <= 0x217; ++id) EXPECT_TRUE(passes(id)) << std::hex << id;
   EXPECT_FALSE(passes(0x20F));
-  EXPECT_FALSE(passes(0x214));
+  EXPECT_FALSE(passes(0x218));
   EXPECT_FALSE(passes(0x210 | CAN_EFF_FLAG));
   EXPECT_FALSE(passes(0x210 | CAN_RTR_FLAG));
 }

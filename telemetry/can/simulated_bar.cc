@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cmath>
@@ -32,24 +33,30 @@ BarState SimulatedBar::state() const {
 void SimulatedBar::InjectFault(int nozzle, NozzleFault fault) {
   PLANTSCALE_CHECK(nozzle >= 0 && nozzle < options_.num_nozzles, "no such nozzle");
   faults_[static_cast<size_t>(nozzle)] = fault;
-  if (!silent_) {
-    NozzleFaults f;
-    for (size_t i = 0; i < faults_.size(); ++i) f.fault[i] = faults_[i];
-    Send(Encode(options_.ids, f));  // on change, not only with the heartbeat
-  }
+  if (!silent_) SendFaults(nozzle / kSectionNozzles);  // on change, not only with the heartbeat
 }
 
-uint32_t SimulatedBar::HeldClosedMask() const {
-  uint32_t m = 0;
+void SimulatedBar::SendFaults(int section) {
+  NozzleFaults f;
+  f.section = static_cast<uint8_t>(section);
+  for (int j = 0; j < kSectionNozzles; ++j) {
+    const size_t i = static_cast<size_t>(kSectionNozzles * section + j);
+    if (i < faults_.size()) f.fault[static_cast<size_t>(j)] = faults_[i];
+  }
+  Send(Encode(options_.ids, f));
+}
+
+uint64_t SimulatedBar::HeldClosedMask() const {
+  uint64_t m = 0;
   for (size_t i = 0; i < faults_.size(); ++i) {
     if (faults_[i] == NozzleFault::kOpenCircuit || faults_[i] == NozzleFault::kShortCircuit) {
-      m |= 1u << i;
+      m |= uint64_t{1} << i;
     }
   }
   return m;
 }
 
-void SimulatedBar::Apply(int64_t utime, uint32_t mask) {
+void SimulatedBar::Apply(int64_t utime, uint64_t mask) {
   if (mask == open_mask_) return;
   open_mask_ = mask;
   history_.push_back({utime, mask});
@@ -89,14 +96,19 @@ void SimulatedBar::Step(int64_t utime) {
     commands_.push_back(c);
     NozzleAck ack;
     ack.seq = c.seq;
-    if ((c.open_mask >> options_.num_nozzles) != 0 || bar_fault_) {
+    ack.section = c.section;
+    const int shift = kSectionNozzles * c.section;
+    const int in_section = std::min(kSectionNozzles, options_.num_nozzles - shift);
+    const uint64_t section_bits = uint64_t{0xFFFFFFFFu} << shift;
+    const uint64_t rest = open_mask_ & ~section_bits;
+    if (in_section <= 0 || (in_section < 32 && (c.open_mask >> in_section) != 0) || bar_fault_) {
       ack.status = AckStatus::kRejected;
-      Apply(utime, 0);
+      Apply(utime, rest);
     } else {
-      Apply(utime, c.open_mask & ~HeldClosedMask());
+      Apply(utime, rest | ((uint64_t{c.open_mask} << shift) & ~HeldClosedMask()));
     }
     hold_until_utime_ = utime + static_cast<int64_t>(c.hold_ms) * 1000;
-    ack.applied_mask = open_mask_;
+    ack.applied_mask = static_cast<uint32_t>(open_mask_ >> shift);
     if (!silent_) Send(Encode(options_.ids, ack));
   }
   if (hold_until_utime_ >= 0 && utime > hold_until_utime_) {
@@ -114,9 +126,9 @@ void SimulatedBar::Step(int64_t utime) {
       hb.state = state();
       hb.num_nozzles = static_cast<uint8_t>(reported_nozzles_);
       Send(Encode(options_.ids, hb));
-      NozzleFaults f;
-      for (size_t i = 0; i < faults_.size(); ++i) f.fault[i] = faults_[i];
-      Send(Encode(options_.ids, f));
+      for (int section = 0; section < Sections(options_.num_nozzles); ++section) {
+        SendFaults(section);
+      }
     }
     ++counter_;
   }

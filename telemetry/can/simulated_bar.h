@@ -30,7 +30,7 @@ class SimulatedBar {
   // One change of the valves: from `utime` on, nozzle i sprays when bit i is set.
   struct Valves {
     int64_t utime;
-    uint32_t open_mask;
+    uint64_t open_mask;
   };
 
   SimulatedBar(UniqueFd fd, const SimulatedBarOptions& options);
@@ -52,7 +52,7 @@ class SimulatedBar {
   void SendRaw(const can_frame& frame);
   void SendBytes(const void* data, size_t size);
 
-  uint32_t open_mask() const { return open_mask_; }
+  uint64_t open_mask() const { return open_mask_; }
   BarState state() const;
   const std::vector<NozzleCommand>& commands() const { return commands_; }
   const std::vector<Valves>& history() const { return history_; }
@@ -60,9 +60,10 @@ class SimulatedBar {
   const std::vector<std::string>& errors() const { return errors_; }
 
  private:
-  void Apply(int64_t utime, uint32_t mask);
+  void Apply(int64_t utime, uint64_t mask);
   void Send(const can_frame& frame);
-  uint32_t HeldClosedMask() const;
+  void SendFaults(int section);
+  uint64_t HeldClosedMask() const;
 
   UniqueFd fd_;
   SimulatedBarOptions options_;
@@ -73,7 +74,7 @@ class SimulatedBar {
   uint8_t counter_ = 0;
   int64_t next_heartbeat_utime_ = -1;
   int64_t hold_until_utime_ = -1;  // -1: no command yet
-  uint32_t open_mask_ = 0;
+  uint64_t open_mask_ = 0;
   std::vector<NozzleCommand> commands_;
   std::vector<Valves> history_;
   std::vector<std::string> errors_;

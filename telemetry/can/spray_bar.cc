@@ -201,18 +201,27 @@ void SprayBar::OnAck(const NozzleAck& ack) {
             std::to_string(outstanding_.front().seq) + ", got " + std::to_string(ack.seq) + " (" +
             std::to_string(index) + " command(s) never acknowledged)");
   }
-  const uint32_t commanded = outstanding_[index].mask;
+  const Outstanding command = outstanding_[index];
   outstanding_.erase(outstanding_.begin(), outstanding_.begin() + static_cast<long>(index) + 1);
-  status_.applied_mask = ack.applied_mask;
-  if (ack.status == AckStatus::kRejected) {
-    Trouble("bar rejected command " + seq + " (mask " + Mask(commanded) + ")");
+  const int shift = kSectionNozzles * command.section;
+  const std::string where = seq + " (section " + std::to_string(command.section) + ")";
+  if (ack.section != command.section) {
+    Trouble("acknowledgement of command " + where + " names section " +
+            std::to_string(ack.section));
     return;
   }
-  const uint32_t extra = ack.applied_mask & ~commanded;
-  const uint32_t missing = commanded & ~ack.applied_mask & ~FaultyMask();
+  status_.applied_mask = (status_.applied_mask & ~(uint64_t{0xFFFFFFFFu} << shift)) |
+                         (uint64_t{ack.applied_mask} << shift);
+  if (ack.status == AckStatus::kRejected) {
+    Trouble("bar rejected command " + where + " (mask " + Mask(command.mask) + ")");
+    return;
+  }
+  const auto faulty = static_cast<uint32_t>(FaultyMask() >> shift);
+  const uint32_t extra = ack.applied_mask & ~command.mask;
+  const uint32_t missing = command.mask & ~ack.applied_mask & ~faulty;
   if (extra != 0 || missing != 0) {
-    Trouble("bar applied " + Mask(ack.applied_mask) + " for command " + seq + ", commanded " +
-            Mask(commanded));
+    Trouble("bar applied " + Mask(ack.applied_mask) + " for command " + where + ", commanded " +
+            Mask(command.mask));
   }
 }
 
@@ -252,20 +261,22 @@ void SprayBar::OnHeartbeat(int64_t utime, const BarHeartbeat& hb) {
 }
 
 void SprayBar::OnFaults(const NozzleFaults& faults) {
-  for (int i = 0; i < kMaxNozzles; ++i) {
+  for (int j = 0; j < kSectionNozzles; ++j) {
+    const int i = kSectionNozzles * faults.section + j;
+    const NozzleFault fault = faults.fault[static_cast<size_t>(j)];
     if (i < options_.num_nozzles) {
-      status_.nozzle_faults[static_cast<size_t>(i)] = faults.fault[static_cast<size_t>(i)];
-    } else if (faults.fault[static_cast<size_t>(i)] != NozzleFault::kNone) {
+      status_.nozzle_faults[static_cast<size_t>(i)] = fault;
+    } else if (fault != NozzleFault::kNone) {
       Trouble("fault reported for nozzle " + std::to_string(i) + ", beyond the bar's " +
               std::to_string(options_.num_nozzles) + " nozzles");
     }
   }
 }
 
-uint32_t SprayBar::FaultyMask() const {
-  uint32_t m = 0;
+uint64_t SprayBar::FaultyMask() const {
+  uint64_t m = 0;
   for (size_t i = 0; i < status_.nozzle_faults.size(); ++i) {
-    if (status_.nozzle_faults[i] != NozzleFault::kNone) m |= 1u << i;
+    if (status_.nozzle_faults[i] != NozzleFault::kNone) m |= uint64_t{1} << i;
   }
   return m;
 }
@@ -314,10 +325,17 @@ void SprayBar::Evaluate(int64_t utime) {
   status_.failsafe = !status_.reasons.empty();
 }
 
-void SprayBar::Send(int64_t utime, uint32_t mask) {
+void SprayBar::Send(int64_t utime, uint64_t mask) {
+  for (int section = 0; section < Sections(options_.num_nozzles); ++section) {
+    SendSection(utime, section, static_cast<uint32_t>(mask >> (kSectionNozzles * section)));
+  }
+}
+
+void SprayBar::SendSection(int64_t utime, int section, uint32_t mask) {
   NozzleCommand c;
   c.seq = next_seq_;
   c.flags = status_.failsafe ? NozzleCommand::kFlagFailsafe : 0;
+  c.section = static_cast<uint8_t>(section);
   c.open_mask = mask;
   c.hold_ms = static_cast<uint16_t>(std::lround(options_.hold_s * 1e3));
   const can_frame frame = Encode(options_.ids, c);
@@ -330,8 +348,10 @@ void SprayBar::Send(int64_t utime, uint32_t mask) {
   }
   ++next_seq_;
   ++status_.commands_sent;
-  status_.commanded_mask = mask;
-  outstanding_.push_back({c.seq, mask, utime});
+  const int shift = kSectionNozzles * section;
+  status_.commanded_mask =
+      (status_.commanded_mask & ~(uint64_t{0xFFFFFFFFu} << shift)) | (uint64_t{mask} << shift);
+  outstanding_.push_back({c.seq, c.section, mask, utime});
   constexpr size_t kMaxOutstanding = 64;  // well inside the 256 sequence space
   while (outstanding_.size() > kMaxOutstanding) outstanding_.pop_front();
 }
@@ -344,11 +364,11 @@ void SprayBar::Poll(int64_t utime) {
 
 void SprayBar::Command(int64_t utime, uint64_t open_mask) {
   PLANTSCALE_CHECK(
-      (open_mask >> options_.num_nozzles) == 0,
+      options_.num_nozzles >= 64 || (open_mask >> options_.num_nozzles) == 0,
       "nozzle mask has bits beyond the bar's " + std::to_string(options_.num_nozzles) + " nozzles");
   Evaluate(utime);
-  status_.requested_mask = static_cast<uint32_t>(open_mask);
-  Send(utime, status_.failsafe ? 0u : status_.requested_mask & ~FaultyMask());
+  status_.requested_mask = open_mask;
+  Send(utime, status_.failsafe ? 0 : status_.requested_mask & ~FaultyMask());
 }
 
 std::function<void(int64_t, uint64_t)> SprayBar::Sink() {

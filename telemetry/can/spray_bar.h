@@ -60,7 +60,7 @@ std::pair<UniqueFd, UniqueFd> CanFramePipe();
 UniqueFd OpenSocketCan(const std::string& interface, const ProtocolIds& ids);
 
 struct SprayBarOptions {
-  int num_nozzles = 8;  // 1 .. kMaxNozzles
+  int num_nozzles = 8;  // 1 .. kMaxNozzles (64); more than 32: two command frames per tick
   ProtocolIds ids;
   double heartbeat_timeout_s = 0.25;  // bar silent longer: fail-safe (bar sends every 50 ms)
   double ack_timeout_s = 0.1;         // a command unacknowledged longer: fail-safe
@@ -74,9 +74,9 @@ struct SprayBarStatus {
   bool failsafe = true;                    // nozzles commanded closed
   std::vector<std::string> reasons;        // why fail-safe, one line each (empty when not)
   std::vector<NozzleFault> nozzle_faults;  // per nozzle, as last reported by the bar
-  uint32_t requested_mask = 0;             // what the caller asked for last
-  uint32_t commanded_mask = 0;  // what was last sent (requested minus faulty, 0 in fail-safe)
-  uint32_t applied_mask = 0;    // what the bar last acknowledged driving
+  uint64_t requested_mask = 0;             // what the caller asked for last
+  uint64_t commanded_mask = 0;  // what was last sent (requested minus faulty, 0 in fail-safe)
+  uint64_t applied_mask = 0;    // what the bar last acknowledged driving
   bool heard = false;           // any heartbeat so far
   BarState bar_state = BarState::kHoldExpired;
   int64_t last_heartbeat_utime = 0;
@@ -121,6 +121,7 @@ class SprayBar {
  private:
   struct Outstanding {
     uint8_t seq;
+    uint8_t section;
     uint32_t mask;
     int64_t sent_utime;
   };
@@ -131,8 +132,9 @@ class SprayBar {
   void OnFaults(const NozzleFaults& faults);
   void Trouble(const std::string& text);
   void Evaluate(int64_t utime);
-  void Send(int64_t utime, uint32_t mask);
-  uint32_t FaultyMask() const;
+  void Send(int64_t utime, uint64_t mask);  // one command per section
+  void SendSection(int64_t utime, int section, uint32_t mask);
+  uint64_t FaultyMask() const;
 
   UniqueFd fd_;
   SprayBarOptions options_;

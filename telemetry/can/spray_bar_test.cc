@@ -214,14 +214,14 @@ TEST_F(SprayBarTest, FrameWithWrongIdentifierFailsSafeUntilThreeGoodHeartbeats) 
   ASSERT_GT(TicksUntilReady(0x3), 0);
   Tick(0x3);
   can_frame f = Encode(ProtocolIds{}, BarHeartbeat{0, BarState::kReady, 8, kProtocolVersion});
-  f.can_id = 0x215;
+  f.can_id = 0x219;
   sim_->SendRaw(f);
   vehicle_->Poll(t_);
   EXPECT_TRUE(status().failsafe);
   EXPECT_EQ(status().frames_rejected, 1);
   EXPECT_THAT(status().last_error,
-              AllOf(HasSubstr("id 0x215"), HasSubstr("not in the bar's block")));
-  EXPECT_THAT(status().reasons, Contains(HasSubstr("recovering from: CAN frame id 0x215")));
+              AllOf(HasSubstr("id 0x219"), HasSubstr("not in the bar's block")));
+  EXPECT_THAT(status().reasons, Contains(HasSubstr("recovering from: CAN frame id 0x219")));
   // Nozzles were commanded closed in that Poll.
   sim_->Step(t_);
   EXPECT_EQ(sim_->open_mask(), 0u);
@@ -280,6 +280,64 @@ TEST_F(SprayBarTest, AcknowledgementSequenceGapAndUnknownSequence) {
   EXPECT_THAT(status().last_error,
               HasSubstr("seq " + std::to_string(static_cast<uint8_t>(first + 100)) +
                         ", which is not an outstanding command"));
+}
+
+TEST_F(SprayBarTest, AcknowledgementOfTheWrongSectionFailsSafe) {
+  ASSERT_GT(TicksUntilReady(0x1), 0);
+  vehicle_->Command(t_, 0x1);
+  const uint8_t seq = static_cast<uint8_t>(status().commands_sent - 1);
+  sim_->SendRaw(Encode(ProtocolIds{}, NozzleAck{seq, AckStatus::kApplied, 0x1, 1}));
+  vehicle_->Poll(t_);
+  EXPECT_TRUE(status().failsafe);
+  EXPECT_THAT(status().last_error, HasSubstr("acknowledgement of command seq " +
+                                             std::to_string(seq) + " (section 0) names section 1"));
+}
+
+TEST(SprayBar64Test, SixtyFourNozzlesTakeTwoFramesPerTickWithFaultsInBothSections) {
+  auto [vehicle_end, bar_end] = CanFramePipe();
+  SprayBarOptions o;
+  o.num_nozzles = 64;
+  SprayBar bar(std::move(vehicle_end), o, "socketpair");
+  SimulatedBarOptions so;
+  so.num_nozzles = 64;
+  SimulatedBar sim(std::move(bar_end), so);
+  int64_t t = 1'000'000'000;
+  const auto tick = [&](uint64_t mask) {
+    bar.Command(t, mask);
+    sim.Step(t);
+    bar.Poll(t);
+    t += kTick;
+  };
+  const uint64_t mask = 0x8000'0001'0000'0003ull;  // nozzles 0, 1, 32 and 63
+  for (int i = 0; i < 10; ++i) tick(mask);
+  EXPECT_FALSE(bar.status().failsafe);
+  EXPECT_EQ(sim.open_mask(), mask);
+  EXPECT_EQ(bar.status().applied_mask, mask);
+  EXPECT_EQ(bar.status().commands_sent, 20);  // two sections per tick
+  EXPECT_EQ(bar.status().acks, 20);
+  ASSERT_GE(sim.commands().size(), 2u);
+  EXPECT_EQ(sim.commands()[0].section, 0);
+  EXPECT_EQ(sim.commands()[1].section, 1);
+  EXPECT_EQ(sim.commands().back().open_mask, 0x8000'0001u);
+  sim.InjectFault(32, NozzleFault::kOpenCircuit);
+  sim.InjectFault(40, NozzleFault::kStuck);
+  tick(mask);
+  tick(mask);
+  EXPECT_FALSE(bar.status().failsafe);
+  EXPECT_EQ(bar.status().nozzle_faults[32], NozzleFault::kOpenCircuit);
+  EXPECT_EQ(bar.status().nozzle_faults[40], NozzleFault::kStuck);
+  EXPECT_EQ(sim.open_mask(), mask & ~(uint64_t{1} << 32));
+  EXPECT_THAT(bar.HealthFaults(),
+              ::testing::ElementsAre("spray bar socketpair: nozzle 32: valve coil open circuit",
+                                     "spray bar socketpair: nozzle 40: valve stuck (flow "
+                                     "disagrees with command)"));
+  EXPECT_EQ(ToNozzleBar(bar.status()).open.size(), 64u);
+  EXPECT_TRUE(ToNozzleBar(bar.status()).open[63]);
+  // Every shot of nozzle 63 from the bar's record: one, still open.
+  const std::vector<NozzleShot> shots = ShotsFromValves(sim.history(), t);
+  int shots63 = 0;
+  for (const NozzleShot& s : shots) shots63 += s.nozzle == 63 ? 1 : 0;
+  EXPECT_EQ(shots63, 1);
 }
 
 TEST_F(SprayBarTest, PerNozzleFaultsAreReportedAndHeldClosedWithoutFailSafe) {
@@ -493,10 +551,10 @@ TEST(SprayBarOpenTest, BadInterfaceNamesAndOptions) {
       },
       CanError);
   SprayBarOptions o;
-  o.num_nozzles = 33;
+  o.num_nozzles = 65;
   EXPECT_THROW(SprayBar::Open("can0", o), InvalidOptionsError);
   o = SprayBarOptions{};
-  o.ids.base_id = 0x211;
+  o.ids.base_id = 0x214;
   EXPECT_THROW(SprayBar::Open("can0", o), InvalidOptionsError);
 }
 
