@@ -111,7 +111,7 @@ void AddSprayBarCommands(CommandRegistry& registry) {
       "spraybar", "diagnose the spray bar: supervise it for a while and report its state",
       [&a] { return RunSprayBar(a); });
   c->add_option("--can", a.can, "SocketCAN interface of the bar, or 'simulated'")->required();
-  c->add_option("--nozzles", a.nozzles, "nozzles on the bar (1..32)")->capture_default_str();
+  c->add_option("--nozzles", a.nozzles, "nozzles on the bar (1..64)")->capture_default_str();
   c->add_option("--seconds", a.seconds, "how long to supervise it")->capture_default_str();
   c->add_option("--tick-hz", a.tick_hz, "command rate, Hz")->capture_default_str();
   c->add_flag("--test-pattern", a.test_pattern,
