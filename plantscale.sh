@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # plantscale.sh: the two README commands.
-#   ./plantscale.sh demo [plantscale demo options]   build, then run the demo into out/demo/
+#   ./plantscale.sh demo [plantscale demo options]   build, then run the whole system on the simulator into out/demo/
 #   ./plantscale.sh test                             build, then run every test under Xvfb
 # Each installs the Debian packages it needs when they are missing (apt is
 # skipped entirely when they are all present) and builds with ccache into build/.

@@ -2,11 +2,13 @@
 
 #include "app/export_commands.h"
 #include "app/motion_commands.h"
+#include "app/rows_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
 #include "app/spraybar_commands.h"
 #include "app/telemetry_commands.h"
 #include "app/tracking_commands.h"
+#include "app/treatment_commands.h"
 #include "app/ui_commands.h"
 
 namespace plantscale::app {
@@ -17,7 +19,9 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddTelemetryCommands(registry_);
   AddExportCommands(registry_);
   AddTrackingCommands(registry_);
+  AddTreatmentCommands(registry_);
   AddMotionCommands(registry_);
+  AddRowsCommands(registry_);
   AddUiCommands(registry_);
   AddSprayBarCommands(registry_);
 }

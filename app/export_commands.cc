@@ -1,15 +1,18 @@
 #include "app/export_commands.h"
 
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "app/config_loader.h"
+#include "app/log_map.h"
 #include "app/progress.h"
 #include "maps/export.h"
 #include "maps/map_file.h"
 #include "maps/map_merge.h"
 #include "maps/sim_truth.h"
+#include "telemetry/log.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;
@@ -62,6 +65,14 @@ std::optional<maps::GeoAnchorOptions> StoredAnchor(const maps::CropMap& map) {
   return a;
 }
 
+// An LCM log starts with the event sync word 0xEDA1DA01 (big-endian).
+bool IsLcmLog(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char magic[4] = {0, 0, 0, 0};
+  in.read(reinterpret_cast<char*>(magic), 4);
+  return in.gcount() == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
+}
+
 maps::CropMap LoadInput(const std::string& input, const ExportArgs& args) {
   const fs::path path(input);
   if (maps::IsSimulatorOutput(path)) {
@@ -74,10 +85,37 @@ maps::CropMap LoadInput(const std::string& input, const ExportArgs& args) {
     bar.Finish();
     return map;
   }
-  if (fs::is_regular_file(path)) return maps::LoadMap(path);  // DataError when not a map
+  if (!fs::exists(path)) throw ConfigError(input, "LOG_OR_MAP", "no such file or folder");
+  if (IsLcmLog(path)) {
+    ProgressBar bar(std::cerr, "read " + path.filename().string(), 1000, !args.quiet);
+    LogMapReport report;
+    maps::CropMap map = CropMapFromLog(path, report, [&bar](int64_t done, int64_t all) {
+      bar.Update(static_cast<int>(1000.0 * static_cast<double>(done) / std::max<double>(static_cast<double>(all), 1)));
+    });
+    bar.Finish();
+    for (const std::string& p : report.problems) std::cerr << "plantscale: warning: " << p << "\n";
+    if (!args.quiet) {
+      std::cerr << "read " << path.string() << ": " << report.events << " events, " << report.tiles
+                << " map tiles, " << report.plants << " plants";
+      if (report.bad_messages > 0) std::cerr << ", " << report.bad_messages << " bad messages skipped";
+      std::cerr << "\n";
+    }
+    return map;
+  }
+  if (fs::is_regular_file(path)) {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(14, '\0');
+    in.read(head.data(), 14);
+    if (head != "plantscale-map") {
+      throw ConfigError(input, "LOG_OR_MAP",
+                        "neither an LCM log (no LCM sync word at byte 0) nor a plantscale map file (no "
+                        "'plantscale-map' header)");
+    }
+    return maps::LoadMap(path);  // DataError when the map is corrupt
+  }
   throw ConfigError(input, "LOG_OR_MAP",
-                    "neither a map file (.psmap) nor a simulator output folder "
-                    "(DIR/truth/plants.csv); LCM logs come with the telemetry issue");
+                    "neither an LCM log, a map file (.psmap) nor a simulator output folder "
+                    "(DIR/truth/plants.csv)");
 }
 
 maps::ExportOptions MakeOptions(const ExportArgs& args, const maps::CropMap& map) {
@@ -130,14 +168,16 @@ void AddExportCommands(CommandRegistry& registry) {
           return Export(args);
         } catch (const DataError& e) {  // corrupt or malformed input: bad input, exit 2
           throw ConfigError("export", "LOG_OR_MAP", e.what());
+        } catch (const telemetry::LogError& e) {  // unreadable or not an LCM log
+          throw ConfigError("export", "LOG_OR_MAP", e.what());
         }
       });
   cmd->add_option("LOG_OR_MAP", args.inputs,
-                  "map file (.psmap) or simulator output folder; several are merged")
+                  "LCM log of a run, map file (.psmap) or simulator output folder; several are merged")
       ->required();
   cmd->add_option("--out", args.out, "output folder")->required();
   cmd->add_option("--format", args.formats,
-                  "comma-separated: gtiff,gpkg,geojson,csv,png,isoxml,map (default: all)");
+                  "comma-separated: gtiff,northup,gpkg,geojson,csv,png,isoxml,map (default: all)");
   cmd->add_option("--origin", args.origin, "WGS84 LAT,LON of the field-frame origin (degrees)");
   cmd->add_option("--heading", args.heading_deg,
                   "direction of the field +y axis (along the rows), degrees clockwise from "

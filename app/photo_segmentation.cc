@@ -36,7 +36,8 @@ bool JpegComplete(const fs::path& p) {
   return static_cast<unsigned char>(tail[0]) == 0xFF && static_cast<unsigned char>(tail[1]) == 0xD9;
 }
 
-// 8-bit grey or BGR; throws DataError naming what is wrong.
+}  // namespace
+
 cv::Mat ReadImage(const fs::path& p) {
   std::error_code ec;
   const auto size = fs::file_size(p, ec);
@@ -62,8 +63,8 @@ bool IsGreyInColour(const cv::Mat& bgr) {
   return cv::countNonZero(ch[0] != ch[1]) == 0 && cv::countNonZero(ch[1] != ch[2]) == 0;
 }
 
-vision::SegmenterOptions OptionsFor(const SegmentPhotosRequest& r, const cv::Mat& image,
-                                    cv::Mat& input) {
+vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
+                                               const cv::Mat& image, cv::Mat& input) {
   vision::SegmenterOptions o;
   o.colour_index = *vision::ParseColourIndex(r.index);
   const bool colour = image.channels() == 3 && !IsGreyInColour(image);
@@ -100,6 +101,8 @@ vision::SegmenterOptions OptionsFor(const SegmentPhotosRequest& r, const cv::Mat
   return o;
 }
 
+namespace {
+
 void WriteAtomically(const fs::path& path, const auto& write) {
   // Same extension: encoders are chosen by it.
   const fs::path tmp = path.parent_path() /
@@ -126,7 +129,7 @@ void WriteBlobs(const fs::path& path, std::span<const vision::Blob> blobs) {
 void SegmentOne(const SegmentPhotosRequest& r, const fs::path& file) {
   const cv::Mat image = ReadImage(file);
   cv::Mat input;
-  vision::Segmenter segmenter(OptionsFor(r, image, input));
+  vision::Segmenter segmenter(PhotoSegmenterOptions(r, image, input));
   const vision::Segmentation& s = segmenter.Process(input);
   const std::string stem = file.stem().string();
   const fs::path mask = r.out / (stem + "_mask.png");

@@ -4,9 +4,12 @@
 // reads and writes files; the segmentation itself is engine/vision.
 
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <iosfwd>
 #include <string>
 #include <vector>
+
+#include "engine/vision/segmenter.h"
 
 namespace plantscale::app {
 
@@ -30,6 +33,16 @@ struct SegmentPhotosResult {
 // others are still processed.
 std::vector<std::filesystem::path> CollectImages(const std::vector<std::filesystem::path>& inputs,
                                                  std::vector<std::string>& errors);
+
+// A PNG/JPEG as 8-bit grey or BGR; throws DataError naming what is wrong
+// (empty, truncated, corrupt, unsupported depth or channels).
+cv::Mat ReadImage(const std::filesystem::path& path);
+
+// The segmenter options `plantscale segment` uses on this photograph, and in
+// `input` the image to give it (a colour file with equal channels becomes
+// grey). Throws DataError when the method does not suit the image.
+vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& request,
+                                               const cv::Mat& image, cv::Mat& input);
 
 SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log);
 

@@ -5,10 +5,7 @@
 #include "engine/vision/threshold.h"
 
 namespace plantscale::app {
-namespace {
 
-// Pixels whose ground point (z = 0, nominal camera) lies between the wheels:
-// the region the thesis labelled and treated (§2.3.3, fig. 2.8).
 cv::Mat WheelTrapezoid(const geometry::CameraModel& camera, double track_width_m) {
   const auto& c = camera.options();
   cv::Mat roi(c.image_height_px, c.image_width_px, CV_8UC1, cv::Scalar(0));
@@ -20,6 +17,8 @@ cv::Mat WheelTrapezoid(const geometry::CameraModel& camera, double track_width_m
   }
   return roi;
 }
+
+namespace {
 
 // The ground depth the camera sees between the wheels: frames further apart
 // than this share no soil (thesis §2.3.3 chose non-overlapping images).

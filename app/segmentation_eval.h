@@ -14,6 +14,10 @@
 
 namespace plantscale::app {
 
+// Pixels whose ground point (z = 0, nominal camera) lies between the wheels:
+// the region the thesis labelled and treated (§2.3.3, fig. 2.8).
+cv::Mat WheelTrapezoid(const geometry::CameraModel& camera, double track_width_m);
+
 struct SegmentationEvalOptions {
   sim::SimulatorOptions sim;
   int seeds = 3;              // seeds sim.seed, sim.seed + 1, ...

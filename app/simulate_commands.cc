@@ -116,18 +116,6 @@ void AddSimulateCommands(CommandRegistry& registry) {
   AddPublishOptions(simulate, sim.publish);
   out->excludes("--publish");
 
-  SimulateArgs& demo = registry.Keep(SimulateArgs{});
-  demo.out = "out/demo";
-  demo.every = 25;
-  CLI::App* demo_cmd = registry.Add(
-      "demo", "a simulated 40 m pass written to out/demo with a summary", [&demo, &global] {
-        SimulateArgs args = demo;
-        if (!args.length_m) args.length_m = 40.0;
-        return Simulate(args, global, "demo");
-      });
-  AddSimulateOptions(demo_cmd, demo);
-  demo_cmd->add_option("--out", demo.out, "output folder")->capture_default_str();
-
   registry.Add("presets", "list the simulator presets and cameras",
                [&global] { return Presets(global); });
 }

@@ -92,6 +92,13 @@ SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
 
 namespace {
 
+// The CAN bar has as many nozzles as the treatment scheduler's bar.
+tm::can::SprayBarOptions BarOptionsOfTreatment() {
+  tm::can::SprayBarOptions o;
+  o.num_nozzles = treatment::TreatmentOptions{}.scheduler.bar.nozzles;
+  return o;
+}
+
 using SourceFactory =
     std::function<std::unique_ptr<tm::FrameSource>(tm::Transport& transport, int64_t boot)>;
 
@@ -101,6 +108,7 @@ using SourceFactory =
 struct TrackerSetup {
   const geometry::CameraModel& camera;
   tracking::TrackerOptions options;
+  treatment::NozzleSink nozzle_sink = {};  // a spray bar: every tick's open mask
 };
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
@@ -122,19 +130,25 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
   tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
   clock = &runner;
-  // The spray bar (--can): the treatment scheduler drives it through
-  // `nozzle_sink`; until a scheduler does, its stage commands every nozzle
-  // closed each frame so the bar stays supervised. Before HealthStage, which
-  // reports its fail-safe state and faults.
+  // The spray bar (--can): with the treatment stage (a calibrated camera)
+  // its scheduler drives the bar through the bar's sink every tick; without
+  // one the bar stage commands every nozzle closed each frame so the bar
+  // stays supervised. The bar stage goes before HealthStage, which reports
+  // its fail-safe state and faults; the simulated bar steps after the
+  // treatment stage has commanded it.
   tm::can::SprayBar* bar = endpoint.bar.get();
-  std::function<void(int64_t, uint64_t)> nozzle_sink;
+  treatment::NozzleSink nozzle_sink = tracker ? tracker->nozzle_sink : treatment::NozzleSink{};
   if (bar != nullptr) {
-    nozzle_sink = bar->Sink();
-    const bool scheduler_drives_bar = false;
+    const bool scheduler_drives_bar = tracker.has_value();
+    if (scheduler_drives_bar) {
+      const treatment::NozzleSink to_bar = bar->Sink();
+      const treatment::NozzleSink other = nozzle_sink;
+      nozzle_sink = [to_bar, other](int64_t utime, uint64_t mask) {
+        if (other) other(utime, mask);
+        to_bar(utime, mask);
+      };
+    }
     runner.AddStage(std::make_unique<tm::can::SprayBarStage>(*bar, !scheduler_drives_bar));
-  }
-  if (endpoint.simulated) {
-    runner.AddStage(std::make_unique<tm::can::SimulatedBarStage>(*endpoint.simulated));
   }
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
@@ -143,9 +157,16 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   const tm::SegmentationStage* blobs = segmentation.get();
   runner.AddStage(std::move(segmentation));
   if (tracker) {
-    runner.AddStage(std::make_unique<tm::TrackerStage>(tracker->camera, tracker->options, *blobs));
+    auto grid = std::make_unique<tm::TrackerStage>(tracker->camera, tracker->options, *blobs);
+    const tm::TrackerStage& tracked = *grid;
+    runner.AddStage(std::move(grid));
+    runner.AddStage(std::make_unique<tm::TreatmentStage>(
+        tracker->camera, treatment::TreatmentOptions{}, *blobs, tracked, nozzle_sink));
   }
   runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
+  if (endpoint.simulated) {
+    runner.AddStage(std::make_unique<tm::can::SimulatedBarStage>(*endpoint.simulated));
+  }
   if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
   g_stop = false;
   std::signal(SIGINT, OnSignal);
@@ -162,8 +183,8 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
     const tm::can::SprayBarStatus& b = bar->status();
     std::cout << "  spray bar         " << bar->endpoint() << ": " << b.commands_sent
               << " commands, " << b.acks << " acks, " << b.heartbeats << " heartbeats, "
-              << b.frames_rejected << " frames rejected, " << b.sequence_gaps
-              << " sequence gaps" << (b.failsafe ? ", fail-safe" : "") << '\n';
+              << b.frames_rejected << " frames rejected, " << b.sequence_gaps << " sequence gaps"
+              << (b.failsafe ? ", fail-safe" : "") << '\n';
     for (const std::string& line : bar->HealthFaults()) std::cout << "    " << line << '\n';
   }
   if (endpoint.simulated) {
@@ -180,7 +201,8 @@ struct RunArgs {
 };
 
 int Run(const RunArgs& a) {
-  const SprayBarEndpoint bar = OpenSprayBar(a.publish, false);  // before anything else
+  const SprayBarEndpoint bar =
+      OpenSprayBar(a.publish, false, BarOptionsOfTreatment());  // before anything else
   return RunVehicle(
       a.publish,
       [&a](tm::Transport& t, int64_t boot) {
@@ -192,7 +214,8 @@ int Run(const RunArgs& a) {
 }  // namespace
 
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
-  const SprayBarEndpoint bar = OpenSprayBar(args, true);  // before anything else
+  const SprayBarEndpoint bar =
+      OpenSprayBar(args, true, BarOptionsOfTreatment());  // before anything else
   sim::Simulator simulator(options);
   return RunVehicle(
       args,

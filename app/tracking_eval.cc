@@ -244,11 +244,23 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     sim::SimFrame frame;
     int index = 0;
     double last_distance = 0.0;
+    // Odometry up to the frame's capture goes in before the frame, the rest
+    // after it, so that the estimate is scored at the time of its truth.
+    std::vector<sim::OdometrySample> later;
+    const auto add = [&](const sim::OdometrySample& o) {
+      ours.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+      if (thesis) thesis->tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+      probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+    };
     while (simulator.Next(frame)) {
+      for (const sim::OdometrySample& o : later) add(o);
+      later.clear();
       for (const sim::OdometrySample& o : frame.odometry) {
-        ours.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
-        if (thesis) thesis->tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
-        probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+        if (o.utime <= frame.truth.utime) {
+          add(o);
+        } else {
+          later.push_back(o);
+        }
       }
       ours.Frame(frame, index, simulator.camera());
       if (thesis) thesis->Frame(frame, index, simulator.camera());

@@ -76,6 +76,7 @@ struct DemoArgs {
   double length_m = 40.0;
   bool real_time = false;
   std::string lcm_url = "udpm://239.255.76.67:7668?ttl=0";  // a port apart from LCM's default
+  std::string origin = "52.0063,-0.4206";  // WGS84 of the field-frame origin for the map exports
 };
 
 bool OnPath(const std::string& program) {
@@ -109,7 +110,8 @@ int Wait(pid_t pid) {
 void ReexecUnderXvfb(const std::string& self, const DemoArgs& a) {
   if (ui::DisplayAvailable() || !OnPath("xvfb-run")) return;
   std::vector<std::string> args{"xvfb-run", "-a", self, "demo-system", "--out", a.out, "--preset", a.preset,
-                                "--length-m", std::to_string(a.length_m), "--lcm-url", a.lcm_url};
+                                "--length-m", std::to_string(a.length_m), "--lcm-url", a.lcm_url,
+                                "--origin", a.origin};
   if (a.real_time) args.push_back("--real-time");
   std::vector<char*> argv;
   for (std::string& s : args) argv.push_back(s.data());
@@ -123,6 +125,12 @@ void ReexecUnderXvfb(const std::string& self, const DemoArgs& a) {
 // off-screen under xvfb-run), then the report of the log.
 int DemoSystem(const DemoArgs& a) {
   namespace fs = std::filesystem;
+  if (a.lcm_url.rfind("memq://", 0) == 0) {
+    std::cerr << "plantscale: error: demo: --lcm-url " << a.lcm_url
+              << " cannot work: memq:// stays inside one process, and the demo runs the vehicle and the station"
+                 " as separate processes; use a udpm:// URL\n";
+    return 2;
+  }
   const fs::path out = a.out, log = out / "run.lcmlog";
   fs::create_directories(out);
   const std::string self = fs::read_symlink("/proc/self/exe").string();
@@ -158,8 +166,16 @@ int DemoSystem(const DemoArgs& a) {
   std::cout << "demo: report          " << (report_status == 0 ? (out / "report" / "index.html").string()
                                                               : "failed, see " + (out / "report.txt").string())
             << '\n';
-  std::cout << "demo: maps            not written: exporting maps from an LCM log comes with the maps issue\n";
-  return report_status == 0 && station_status == 0 ? 0 : 1;
+  // The maps of the run from its log, anchored at a demonstration field
+  // (Silsoe, Bedfordshire, where the thesis's trials were run).
+  const int maps_status = Wait(Spawn({self, "export", log.string(), "--out", (out / "maps").string(), "--origin",
+                                      a.origin, "--heading", "0", "--quiet"},
+                                     out / "maps.txt"));
+  std::cout << "demo: maps            "
+            << (maps_status == 0 ? (out / "maps").string() + "/  (GeoTIFF, GeoPackage, GeoJSON, CSV, PNG, ISOXML)"
+                                 : "not written, see " + (out / "maps.txt").string())
+            << '\n';
+  return report_status == 0 && station_status == 0 && maps_status == 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -186,15 +202,19 @@ void AddUiCommands(CommandRegistry& registry) {
   report->add_option("--closeup-every-m", r.closeup_every_m, "ellipse close-up spacing (default 10 m)");
   report->add_option("--confidence", r.confidence, "ellipse confidence (default 0.95)");
 
-  DemoArgs& d = registry.Keep(DemoArgs{});
-  CLI::App* demo = registry.Add("demo-system",
-                                "the whole system on the simulator: vehicle over LCM, station, log, report",
-                                [&d] { return DemoSystem(d); });
-  demo->add_option("--out", d.out, "output folder")->capture_default_str();
-  demo->add_option("--preset", d.preset, "simulator preset")->capture_default_str();
-  demo->add_option("--length-m", d.length_m, "distance to drive, metres")->capture_default_str();
-  demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
-  demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
+  // `demo` (what ./plantscale.sh demo runs) and `demo-system` are the same command.
+  for (const char* name : {"demo", "demo-system"}) {
+    DemoArgs& d = registry.Keep(DemoArgs{});
+    CLI::App* demo = registry.Add(name,
+                                  "the whole system on the simulator: vehicle over LCM, station, log, report",
+                                  [&d] { return DemoSystem(d); });
+    demo->add_option("--out", d.out, "output folder")->capture_default_str();
+    demo->add_option("--preset", d.preset, "simulator preset")->capture_default_str();
+    demo->add_option("--length-m", d.length_m, "distance to drive, metres")->capture_default_str();
+    demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
+    demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
+    demo->add_option("--origin", d.origin, "WGS84 LAT,LON of the field origin for the maps")->capture_default_str();
+  }
 }
 
 }  // namespace plantscale::app

@@ -24,8 +24,8 @@ OptionErrors IsoxmlOptions::Validate() const {
 }
 
 const std::vector<std::string>& AllExportFormats() {
-  static const std::vector<std::string> all{"gtiff", "gpkg",   "geojson", "csv",
-                                            "png",   "isoxml", "map"};
+  static const std::vector<std::string> all{"gtiff", "northup", "gpkg", "geojson",
+                                            "csv",   "png",     "isoxml", "map"};
   return all;
 }
 
@@ -39,7 +39,7 @@ OptionErrors ExportOptions::Validate() const {
     const auto& all = AllExportFormats();
     if (std::find(all.begin(), all.end(), f) == all.end()) {
       errors.push_back({"formats", "unknown format '" + f +
-                                       "' (known: gtiff, gpkg, geojson, csv, png, isoxml, map)"});
+                                       "' (known: gtiff, northup, gpkg, geojson, csv, png, isoxml, map)"});
     }
     needs_anchor = needs_anchor || NeedsGeoreference(f);
   }
@@ -56,6 +56,7 @@ namespace {
 
 const char* FileOf(const std::string& format) {
   if (format == "gtiff") return "map.tif";
+  if (format == "northup") return "map_northup.tif";
   if (format == "gpkg") return "map.gpkg";
   if (format == "geojson") return "plants.geojson";
   if (format == "csv") return "plants.csv";
@@ -76,6 +77,7 @@ CropMap WithAnchor(const CropMap& map, const Georeference& georef) {
 void WriteFormat(const std::string& format, const CropMap& map, const Georeference* georef,
                  const ExportOptions& options, const fs::path& path) {
   if (format == "gtiff") WriteGeoTiff(map, *georef, path);
+  if (format == "northup") WriteNorthUpGeoTiff(map, *georef, path);
   if (format == "gpkg") WriteGeoPackage(map, *georef, path);
   if (format == "geojson") WriteGeoJson(map, *georef, path);
   if (format == "csv") WritePlantsCsv(map, *georef, path);

@@ -4,7 +4,8 @@
 // `dir` and moved into place only when all requested formats succeeded.
 //
 //   format   file(s) in dir                        CRS
-//   gtiff    map.tif                               export CRS (UTM or --epsg)
+//   gtiff    map.tif                               export CRS (UTM or --epsg), grid along the rows
+//   northup  map_northup.tif                       the same, resampled north-up (nearest)
 //   gpkg     map.gpkg                              export CRS
 //   geojson  plants.geojson                        WGS84 lon/lat (RFC 7946)
 //   csv      plants.csv                            X, Y in the export CRS

@@ -53,7 +53,7 @@ expect 2 "latitude_deg: must be in \[-90, 90\] \(got 95\)" -- "$plantscale" expo
 expect 2 "expected LAT,LON" -- "$plantscale" export "$work/sim" --out "$work/bad" --origin north
 expect 2 "need an origin" -- "$plantscale" export "$work/sim" --out "$work/bad"
 expect 2 "unknown format 'shp'" -- "$plantscale" export "$work/sim" --out "$work/bad" --origin 52,0 --format shp
-expect 2 "neither a map file" -- "$plantscale" export "$work/absent" --out "$work/bad" --origin 52,0
+expect 2 "absent: LOG_OR_MAP: no such file or folder" -- "$plantscale" export "$work/absent" --out "$work/bad" --origin 52,0
 [[ -e "$work/bad" ]] && fail "a refused export created $work/bad"
 head -c 2000 "$out/map.psmap" >"$work/short.psmap"
 expect 2 "short.psmap: truncated" -- "$plantscale" export "$work/short.psmap" --out "$work/bad" --origin 52,0

@@ -55,7 +55,7 @@ TEST_F(ExportTest, WritesEveryFileAndNoTemporaries) {
   for (const auto& e : fs::directory_iterator(dir_.path())) names.push_back(e.path().filename());
   std::sort(names.begin(), names.end());
   EXPECT_EQ(names, (std::vector<std::string>{"TASKDATA", "map.gpkg", "map.png", "map.psmap",
-                                             "map.tif", "plants.csv", "plants.geojson"}));
+                                             "map.tif", "map_northup.tif", "plants.csv", "plants.geojson"}));
   EXPECT_EQ(result_.epsg, 32630);
 }
 
@@ -64,8 +64,8 @@ TEST_F(ExportTest, ExportingAgainReplacesFilesAndTheTaskFolder) {
   ExportOptions options;
   options.anchor = TestAnchor(45.0);
   const ExportResult again = ExportMap(map_, dir_.path(), options);
-  EXPECT_EQ(again.files.size(), 7u);
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir_.path()), {}), 7);  // no staging, no .old
+  EXPECT_EQ(again.files.size(), 8u);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_.path()), {}), 8);  // no staging, no .old
   EXPECT_GE(fs::last_write_time(dir_.path() / "TASKDATA" / "TASKDATA.XML"), before);
   EXPECT_EQ(std::stod(LoadMap(dir_.path() / "map.psmap").metadata().at("heading_deg")), 45.0);
 }
@@ -131,6 +131,63 @@ TEST_F(ExportTest, AKnownPlantFallsInItsRasterCell) {
             CE_None);
   EXPECT_EQ(weeds, 1);
   EXPECT_EQ(treated, 1);
+}
+
+TEST_F(ExportTest, NorthUpGeoTiffHoldsTheSameMapOnANorthUpGrid) {
+  // The map's field frame is turned 30° from north; the north-up copy is
+  // resampled (nearest) on cells of the same size aligned with E and N.
+  Dataset ds = Open(dir_.path() / "map_northup.tif", GDAL_OF_RASTER);
+  ASSERT_TRUE(ds);
+  std::array<double, 6> gt{}, inv{};
+  ds->GetGeoTransform(gt.data());
+  const double res = map_.grid().resolution_m();
+  EXPECT_EQ(gt[2], 0.0);
+  EXPECT_EQ(gt[4], 0.0);
+  EXPECT_NEAR(gt[1], res, 1e-12);
+  EXPECT_NEAR(gt[5], -res, 1e-12);
+  EXPECT_STREQ(ds->GetSpatialRef()->GetAuthorityCode(nullptr), "32630");
+  EXPECT_STREQ(ds->GetRasterBand(3)->GetDescription(), "weed_count");
+  // It covers the bounding box of map.tif's four corners, cell-aligned (≤ 1 cell more each way).
+  std::array<double, 6> rotated{};
+  Open(dir_.path() / "map.tif", GDAL_OF_RASTER)->GetGeoTransform(rotated.data());
+  const double w = map_.grid().cols(), h = map_.grid().rows();
+  double e_min = 1e300, e_max = -1e300, n_min = 1e300, n_max = -1e300;
+  for (const auto& [x, y] : {std::pair{0.0, 0.0}, {w, 0.0}, {0.0, h}, {w, h}}) {
+    const double e = rotated[0] + x * rotated[1] + y * rotated[2], n = rotated[3] + x * rotated[4] + y * rotated[5];
+    e_min = std::min(e_min, e), e_max = std::max(e_max, e), n_min = std::min(n_min, n), n_max = std::max(n_max, n);
+  }
+  EXPECT_LE(gt[0], e_min);
+  EXPECT_GT(gt[0], e_min - res);
+  EXPECT_GE(gt[3], n_max);
+  EXPECT_LT(gt[3], n_max + res);
+  EXPECT_NEAR(ds->GetRasterXSize(), (e_max - e_min) / res, 2.0);
+  EXPECT_NEAR(ds->GetRasterYSize(), (n_max - n_min) / res, 2.0);
+  EXPECT_GT(std::abs(rotated[2]), 0.1 * res);  // the source really is rotated
+  // Class areas survive resampling within 3 % (nearest neighbour at 30°).
+  const int cols = ds->GetRasterXSize(), rows = ds->GetRasterYSize();
+  std::vector<uint16_t> cls(static_cast<size_t>(cols) * static_cast<size_t>(rows));
+  ASSERT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Read, 0, 0, cols, rows, cls.data(), cols, rows, GDT_UInt16, 0, 0,
+                                           nullptr),
+            CE_None);
+  for (uint16_t k : {uint16_t{0}, uint16_t{1}, uint16_t{2}}) {
+    const auto want = std::count(map_.layers().cls.begin(), map_.layers().cls.end(), static_cast<uint8_t>(k));
+    const auto got = std::count(cls.begin(), cls.end(), k);
+    ASSERT_GT(want, 0);
+    EXPECT_NEAR(static_cast<double>(got), static_cast<double>(want), 0.03 * static_cast<double>(want) + 2.0)
+        << "class " << k;
+  }
+  EXPECT_GT(std::count(cls.begin(), cls.end(), uint16_t{65535}), 0);  // corners outside the map are nodata
+  // The treated weed at (0.21, 2.11), projected independently, is within one
+  // cell of a north-up pixel that counts it.
+  ASSERT_TRUE(GDALInvGeoTransform(gt.data(), inv.data()));
+  const Eigen::Vector2d en = ExpectedProjected(anchor_, {0.21, 2.11}, 32630);
+  double px = 0, ln = 0;
+  GDALApplyGeoTransform(inv.data(), en.x(), en.y(), &px, &ln);
+  uint16_t weeds[9] = {};
+  ASSERT_EQ(ds->GetRasterBand(3)->RasterIO(GF_Read, static_cast<int>(px) - 1, static_cast<int>(ln) - 1, 3, 3, weeds,
+                                           3, 3, GDT_UInt16, 0, 0, nullptr),
+            CE_None);
+  EXPECT_NE(std::count(std::begin(weeds), std::end(weeds), uint16_t{1}), 0);
 }
 
 // Every plant of `layer` matches the map's attributes and lies within 1 mm

@@ -1,7 +1,9 @@
 // GeoTIFF export and the treated-area polygons (both from raster bands).
 #include <gdal_alg.h>
+#include <gdalwarper.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "maps/export.h"
 #include "maps/gdal_dataset.h"
@@ -56,9 +58,9 @@ void WriteBand(GDALDataset& ds, const CropMap& map, int b, const std::filesystem
   }
 }
 
-void BuildOverviews(GDALDataset& ds, const MapGrid& g, const std::filesystem::path& file) {
+void BuildOverviews(GDALDataset& ds, const std::filesystem::path& file) {
   std::vector<int> levels;
-  for (int f = 2; std::max(g.cols(), g.rows()) / f >= 16; f *= 2) levels.push_back(f);
+  for (int f = 2; std::max(ds.GetRasterXSize(), ds.GetRasterYSize()) / f >= 16; f *= 2) levels.push_back(f);
   if (levels.empty()) return;
   if (ds.BuildOverviews("NEAREST", static_cast<int>(levels.size()), levels.data(), 0, nullptr,
                         nullptr, nullptr) != CE_None) {
@@ -81,8 +83,79 @@ void WriteGeoTiff(const CropMap& map, const Georeference& georef,
   ds->SetMetadataItem("RASTER_ORDER", "line 0 = largest field y; column 0 = smallest field x");
   ds->SetMetadataItem("RESOLUTION_M", ExactText(g.resolution_m()).c_str());
   for (const auto& [k, v] : map.metadata()) ds->SetMetadataItem(k.c_str(), v.c_str(), "PLANTSCALE");
-  BuildOverviews(*ds, g, file);
+  BuildOverviews(*ds, file);
   CloseAndCopy(ds, mem);
+}
+
+void WriteNorthUpGeoTiff(const CropMap& map, const Georeference& georef,
+                         const std::filesystem::path& file) {
+  GdalErrorScope scope;
+  const MapGrid& g = map.grid();
+  DatasetPtr src = CreateMemRaster(g.cols(), g.rows(), 4, GDT_UInt16);
+  SetGeoreference(*src, map, georef, file);
+  for (int b = 0; b < 4; ++b) WriteBand(*src, map, b, file);
+
+  // The north-up grid: same cell size, cell edges on multiples of it, covering
+  // the four corners of the (rotated) map.
+  const std::array<double, 6> gt = georef.GeoTransform(g);
+  double min_e = INFINITY, max_e = -INFINITY, min_n = INFINITY, max_n = -INFINITY;
+  for (const auto& [px, ln] : {std::pair{0, 0}, {g.cols(), 0}, {0, g.rows()}, {g.cols(), g.rows()}}) {
+    const double e = gt[0] + px * gt[1] + ln * gt[2];
+    const double n = gt[3] + px * gt[4] + ln * gt[5];
+    min_e = std::min(min_e, e), max_e = std::max(max_e, e);
+    min_n = std::min(min_n, n), max_n = std::max(max_n, n);
+  }
+  const double res = g.resolution_m();
+  const double e0 = std::floor(min_e / res) * res, n0 = std::ceil(max_n / res) * res;
+  const int cols = static_cast<int>(std::ceil((max_e - e0) / res));
+  const int rows = static_cast<int>(std::ceil((n0 - min_n) / res));
+  MemoryFile mem(file);
+  DatasetPtr dst = CreateDataset("GTiff", mem, cols, rows, 4, GDT_UInt16,
+                                 {"COMPRESS=DEFLATE", "TILED=YES", "INTERLEAVE=BAND"});
+  std::array<double, 6> north_up{e0, res, 0.0, n0, 0.0, -res};
+  const OGRSpatialReference srs = ProjectedSrs(georef);
+  if (dst->SetGeoTransform(north_up.data()) != CE_None || dst->SetSpatialRef(&srs) != CE_None) {
+    ThrowGdal(file, "cannot set the georeference");
+  }
+  for (int b = 0; b < 4; ++b) {
+    GDALRasterBand* band = dst->GetRasterBand(b + 1);
+    band->SetDescription(kBandNames[b]);
+    band->SetNoDataValue(kNoData);
+  }
+
+  // Nearest neighbour: cell values are classes and counts, never blends.
+  GDALWarpOptions* wo = GDALCreateWarpOptions();
+  wo->hSrcDS = GDALDataset::ToHandle(src.get());
+  wo->hDstDS = GDALDataset::ToHandle(dst.get());
+  wo->eResampleAlg = GRA_NearestNeighbour;
+  wo->nBandCount = 4;
+  wo->panSrcBands = static_cast<int*>(CPLMalloc(sizeof(int) * 4));
+  wo->panDstBands = static_cast<int*>(CPLMalloc(sizeof(int) * 4));
+  wo->padfSrcNoDataReal = static_cast<double*>(CPLMalloc(sizeof(double) * 4));
+  wo->padfDstNoDataReal = static_cast<double*>(CPLMalloc(sizeof(double) * 4));
+  for (int b = 0; b < 4; ++b) {
+    wo->panSrcBands[b] = wo->panDstBands[b] = b + 1;
+    wo->padfSrcNoDataReal[b] = wo->padfDstNoDataReal[b] = kNoData;
+  }
+  wo->papszWarpOptions = CSLSetNameValue(wo->papszWarpOptions, "INIT_DEST", "NO_DATA");
+  wo->pTransformerArg = GDALCreateGenImgProjTransformer(wo->hSrcDS, nullptr, wo->hDstDS, nullptr, FALSE, 0.0, 0);
+  wo->pfnTransformer = GDALGenImgProjTransform;
+  CPLErr warped = CE_Failure;
+  if (wo->pTransformerArg != nullptr) {
+    GDALWarpOperation op;
+    if (op.Initialize(wo) == CE_None) warped = op.ChunkAndWarpImage(0, 0, cols, rows);
+    GDALDestroyGenImgProjTransformer(wo->pTransformerArg);
+  }
+  GDALDestroyWarpOptions(wo);
+  if (warped != CE_None) ThrowGdal(file, "cannot resample the map north-up");
+
+  dst->SetMetadataItem("CLASS_CODES", "0=soil,1=crop,2=weed,65535=unknown (nodata)");
+  dst->SetMetadataItem("RASTER_ORDER", "north-up: line 0 = northmost, column 0 = westmost");
+  dst->SetMetadataItem("RESAMPLING", "nearest neighbour from the field-frame grid of map.tif");
+  dst->SetMetadataItem("RESOLUTION_M", ExactText(res).c_str());
+  for (const auto& [k, v] : map.metadata()) dst->SetMetadataItem(k.c_str(), v.c_str(), "PLANTSCALE");
+  BuildOverviews(*dst, file);
+  CloseAndCopy(dst, mem);
 }
 
 void WriteTreatedPolygons(const CropMap& map, const Georeference& georef, OGRLayer& layer,

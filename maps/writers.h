@@ -18,6 +18,10 @@ struct IsoxmlOptions;
 // where the class is unknown), DEFLATE, tiled, internal overviews.
 void WriteGeoTiff(const CropMap& map, const Georeference& georef,
                   const std::filesystem::path& file);
+// The same bands resampled (nearest neighbour) onto a north-up grid of the
+// same cell size: for tools that ignore a rotated geotransform.
+void WriteNorthUpGeoTiff(const CropMap& map, const Georeference& georef,
+                         const std::filesystem::path& file);
 // Layers plants (points), rows (lines), treated_areas (polygons), run_metadata (table).
 void WriteGeoPackage(const CropMap& map, const Georeference& georef,
                      const std::filesystem::path& file);

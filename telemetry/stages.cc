@@ -130,6 +130,7 @@ void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publish
   const tracking::FrameReport r =
       tracker_.ProcessFrame(frame.utime, frame.image.cols, frame.image.rows, features_);
   if (!r.input.accepted) status.faults.push_back("tracker: " + r.input.reason);
+  initialised_now_ = r.initialised_now;
   if (r.mode == tracking::TrackerMode::kLost) {
     status.faults.push_back("tracker: " + r.skipped_reason);
   }
@@ -155,6 +156,176 @@ void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publish
   e.validated = r.matched;
   e.innovation_nis = r.nis;
   publisher.Publish(channels::kGrid, ToLcm(e));
+}
+
+namespace {
+
+constexpr int kTileCells = 64;
+constexpr int64_t kPlantListPeriodUs = 400'000;
+
+uint8_t TileCell(treatment::CellClass c) {
+  switch (c) {
+    case treatment::CellClass::kCrop: return plantscale_map_tile_t::CELL_CROP;
+    case treatment::CellClass::kWeed: return plantscale_map_tile_t::CELL_WEED;
+    case treatment::CellClass::kSoil: break;
+  }
+  return plantscale_map_tile_t::CELL_SOIL;
+}
+
+int WhyCode(const treatment::PlantRecord& r) {
+  if (r.crop()) return plantscale_plant_t::WHY_CROP_IN_REGION;
+  if (r.small) return plantscale_plant_t::WHY_TOO_SMALL;
+  return plantscale_plant_t::WHY_OUTSIDE_REGION;
+}
+
+}  // namespace
+
+TreatmentStage::TreatmentStage(const geometry::CameraModel& camera,
+                               const treatment::TreatmentOptions& options,
+                               const SegmentationStage& segmentation, const TrackerStage& tracker,
+                               treatment::NozzleSink sink)
+    : system_(camera, options, std::move(sink)), segmentation_(segmentation), tracker_(tracker) {
+  const auto n = static_cast<size_t>(options.scheduler.bar.nozzles);
+  open_since_.assign(n, -1);
+  open_sum_.assign(n, Eigen::Vector2d::Zero());
+  open_ticks_.assign(n, 0);
+}
+
+void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
+  const tracking::GridTracker& tracker = tracker_.tracker();
+  const double speed = 0.5 * (o.left_m_s + o.right_m_s);
+  const bool odometry_ok = std::isfinite(speed) && std::abs(speed) <=
+                                                       tracker.options().max_wheel_speed_m_s;
+  treatment::BedPose pose = treatment::BedPoseFromGrid(
+      o.utime, tracker.state(), tracker.forward_distance_m(), odometry_ok ? speed : 0.0);
+  pose.distance_m -= pose.speed_m_s * 1e-6 * static_cast<double>(tracker.utime() - o.utime);
+  treatment::SafetyInputs safety;
+  safety.pose_utime = std::min(tracker.utime(), o.utime);
+  safety.last_frame_utime = system_.last_frame_utime();
+  safety.odometry_valid = odometry_ok;
+  safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
+  last_tick_ = system_.Tick(o.utime, pose, safety);
+  status.failsafe = last_tick_.fail_reasons != 0;
+  // The tracker reports its own loss; before the first frame the bar is
+  // closed by design, not by a fault.
+  if (safety.last_frame_utime >= 0) {
+    for (const std::string& m : last_tick_.messages) {
+      if (m.rfind("tracker", 0) != 0) status.faults.push_back("treatment: bar closed: " + m);
+    }
+  }
+  std::vector<Eigen::Vector2d> centre(open_since_.size(), Eigen::Vector2d::Zero());
+  for (const treatment::NozzleTarget& t : last_tick_.opened) {
+    centre[static_cast<size_t>(t.nozzle)] = {0.5 * (t.x0 + t.x1), 0.5 * (t.y0 + t.y1)};
+  }
+  for (size_t i = 0; i < open_since_.size(); ++i) {
+    const bool open = (last_tick_.open_mask >> i) & 1u;
+    if (open) {
+      if (open_since_[i] < 0) open_since_[i] = o.utime, open_sum_[i].setZero(), open_ticks_[i] = 0;
+      open_sum_[i] += centre[i];
+      ++open_ticks_[i];
+    } else if (open_since_[i] >= 0) {
+      shots_.push_back({static_cast<int>(i), open_since_[i], o.utime,
+                        open_sum_[i] / std::max(1, open_ticks_[i]), -1});
+      open_since_[i] = -1;
+    }
+  }
+}
+
+void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  for (const sim::OdometrySample& o : frame.odometry) Tick(o, status);
+  if (frame.image.empty()) return;
+  const std::span<const vision::Blob> blobs = segmentation_.blobs();
+  tracking::FeaturesFromBlobs(blobs, frame.image.cols, frame.image.rows, features_);
+  treatment::FeatureBlobIndices(blobs, blob_of_feature_);
+  tracking::FrameReport report;
+  report.mode = tracker_.tracker().mode();
+  report.initialised_now = tracker_.initialised_now();
+  const treatment::FrameTreatment& t = system_.OnFrame(frame.utime, tracker_.tracker(), report,
+                                                       blobs, features_, blob_of_feature_);
+  if (t.map_reset) next_tile_row_ = 0;
+  PublishPlants(frame, t, publisher);
+  PublishNozzles(frame.utime, publisher);
+  PublishTiles(frame.utime, publisher);
+}
+
+// Plants whose record changed since the last message, every 0.4 s of
+// message time (the list is the largest channel: it must fit the budget),
+// leaving out records seen only once (leaf fragments, noise).
+void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
+                                   Publisher& publisher) {
+  if (t.map_reset) changed_plants_.clear();
+  const std::vector<int> sprayed = system_.TakeNewlySprayed();
+  changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
+  if (!t.classified) return;
+  changed_plants_.insert(changed_plants_.end(), t.plant_ids.begin(), t.plant_ids.end());
+  if (last_plants_utime_ >= 0 && frame.utime - last_plants_utime_ < kPlantListPeriodUs) return;
+  std::vector<int>& ids = changed_plants_;
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<PlantObservation> plants;
+  for (int id : ids) {
+    if (id < 0) continue;
+    const treatment::PlantRecord& r = system_.registry().records()[static_cast<size_t>(id)];
+    if (r.observations < 2) continue;
+    PlantObservation p;
+    p.id = r.id;
+    p.kind = r.crop() ? PlantKind::kCrop : PlantKind::kWeed;
+    p.position_m = r.bed_m;
+    p.size_m2 = r.area_m2;
+    p.sprayed = r.sprayed;
+    p.why = WhyCode(r);
+    p.distance_to_crop_m = std::isfinite(r.distance_m) ? r.distance_m : -1.0;
+    plants.push_back(p);
+  }
+  ids.clear();
+  last_plants_utime_ = frame.utime;
+  publisher.Publish(channels::kPlants, ToLcm(plants, frame.utime, frame.frame_index));
+}
+
+void TreatmentStage::PublishNozzles(int64_t utime, Publisher& publisher) {
+  NozzleBar bar;
+  for (size_t i = 0; i < open_since_.size(); ++i) {
+    bar.open.push_back(((last_tick_.open_mask >> i) & 1u) != 0);
+  }
+  bar.fault.assign(open_since_.size(), plantscale_nozzles_t::FAULT_NONE);
+  bar.failsafe = last_tick_.fail_reasons != 0;
+  bar.shots = std::move(shots_);
+  shots_.clear();
+  publisher.Publish(channels::kNozzles, ToLcm(bar, utime));
+}
+
+// A tile row is sent once the bar has passed it: its cells are final.
+void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher) {
+  const tracking::GridTracker& tracker = tracker_.tracker();
+  if (tracker.mode() != tracking::TrackerMode::kTracking) return;
+  const treatment::TreatmentMap& map = system_.map();
+  const double bar_y = tracker.forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
+  const double edge = kTileCells * map.options().cell_m;
+  while (map.options().start_y_m + (next_tile_row_ + 1) * edge < bar_y &&
+         (next_tile_row_ + 1) * kTileCells <= map.rows()) {
+    for (int tx = 0; tx * kTileCells < map.columns(); ++tx) {
+      MapTileDelta d;
+      d.tile_x = tx;
+      d.tile_y = next_tile_row_;
+      d.revision = tile_revision_;
+      d.origin_m = {map.origin_x_m() + tx * edge, map.options().start_y_m + next_tile_row_ * edge};
+      d.resolution_m = map.options().cell_m;
+      d.width = d.height = kTileCells;
+      d.cells.reserve(static_cast<size_t>(kTileCells * kTileCells));
+      for (int j = 0; j < kTileCells; ++j) {
+        for (int i = 0; i < kTileCells; ++i) {
+          const int c = tx * kTileCells + i;
+          const int r = next_tile_row_ * kTileCells + j;
+          d.cells.push_back(c >= map.columns() ? plantscale_map_tile_t::CELL_UNKNOWN
+                            : map.Treated(c, r)  ? plantscale_map_tile_t::CELL_TREATED
+                                                 : TileCell(map.ClassOf(c, r)));
+        }
+      }
+      publisher.Publish(channels::kMapTiles, ToLcm(d, utime));
+    }
+    ++next_tile_row_;
+  }
+  ++tile_revision_;
 }
 
 }  // namespace plantscale::telemetry

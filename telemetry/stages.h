@@ -7,8 +7,10 @@
 #include "engine/common/options.h"
 #include "engine/geometry/camera_model.h"
 #include "engine/tracking/grid_tracker.h"
+#include "engine/treatment/treatment_system.h"
 #include "engine/vision/segmenter.h"
 #include "telemetry/runner.h"
+#include "telemetry/types.h"
 
 namespace plantscale::telemetry {
 
@@ -58,9 +60,11 @@ class TrackerStage : public Stage {
   std::string name() const override { return "tracker"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
   const tracking::GridTracker& tracker() const { return tracker_; }
+  bool initialised_now() const { return initialised_now_; }  // on the last frame
 
  private:
   tracking::GridTracker tracker_;
+  bool initialised_now_ = false;
   const SegmentationStage& segmentation_;
   std::vector<tracking::Feature> features_;
 };
@@ -88,6 +92,47 @@ class OdometryStage : public Stage {
 
  private:
   int64_t last_utime_ = -1;
+};
+
+// Classification, treatment map and nozzle scheduling (engine/treatment) on
+// the tracker's grid and the segmentation's blobs: plants with class and
+// why on PLANTSCALE_PLANTS (changed records, 2.5 Hz), nozzle states and finished shots on
+// PLANTSCALE_NOZZLES each frame, map tiles on PLANTSCALE_MAP_TILES once the
+// bar has passed them. Positions are in the bed frame (treatment/bed_frame.h).
+// The scheduler ticks once per odometry sample; the tracker has already
+// taken the whole batch, so each tick's pose is dead-reckoned back from the
+// tracker's latest at the measured speed. `sink` (a spray bar) gets every
+// tick's open mask, all closed on fail-safe.
+class TreatmentStage : public Stage {
+ public:
+  TreatmentStage(const geometry::CameraModel& camera, const treatment::TreatmentOptions& options,
+                 const SegmentationStage& segmentation, const TrackerStage& tracker,
+                 treatment::NozzleSink sink = {});
+  std::string name() const override { return "treatment"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+  const treatment::TreatmentSystem& system() const { return system_; }
+
+ private:
+  void Tick(const sim::OdometrySample& o, RunStatus& status);
+  void PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
+                     Publisher& publisher);
+  void PublishNozzles(int64_t utime, Publisher& publisher);
+  void PublishTiles(int64_t utime, Publisher& publisher);
+
+  treatment::TreatmentSystem system_;
+  const SegmentationStage& segmentation_;
+  const TrackerStage& tracker_;
+  std::vector<tracking::Feature> features_;
+  std::vector<int> blob_of_feature_;
+  treatment::TickResult last_tick_;
+  std::vector<int64_t> open_since_;       // per nozzle, −1 closed
+  std::vector<Eigen::Vector2d> open_sum_; // per nozzle, sum of strip centres
+  std::vector<int> open_ticks_;
+  std::vector<NozzleShot> shots_;         // finished since the last message
+  int next_tile_row_ = 0;
+  int tile_revision_ = 0;
+  std::vector<int> changed_plants_;  // record ids since the last plant list
+  int64_t last_plants_utime_ = -1;
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on

@@ -42,9 +42,12 @@ expect 2 "--can: only with --publish" -- "$plantscale" simulate --preset testbed
 [[ -e "$work/x" ]] && fail "simulate wrote output with a bad --can"
 
 # The whole vehicle path with the bar played in process over a socketpair
-# (same codec and SprayBar as on SocketCAN): every frame commands the bar,
-# every command but the last is acknowledged, heartbeats arrive, nothing is
-# malformed, and the bar is out of fail-safe at the end.
+# (same codec and SprayBar as on SocketCAN): the treatment scheduler drives
+# the bar at every 50 Hz odometry tick, two command frames per tick (the
+# 64-nozzle bar has two sections), four ticks per 12.5 Hz frame; every
+# command but those of the last frame is acknowledged, heartbeats arrive,
+# nothing is malformed, the bar opened nozzles, and it is out of fail-safe
+# at the end.
 out=$("$plantscale" simulate --preset testbed --length-m 2 --publish --fast --lcm-url memq:// \
   --can simulated 2>&1)
 status=$?
@@ -52,16 +55,21 @@ status=$?
 line=$(grep -E "^  spray bar +simulated: " <<<"$out")
 read -r commands acks heartbeats rejected gaps < <(sed -E \
   's/.*: ([0-9]+) commands, ([0-9]+) acks, ([0-9]+) heartbeats, ([0-9]+) frames rejected, ([0-9]+) sequence gaps.*/\1 \2 \3 \4 \5/' <<<"$line")
+read -r received changes bad < <(grep -E "^  simulated bar " <<<"$out" | sed -E \
+  's/.* ([0-9]+) commands received, ([0-9]+) valve changes, ([0-9]+) bad frames.*/\1 \2 \3/')
 frames=$(grep -oE "[0-9]+ frames \(" <<<"$out" | grep -oE "^[0-9]+")
-if [[ -z "${commands:-}" || -z "${frames:-}" ]]; then
+if [[ -z "${commands:-}" || -z "${frames:-}" || -z "${received:-}" ]]; then
   fail "no spray bar summary in: $out"
 else
-  [[ $commands -eq $frames ]] || fail "spray bar: $commands commands for $frames frames"
-  [[ $acks -eq $((commands - 1)) ]] || fail "spray bar: $acks acks for $commands commands"
+  [[ $((commands % 2)) -eq 0 && $commands -ge $((8 * (frames - 1))) && $commands -le $((8 * (frames + 1))) ]] ||
+    fail "spray bar: $commands commands for $frames frames (expected 8 per frame)"
+  [[ $acks -le $commands && $acks -ge $((commands - 16)) ]] || fail "spray bar: $acks acks for $commands commands"
   [[ $heartbeats -ge $((frames - 1)) ]] || fail "spray bar: $heartbeats heartbeats over $frames frames"
   [[ $rejected -eq 0 && $gaps -eq 0 ]] || fail "spray bar: $rejected rejected, $gaps gaps"
   grep -q "fail-safe" <<<"$line" && fail "spray bar fail-safe at the end: $line"
-  echo "ok: simulated bar: $commands commands, $acks acks, $heartbeats heartbeats over $frames frames"
+  [[ $received -eq $commands && $bad -eq 0 ]] || fail "simulated bar received $received of $commands, $bad bad"
+  [[ $changes -gt 0 ]] || fail "the treatment scheduler never opened a nozzle through the bar"
+  echo "ok: simulated bar: $commands commands, $acks acks, $heartbeats heartbeats, $changes valve changes over $frames frames"
 fi
 expect 2 "--can: 'simulated' only with simulate --publish" -- "$plantscale" run --camera "$work/empty" \
   --lcm-url memq:// --can simulated

@@ -40,6 +40,7 @@ echo "ok: total_kbit_s $total <= 250"
 # The grid tracker publishes on its own channel (issue 5); truth stays on
 # PLANTSCALE_SIM_TRUTH (checked above).
 grep -q '"PLANTSCALE_GRID"' "$work/stats.json" || fail "no grid tracker state on PLANTSCALE_GRID"
+grep -q '"PLANTSCALE_NOZZLES"' "$work/stats.json" || fail "no nozzle states on PLANTSCALE_NOZZLES (treatment stage)"
 
 expect 0 "republished" -- "$plantscale" replay "$log" --speed 100 --lcm-url memq:// --channels 'PLANTSCALE_HEALTH'
 if command -v lcm-logplayer >/dev/null; then
@@ -48,6 +49,10 @@ else
   echo "skip: lcm-logplayer not installed (liblcm-bin)"
 fi
 
+# The run's maps from its log (map tiles with treated cells, plants).
+expect 0 "plantscale export: [0-9]+ plants, .* [1-9][0-9]* treated cells; EPSG:32630" -- \
+  "$plantscale" export "$log" --out "$work/maps" --origin 52.0063,-0.4206 --heading 30 --quiet
+[[ -s "$work/maps/map.tif" && -s "$work/maps/map_northup.tif" && -s "$work/maps/plants.csv" ]] || fail "export of the log wrote no maps"
 printf 'not a log at all\n' >"$work/text.lcmlog"
 expect 2 "text.lcmlog: not an LCM log.*byte offset 0" -- "$plantscale" telemetry-stats "$work/text.lcmlog" --json
 size=$(stat -c %s "$log")
@@ -55,6 +60,8 @@ head -c $((size - 7)) "$log" >"$work/cut.lcmlog"
 expect 2 "cut.lcmlog: event cut off or corrupt at byte offset [0-9]+" -- "$plantscale" telemetry-stats "$work/cut.lcmlog"
 expect 2 "cut.lcmlog: event cut off" -- "$plantscale" replay "$work/cut.lcmlog" --speed 1000 --lcm-url memq://
 expect 1 "absent.lcmlog: cannot open" -- "$plantscale" replay "$work/absent.lcmlog" --lcm-url memq://
+expect 2 "text.lcmlog.*neither an LCM log .* nor a plantscale map file" -- "$plantscale" export "$work/text.lcmlog" --out "$work/no_maps" --origin 52,0 --quiet
+expect 0 "warning: .*cut.lcmlog.*byte offset" -- "$plantscale" export "$work/cut.lcmlog" --out "$work/cut_maps" --origin 52,0 --quiet
 expect 2 "speed: must be > 0" -- "$plantscale" replay "$log" --speed 0 --lcm-url memq://
 expect 2 "only with --publish" -- "$plantscale" simulate --preset testbed --fast --out "$work/x"
 expect 2 "excludes" -- "$plantscale" simulate --preset testbed --publish --out "$work/x"

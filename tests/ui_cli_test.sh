@@ -33,5 +33,6 @@ expect 0 "station: [0-9]+ frames" -- "$plantscale" station --log "$log" --offscr
 expect 0 "problem: .*no plantscale messages|problem: log:" -- \
   "$plantscale" station --log "$work/garbage.lcmlog" --offscreen --seconds 1
 
+expect 2 "memq:// stays inside one process" -- "$plantscale" demo --lcm-url memq:// --out "$work/e"
 if ((failures)); then echo "$failures failure(s)"; exit 1; fi
 echo "all ui CLI checks passed"

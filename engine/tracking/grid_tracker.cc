@@ -258,6 +258,13 @@ void GridTracker::Predict(const WheelIncrement& u, double left_sd_m, double righ
   }
 }
 
+void GridTracker::MoveMean(const WheelIncrement& u) {
+  const MotionPrediction f = PredictGridMotion(state(), u, options_.track_width_m);
+  x_(GridState::kOffset) = f.state.offset_m;
+  x_(GridState::kForward) = f.state.forward_m;
+  x_(GridState::kBearing) = f.state.bearing_rad;
+}
+
 void GridTracker::ShiftReference(FrameReport& report) {
   GridState s = state();
   const int k = model_.ShiftReference(s);
@@ -343,6 +350,13 @@ FrameReport GridTracker::ProcessFrame(int64_t utime, int width, int height,
     return report;
   }
   PredictTo(utime);
+  // A frame captured before the newest odometry (the camera's latency, or
+  // odometry that arrived while the frame was being segmented) is compared
+  // with the grid where it was at capture: the mean is driven back over the
+  // lag with the newest wheel speeds for the update and forward again after
+  // it. The covariance already holds the lag's process noise.
+  const double lag_s = utime_ > utime ? (utime_ - utime) * 1e-6 : 0.0;
+  const WheelIncrement lag{left_m_s_ * lag_s, right_m_s_ * lag_s};
 
   std::vector<Feature> valid;
   valid.reserve(features.size());
@@ -382,7 +396,10 @@ FrameReport GridTracker::ProcessFrame(int64_t utime, int width, int height,
   p_(GridState::kForward, GridState::kForward) += std::pow(options_.frame_forward_sd_m, 2);
   p_(GridState::kBearing, GridState::kBearing) += std::pow(options_.frame_bearing_sd_rad, 2);
   ShiftReference(report);
+  const bool rewind = lag_s > 0.0 && have_speeds_ && mode_ == TrackerMode::kTracking;
+  if (rewind) MoveMean({-lag.left_m, -lag.right_m});
   Update(valid, report);
+  if (rewind) MoveMean(lag);
   CheckLost(utime, report);
   report.mode = mode_;
   return report;

@@ -155,6 +155,7 @@ class GridTracker {
   int core() const { return options_.estimate_spacing ? 5 : 3; }
   void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m);
   void PredictTo(int64_t utime);
+  void MoveMean(const WheelIncrement& u);  // the mean only (out-of-sequence frames)
   void ShiftReference(FrameReport& report);
   void AddSpacingNoise(int lines_changed);
   void Update(std::span<const Feature> features, FrameReport& report);

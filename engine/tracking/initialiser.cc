@@ -7,6 +7,8 @@
 #include <numbers>
 #include <vector>
 
+#include "engine/rows/comb.h"
+
 namespace plantscale::tracking {
 
 using geometry::GridState;
@@ -92,16 +94,10 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
       const double psi = (b - half_bearing) * o.bearing_step_rad;
       const double base = f.ground_m.x() - f.ground_m.y() * std::tan(psi);
       const double row_step = r / std::cos(psi);
-      double* line = &acc[static_cast<size_t>(b) * n_offset];
-      for (int n = -rows_each_side; n <= rows_each_side; ++n) {
-        const double t = (base - n * row_step) / o.offset_step_m + half_offset;
-        const int centre = static_cast<int>(std::floor(t));
-        for (int k = centre - kSpread + 1; k <= centre + kSpread; ++k) {
-          if (k < 0 || k >= n_offset) continue;
-          const double vote = 1.0 - std::abs(t - k) / kSpread;
-          if (vote > 0.0) line[k] += w * vote;
-        }
-      }
+      // The row comb shared with the image-plane detector (engine/rows).
+      rows::VoteComb(std::span<double>(&acc[static_cast<size_t>(b) * n_offset],
+                                       static_cast<size_t>(n_offset)),
+                     half_offset, o.offset_step_m, base, row_step, rows_each_side, kSpread, w);
     }
   }
   if (usable < o.min_features || total <= 0.0) return std::nullopt;

@@ -3,9 +3,10 @@
 // a Hough transform over (t_x, Ψ) with a comb of the bed's rows finds the
 // rows (Marchant & Brivot's accumulator, here voted from features on the
 // calibrated virtual ground plane, which is eq. A.7 without its small-angle
-// approximation), a least-squares fit to the features near the winning rows
-// refines it, and the phase of the plant-spacing frequency along the rows
-// (eq. 6.1) gives Y. A candidate is only accepted when the next frame,
+// approximation; the votes are engine/rows' VoteComb, the row comb the
+// image-plane detector shares), a least-squares fit to the features near
+// the winning rows refines it, and the phase of the plant-spacing frequency
+// along the rows (eq. 6.1) gives Y. A candidate is only accepted when the next frame,
 // predicted by odometry, agrees with it; otherwise the initialiser retries
 // and says why.
 

@@ -1,0 +1,36 @@
+#pragma once
+// `plantscale detect-rows` (crop rows in photographs from unknown cameras)
+// and `plantscale evaluate rows` (the same detector on simulator frames seen
+// in perspective, scored with CRDA).
+
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "app/command_registry.h"
+
+namespace plantscale::app {
+
+struct DetectRowsRequest {
+  std::vector<std::filesystem::path> inputs;  // files and folders
+  std::filesystem::path out;
+  bool progress = true;
+};
+
+struct DetectRowsResult {
+  int images = 0;
+  int with_rows = 0;
+  int failed = 0;
+  std::vector<std::string> errors;  // "FILE: reason"
+};
+
+// For each NAME.ext: OUT/NAME_rows.csv (row,v,u), OUT/NAME_rows.png (the
+// photograph with the rows drawn), OUT/NAME_rows.json (vanishing point,
+// spacing at the bottom row, confidence). Unreadable files are errors of
+// their own; the others are still processed.
+DetectRowsResult DetectRows(const DetectRowsRequest& request, std::ostream& log);
+
+void AddRowsCommands(CommandRegistry& registry);
+
+}  // namespace plantscale::app

@@ -1,0 +1,208 @@
+#include "app/treatment_commands.h"
+
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "app/config_loader.h"
+#include "app/segment_commands.h"
+#include "app/treatment_eval.h"
+
+namespace plantscale::app {
+namespace {
+
+struct TreatmentArgs {
+  std::string preset = "field";
+  int seeds = 5;
+  std::optional<int64_t> seed;
+  std::optional<double> length_m;
+  std::string mode = "crop";
+  std::string baseline;
+  std::optional<double> latency_ms;
+  std::optional<double> true_latency_ms;
+  std::optional<double> footprint_scale;
+  std::optional<double> cell_mm;
+  std::optional<double> min_crop_area_m2;
+  std::optional<double> assoc_chi2;
+  std::optional<double> sure_crop_area_m2;
+  std::optional<int> majority;
+  bool mrroc = false;
+  double costs_ratio = 1.0;
+  bool json = false;
+};
+
+nlohmann::json MetricsJson(const TreatmentMetrics& m) {
+  return {
+      {"crop_plants", m.crop_plants},
+      {"crop_hits", m.crop_hits},
+      {"crop_hit_rate", m.crop_hit_rate},
+      {"weeds", m.weeds},
+      {"weed_hits", m.weed_hits},
+      {"weed_hit_rate", m.weed_hit_rate},
+      {"weeds_clear_of_crop", m.weeds_clear},
+      {"weed_hit_rate_clear_of_crop", m.weed_hit_rate_clear},
+      {"placement_bias_along_m", m.placement_bias_along_m},
+      {"placement_bias_across_m", m.placement_bias_across_m},
+      {"placement_rms_along_m", m.placement_rms_along_m},
+      {"placement_rms_across_m", m.placement_rms_across_m},
+      {"placement_rms_m", m.placement_rms_m},
+      {"centre_bias_along_m", m.centre_bias_along_m},
+      {"centre_bias_across_m", m.centre_bias_across_m},
+      {"centre_rms_along_m", m.centre_rms_along_m},
+      {"centre_rms_across_m", m.centre_rms_across_m},
+      {"treated_area_fraction", m.treated_area_fraction},
+      {"crop_pixel_rate", m.crop_pixel_rate},
+      {"pixels", {{"crop_as_crop", m.crop_as_crop}, {"crop_as_weed", m.crop_as_weed},
+                  {"crop_as_soil", m.crop_as_soil}, {"weed_as_crop", m.weed_as_crop},
+                  {"weed_as_weed", m.weed_as_weed}, {"weed_as_soil", m.weed_as_soil}}},
+      {"frames_classified", m.frames_classified},
+      {"ticks", m.ticks},
+      {"ticks_fail_safe", m.ticks_fail_safe},
+      {"shots", m.shots},
+      {"map_resets", m.map_resets},
+      {"plants_recorded", m.plants_recorded},
+  };
+}
+
+nlohmann::json PointJson(const classify::MrrocPoint& p) {
+  return {{"min_crop_area_m2", std::isfinite(p.min_crop_area_m2) ? p.min_crop_area_m2 : -1.0},
+          {"assoc_chi2", std::isfinite(p.assoc_chi2) ? p.assoc_chi2 : -1.0},
+          {"tpr", p.tpr},
+          {"fpr", p.fpr}};
+}
+
+void PrintTable(const TreatmentEvaluation& e, std::ostream& out) {
+  out << "evaluate treatment: preset " << e.preset << ", " << e.seeds << " seed(s), "
+      << e.distance_m << " m per run, spray-" << e.mode << " mode\n";
+  const auto row = [&](const char* name, double ours, std::optional<double> thesis_here,
+                       double scale, const char* unit, const char* thesis) {
+    char buffer[256];
+    std::snprintf(buffer, sizeof buffer, "  %-28s %9.3f %-3s", name, ours * scale, unit);
+    out << buffer;
+    if (thesis_here) {
+      std::snprintf(buffer, sizeof buffer, " | thesis chain here %9.3f", *thesis_here * scale);
+      out << buffer;
+    }
+    if (*thesis) out << " | thesis: " << thesis;
+    out << '\n';
+  };
+  const auto t = [&](double TreatmentMetrics::*field) -> std::optional<double> {
+    if (!e.thesis) return std::nullopt;
+    return (*e.thesis).*field;
+  };
+  using M = TreatmentMetrics;
+  row("crop hit rate", e.ours.crop_hit_rate, t(&M::crop_hit_rate), 100, "%", "all crops treated (§8.2.1)");
+  row("weed hit rate", e.ours.weed_hit_rate, t(&M::weed_hit_rate), 100, "%", "none of the weeds (§8.2.1)");
+  row("weed hit rate, clear of crop", e.ours.weed_hit_rate_clear, t(&M::weed_hit_rate_clear), 100, "%", "");
+  row("placement bias along (y_w)", e.ours.placement_bias_along_m, t(&M::placement_bias_along_m), 1000, "mm", "-23.1 mm (table 8.3)");
+  row("placement bias across (x_w)", e.ours.placement_bias_across_m, t(&M::placement_bias_across_m), 1000, "mm", "9.7 mm (table 8.3)");
+  row("placement RMS along", e.ours.placement_rms_along_m, t(&M::placement_rms_along_m), 1000, "mm", "34.4 mm (table 8.3)");
+  row("placement RMS across", e.ours.placement_rms_across_m, t(&M::placement_rms_across_m), 1000, "mm", "33.6 mm (table 8.3)");
+  row("RMS to plant centre, along", e.ours.centre_rms_along_m, t(&M::centre_rms_along_m), 1000, "mm", "");
+  row("RMS to plant centre, across", e.ours.centre_rms_across_m, t(&M::centre_rms_across_m), 1000, "mm", "");
+  row("treated area of the bed", e.ours.treated_area_fraction, t(&M::treated_area_fraction), 100, "%", "about 33 %");
+  row("crop pixels labelled C", e.ours.crop_as_crop, t(&M::crop_as_crop), 100, "%", "95.1/78.9/81.7/55.0 % on A-D (tables 7.5-7.8)");
+  row("weed pixels labelled W", e.ours.weed_as_weed, t(&M::weed_as_weed), 100, "%", "");
+  out << "  crop plants " << e.ours.crop_plants << ", weeds " << e.ours.weeds << ", shots "
+      << e.ours.shots << ", fail-safe ticks " << e.ours.ticks_fail_safe << " of " << e.ours.ticks
+      << ", map resets " << e.ours.map_resets << '\n';
+  if (e.mrroc) {
+    out << "  MRROC area " << e.mrroc->Auc() << "; operating point: min area "
+        << e.operating_point.min_crop_area_m2 << " m2, chi2 " << e.operating_point.assoc_chi2
+        << " (TPR " << e.operating_point.tpr << ", FPR " << e.operating_point.fpr << ")\n";
+  }
+  for (const std::string& why : e.example_why) out << "  plant: " << why << '\n';
+}
+
+int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global) {
+  TreatmentEvalOptions o;
+  o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
+  if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
+  if (a.length_m) o.sim.length_m = *a.length_m;
+  o.seeds = a.seeds;
+  o.treatment = OurTreatmentOptions(o.sim);
+  treatment::ParseSprayMode(a.mode, o.treatment.scheduler.mode);
+  if (a.latency_ms) o.treatment.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
+  if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
+  if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
+  if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
+  if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
+  if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
+  if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
+  if (a.majority) o.treatment.map.majority_threshold = *a.majority;
+  o.baseline_thesis = a.baseline == "thesis";
+  o.mrroc = a.mrroc;
+  o.costs_ratio = a.costs_ratio;
+  const TreatmentEvaluation e = EvaluateTreatment(o);
+  if (!a.json) {
+    PrintTable(e, std::cout);
+    return 0;
+  }
+  nlohmann::json j = MetricsJson(e.ours);
+  j["preset"] = e.preset;
+  j["seeds"] = e.seeds;
+  j["mode"] = e.mode;
+  j["distance_m"] = e.distance_m;
+  j["example_why"] = e.example_why;
+  if (e.thesis) j["baseline_thesis"] = MetricsJson(*e.thesis);
+  if (e.mrroc) {
+    nlohmann::json hull = nlohmann::json::array();
+    for (const auto& p : e.mrroc->hull) hull.push_back(PointJson(p));
+    j["mrroc"] = {{"auc", e.mrroc->Auc()},
+                  {"costs_ratio", o.costs_ratio},
+                  {"operating_point", PointJson(e.operating_point)},
+                  {"nearest_corner", PointJson(e.nearest_corner)},
+                  {"hull", hull}};
+  }
+  std::cout << j.dump(2) << '\n';
+  return 0;
+}
+
+}  // namespace
+
+void AddTreatmentCommands(CommandRegistry& registry) {
+  const GlobalOptions& global = registry.global();
+  TreatmentArgs& args = registry.Keep(TreatmentArgs{});
+  CLI::App* cmd = registry.Add(
+      "treatment", "crop/weed classification, treatment map and spraying against truth",
+      [&args, &global] { return EvaluateTreatmentCommand(args, global); },
+      EvaluateCommand(registry));
+  cmd->add_option("--preset", args.preset, "preset name or YAML file")->capture_default_str();
+  cmd->add_option("--seeds", args.seeds, "number of seeds")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--seed", args.seed, "first seed (default: the preset's)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--length-m", args.length_m, "distance driven per run (default: the preset's)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--mode", args.mode, "what is sprayed: crop or weed")
+      ->check(CLI::IsMember({"crop", "weed"}))->capture_default_str();
+  cmd->add_option("--latency-ms", args.latency_ms, "valve latency the scheduler leads by")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--true-latency-ms", args.true_latency_ms,
+                  "the simulated valves' latency (default: as scheduled)")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--footprint-scale", args.footprint_scale,
+                  "crop footprint: bounding box scaled about the centroid (1: thesis)")
+      ->check(CLI::Range(0.05, 2.0));
+  cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default 13.33)")
+      ->check(CLI::Range(1.0, 500.0));
+  cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--assoc-chi2", args.assoc_chi2, "classifier association region (chi2)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--sure-crop-area-m2", args.sure_crop_area_m2,
+                  "blobs this big are crop without association (merged plants)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--majority", args.majority, "votes a map cell needs")
+      ->check(CLI::Range(1, 10000));
+  cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
+      ->check(CLI::IsMember({"thesis"}));
+  cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");
+  cmd->add_option("--costs-ratio", args.costs_ratio, "cost ratio for the MRROC operating point")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_flag("--json", args.json, "print one JSON object");
+}
+
+}  // namespace plantscale::app

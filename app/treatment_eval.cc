@@ -1,0 +1,326 @@
+#include "app/treatment_eval.h"
+
+#include <opencv2/imgproc.hpp>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <tuple>
+
+#include "app/segmentation_eval.h"
+#include "app/tracking_eval.h"
+#include "app/treatment_score.h"
+#include "engine/tracking/blob_features.h"
+#include "engine/treatment/simulated_bar.h"
+#include "engine/vision/roc.h"
+#include "engine/vision/segmenter.h"
+
+namespace plantscale::app {
+
+namespace {
+
+// Confusion of true pixel class (soil, crop, weed) × labelled (S, C, W).
+using Confusion = std::array<std::array<double, 3>, 3>;
+
+// One treatment chain under test on one run.
+struct Chain {
+  vision::Segmenter segmenter;
+  tracking::GridTracker tracker;
+  treatment::TreatmentSystem system;
+  treatment::SimulatedBar bar;
+  std::vector<tracking::Feature> features;
+  std::vector<int> blob_of_feature;
+  Confusion confusion{};
+  std::vector<classify::ClassifierSample> samples;
+  bool collect_samples = false;
+  int frames_classified = 0, ticks = 0, ticks_fail_safe = 0;
+  double first_classified_y = std::nan("");
+  // Scratch.
+  cv::Mat components, stats, centroids;
+
+  Chain(const sim::Simulator& sim, const vision::SegmenterOptions& seg,
+        const tracking::TrackerOptions& track, const treatment::TreatmentOptions& treat,
+        double true_latency_s)
+      : segmenter(seg),
+        tracker(sim.camera(), track),
+        system(sim.camera(), treat),
+        bar(treat.scheduler.bar, true_latency_s, treat.scheduler.tick_s) {
+    system.set_sink(bar.Sink());
+  }
+
+  void Odometry(const sim::OdometrySample& o) {
+    const bool ok = tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s).accepted;
+    const treatment::TickResult r =
+        system.OnPose(o.utime, tracker, 0.5 * (o.left_m_s + o.right_m_s), ok);
+    ++ticks;
+    if (r.fail_reasons) ++ticks_fail_safe;
+  }
+
+  void Frame(const sim::SimFrame& frame, const geometry::CameraModel& camera, const cv::Mat& roi) {
+    const vision::Segmentation& seg = segmenter.Process(frame.rendered.image, camera);
+    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features);
+    treatment::FeatureBlobIndices(seg.blobs, blob_of_feature);
+    const tracking::FrameReport report = tracker.ProcessFrame(
+        frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
+    const treatment::FrameTreatment& t =
+        system.OnFrame(frame.truth.utime, tracker, report, seg.blobs, features, blob_of_feature);
+    if (!t.classified) return;
+    if (std::isnan(first_classified_y)) first_classified_y = frame.truth.pose.y_m;
+    ++frames_classified;
+    ScorePixels(seg, t, frame.rendered.labels, roi);
+  }
+
+  // Labels every blob's pixels C or W by its decision, and counts them
+  // against the label image (thesis tables 7.5–7.8).
+  void ScorePixels(const vision::Segmentation& seg, const treatment::FrameTreatment& t,
+                   const cv::Mat& labels, const cv::Mat& roi) {
+    const int n = cv::connectedComponentsWithStats(seg.mask, components, stats, centroids, 8,
+                                                   CV_32S);
+    // Component ↔ blob by bounding box and area (both label 8-connected runs).
+    std::map<std::tuple<int, int, int, int, int>, int> by_box;
+    for (int k = 1; k < n; ++k) {
+      by_box[{stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
+              stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT),
+              stats.at<int>(k, cv::CC_STAT_AREA)}] = k;
+    }
+    std::vector<uint8_t> label_of(static_cast<size_t>(n), 2);  // unmatched plant matter: W
+    label_of[0] = 0;
+    std::vector<int> feature_of(static_cast<size_t>(n), -1);
+    for (size_t i = 0; i < t.decisions.size(); ++i) {
+      const vision::Blob& b = seg.blobs[static_cast<size_t>(blob_of_feature[i])];
+      const auto it = by_box.find({b.bbox_px.x, b.bbox_px.y, b.bbox_px.width, b.bbox_px.height,
+                                   b.area_px});
+      if (it == by_box.end()) continue;
+      label_of[static_cast<size_t>(it->second)] = t.decisions[i].crop ? 1 : 2;
+      feature_of[static_cast<size_t>(it->second)] = static_cast<int>(i);
+    }
+    cv::Mat valid;
+    vision::EvaluationMask(labels, roi, 1, valid);
+    std::vector<std::array<double, 3>> per_component(static_cast<size_t>(n), {0, 0, 0});
+    for (int v = 0; v < labels.rows; ++v) {
+      const uint8_t* truth = labels.ptr<uint8_t>(v);
+      const uint8_t* ok = valid.ptr<uint8_t>(v);
+      const int* comp = components.ptr<int>(v);
+      for (int u = 0; u < labels.cols; ++u) {
+        if (!ok[u] || truth[u] > 2) continue;
+        const size_t k = static_cast<size_t>(comp[u]);
+        confusion[truth[u]][label_of[k]] += 1.0;
+        per_component[k][truth[u]] += 1.0;
+      }
+    }
+    if (!collect_samples) return;
+    for (int k = 1; k < n; ++k) {
+      const int i = feature_of[static_cast<size_t>(k)];
+      if (i < 0) continue;
+      const classify::BlobDecision& d = t.decisions[static_cast<size_t>(i)];
+      samples.push_back({d.area_m2, d.clipped, d.gamma2, per_component[static_cast<size_t>(k)][1],
+                         per_component[static_cast<size_t>(k)][2]});
+    }
+  }
+};
+
+struct Sums {
+  SprayScore spray;
+  Confusion confusion{};
+  int frames_classified = 0, ticks = 0, ticks_fail_safe = 0, shots = 0, map_resets = 0,
+      plants = 0;
+};
+
+void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
+  sums.spray.Merge(s);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) sums.confusion[i][j] += c.confusion[i][j];
+  }
+  sums.frames_classified += c.frames_classified;
+  sums.ticks += c.ticks;
+  sums.ticks_fail_safe += c.ticks_fail_safe;
+  sums.shots += shots;
+  sums.map_resets += c.system.map_resets();
+  sums.plants += static_cast<int>(c.system.registry().records().size());
+}
+
+double Ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+
+TreatmentMetrics Finish(const Sums& s) {
+  TreatmentMetrics m;
+  const SprayScore& p = s.spray;
+  m.crop_plants = p.crop_plants;
+  m.crop_hits = p.crop_hits;
+  m.crop_hit_rate = Ratio(p.crop_hits, p.crop_plants);
+  m.weeds = p.weeds;
+  m.weed_hits = p.weed_hits;
+  m.weed_hit_rate = Ratio(p.weed_hits, p.weeds);
+  m.weeds_clear = p.weeds_clear;
+  m.weed_hit_rate_clear = Ratio(p.weed_hits_clear, p.weeds_clear);
+  const double n = std::max(1, p.crop_hits);
+  m.placement_bias_across_m = p.error_sum.x() / n;
+  m.placement_bias_along_m = p.error_sum.y() / n;
+  m.placement_rms_across_m = std::sqrt(p.error2_sum.x() / n);
+  m.placement_rms_along_m = std::sqrt(p.error2_sum.y() / n);
+  m.placement_rms_m = std::max(m.placement_rms_across_m, m.placement_rms_along_m);
+  m.centre_bias_across_m = p.centre_error_sum.x() / n;
+  m.centre_bias_along_m = p.centre_error_sum.y() / n;
+  m.centre_rms_across_m = std::sqrt(p.centre_error2_sum.x() / n);
+  m.centre_rms_along_m = std::sqrt(p.centre_error2_sum.y() / n);
+  m.treated_area_fraction = Ratio(p.sprayed_bed_m2, p.bed_m2);
+  const auto& c = s.confusion;
+  const double crop = c[1][0] + c[1][1] + c[1][2];
+  const double weed = c[2][0] + c[2][1] + c[2][2];
+  m.crop_as_soil = Ratio(c[1][0], crop);
+  m.crop_as_crop = Ratio(c[1][1], crop);
+  m.crop_as_weed = Ratio(c[1][2], crop);
+  m.weed_as_soil = Ratio(c[2][0], weed);
+  m.weed_as_crop = Ratio(c[2][1], weed);
+  m.weed_as_weed = Ratio(c[2][2], weed);
+  m.crop_pixel_rate = m.crop_as_crop;
+  m.frames_classified = s.frames_classified;
+  m.ticks = s.ticks;
+  m.ticks_fail_safe = s.ticks_fail_safe;
+  m.shots = s.shots;
+  m.map_resets = s.map_resets;
+  m.plants_recorded = s.plants;
+  return m;
+}
+
+// The plants whose whole life under the camera and the bar fell inside the
+// run: from past the far edge of the view when the chain first classified,
+// to behind the bar at the end.
+SprayScoreRegion Region(const sim::Simulator& sim, const Chain& c, double last_y,
+                        const treatment::TreatmentOptions& t) {
+  SprayScoreRegion r;
+  const auto& cam = sim.camera().options();
+  const auto far = sim.camera().ImageToPlane({cam.image_width_px / 2.0, 0.5}, 0.0);
+  r.y_begin_m = c.first_classified_y + (far ? far->y() : 3.0) + 0.1;
+  r.y_end_m = last_y - t.scheduler.bar.bar_offset_m - 0.3;
+  const sim::FieldOptions& f = sim.options().field;
+  r.bed_half_width_m = 0.5 * f.rows * f.row_spacing_m;
+  r.patch_half_size_m = 0.45 * std::min(f.row_spacing_m, f.plant_spacing_m);
+  return r;
+}
+
+}  // namespace
+
+OptionErrors TreatmentEvalOptions::Validate() const {
+  OptionErrors e = Prefixed("sim", sim.Validate());
+  const OptionErrors t = Prefixed("treatment", treatment.Validate());
+  e.insert(e.end(), t.begin(), t.end());
+  if (seeds < 1) e.push_back({"seeds", "must be >= 1"});
+  if (true_valve_latency_s > 1.0) e.push_back({"true_valve_latency_s", "must be <= 1 s"});
+  RequirePositive(e, "costs_ratio", costs_ratio);
+  return e;
+}
+
+treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions&) {
+  return treatment::TreatmentOptions{};
+}
+
+treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& s) {
+  treatment::TreatmentOptions o;
+  o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
+  // Table 7.2's operating points: size ς in pixels and clustering radius r
+  // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).
+  double size_px = 80.0, radius_m = 0.1;
+  if (s.preset == "A") size_px = 100.0, radius_m = 0.45;
+  if (s.preset == "B" || s.preset == "D") size_px = 30.0;
+  // Pixels to ground area at the image centre's pixel footprint.
+  const geometry::CameraModel camera(s.camera);
+  const Eigen::Vector2d centre(s.camera.image_width_px / 2.0, s.camera.image_height_px / 2.0);
+  const double pixel_m2 =
+      std::abs(camera.ImageToPlaneJacobian(centre, s.camera.virtual_plane_height_m).determinant());
+  o.classifier.min_crop_area_m2 = size_px * pixel_m2;
+  // A Euclidean radius r: γ² ≤ 1 with σ = r (the tracker's H P Hᵀ is small).
+  o.classifier.assoc_chi2 = 1.0;
+  o.classifier.feature_sd_m = radius_m;
+  o.classifier.plant_sd_m = 0.0;
+  o.classifier.sure_crop_area_m2 = std::numeric_limits<double>::infinity();
+  o.classifier.camera_pitch_sd_rad = 0.0;
+  o.classifier.camera_roll_sd_rad = 0.0;
+  o.classifier.camera_height_sd_m = 0.0;
+  return o;
+}
+
+TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
+  ThrowIfInvalid("evaluate treatment", options.Validate());
+  TreatmentEvaluation result;
+  result.preset = options.sim.preset;
+  result.seeds = options.seeds;
+  result.mode = treatment::ToString(options.treatment.scheduler.mode);
+  vision::SegmenterOptions thesis_seg;
+  thesis_seg.method = vision::ThresholdMethod::kAdaptive;
+  const double latency = options.true_valve_latency_s >= 0.0
+                             ? options.true_valve_latency_s
+                             : options.treatment.scheduler.bar.valve_latency_s;
+  Sums ours_sums, thesis_sums;
+  std::vector<classify::ClassifierSample> samples;
+  double crop_pixels = 0.0, weed_pixels = 0.0;
+  for (int k = 0; k < options.seeds; ++k) {
+    sim::SimulatorOptions so = options.sim;
+    so.seed = options.sim.seed + static_cast<uint64_t>(k);
+    sim::Simulator simulator(so);
+    const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);
+    Chain ours(simulator, vision::SegmenterOptions{}, ProductTrackerOptions(so), options.treatment,
+               latency);
+    ours.collect_samples = options.mrroc;
+    std::optional<Chain> thesis;
+    treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so);
+    thesis_options.scheduler = options.treatment.scheduler;
+    if (options.baseline_thesis) {
+      thesis.emplace(simulator, thesis_seg, ThesisTrackerOptions(so), thesis_options, latency);
+    }
+    std::vector<treatment::FieldPose> track;
+    sim::SimFrame frame;
+    while (simulator.Next(frame)) {
+      // In time order: the odometry up to the capture, the frame, the rest
+      // (the simulator's last sample of a frame may fall after its capture).
+      const auto odometry = [&](bool before) {
+        for (const sim::OdometrySample& o : frame.odometry) {
+          if ((o.utime <= frame.truth.utime) != before) continue;
+          ours.Odometry(o);
+          if (thesis) thesis->Odometry(o);
+        }
+      };
+      odometry(true);
+      track.push_back({frame.truth.utime, frame.truth.pose.x_m, frame.truth.pose.y_m,
+                       frame.truth.pose.heading_rad});
+      ours.Frame(frame, simulator.camera(), roi);
+      if (thesis) thesis->Frame(frame, simulator.camera(), roi);
+      odometry(false);
+      result.distance_m = frame.truth.distance_m;
+    }
+    const double last_y = track.empty() ? 0.0 : track.back().y_m;
+    const auto score = [&](Chain& c, const treatment::TreatmentOptions& t, Sums& sums) {
+      const std::vector<treatment::Shot> shots = c.bar.Shots(track);
+      const SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
+      Accumulate(c, s, static_cast<int>(shots.size()), sums);
+    };
+    score(ours, options.treatment, ours_sums);
+    if (thesis) score(*thesis, thesis_options, thesis_sums);
+    if (k == 0) {
+      ours.system.Explain();
+      const auto& records = ours.system.registry().records();
+      for (size_t i = 0; i < records.size() && result.example_why.size() < 4; i += 37) {
+        result.example_why.push_back(records[i].why);
+      }
+    }
+    samples.insert(samples.end(), ours.samples.begin(), ours.samples.end());
+    for (int j = 0; j < 3; ++j) {
+      crop_pixels += ours.confusion[1][j];
+      weed_pixels += ours.confusion[2][j];
+    }
+  }
+  result.ours = Finish(ours_sums);
+  if (thesis_sums.ticks > 0) result.thesis = Finish(thesis_sums);
+  if (options.mrroc) {
+    const std::vector<double> areas = {0.0,   0.0005, 0.001, 0.002, 0.003, 0.004, 0.005,
+                                       0.006, 0.008,  0.01,  0.015, 0.02,  0.03};
+    const std::vector<double> gates = {0.5, 1.0, 2.0, 4.0, 5.99, 9.21, 13.8, 20.0, 40.0, 100.0,
+                                       1e12};
+    result.mrroc = classify::SweepClassifier(samples, areas, gates, crop_pixels, weed_pixels);
+    result.operating_point = result.mrroc->OperatingPoint(options.costs_ratio);
+    result.nearest_corner = result.mrroc->NearestToCorner();
+  }
+  return result;
+}
+
+}  // namespace plantscale::app

@@ -1,0 +1,75 @@
+#pragma once
+// `plantscale evaluate treatment`: drives a simulator preset through
+// segmentation, the grid tracker and the treatment chain (classifier,
+// treatment map, nozzle scheduler) into a simulated spray bar, then scores
+// the shots against plant truth (treatment_score.h) and the classified
+// pixels against the label images (thesis tables 7.5–7.8). The thesis's own
+// chain (its tracker, adaptive threshold, whole bounding-box footprints, a
+// 50-pixel size filter and a 95 % gate) runs on the same frames as the
+// baseline. Optionally sweeps the classifier's two parameters into an MRROC.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/classify/mrroc.h"
+#include "engine/sim/simulator.h"
+#include "engine/treatment/treatment_system.h"
+
+namespace plantscale::app {
+
+struct TreatmentEvalOptions {
+  sim::SimulatorOptions sim;
+  int seeds = 5;
+  treatment::TreatmentOptions treatment;
+  double true_valve_latency_s = -1.0;  // the simulated valves' latency; < 0: as scheduled
+  bool baseline_thesis = false;
+  bool mrroc = false;
+  double costs_ratio = 1.0;  // Φ for the MRROC operating point
+
+  OptionErrors Validate() const;
+};
+
+// The product's treatment options for a simulated vehicle and field.
+treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions& sim);
+// The thesis's chain (§8.2): whole bounding boxes, 50-pixel size filter.
+treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& sim);
+
+struct TreatmentMetrics {
+  int crop_plants = 0, crop_hits = 0;
+  double crop_hit_rate = 0.0;
+  int weeds = 0, weed_hits = 0;
+  double weed_hit_rate = 0.0;
+  int weeds_clear = 0;
+  double weed_hit_rate_clear = 0.0;  // weeds not under a crop's leaves
+  double placement_bias_along_m = 0.0, placement_bias_across_m = 0.0;  // to the root
+  double placement_rms_along_m = 0.0, placement_rms_across_m = 0.0;
+  double placement_rms_m = 0.0;  // the larger of the two
+  double centre_bias_along_m = 0.0, centre_bias_across_m = 0.0;  // to root + lean
+  double centre_rms_along_m = 0.0, centre_rms_across_m = 0.0;
+  double treated_area_fraction = 0.0;
+  // Pixels (trapezoid between the wheels, doubt band out, frames classified):
+  // fraction of true crop / weed pixels labelled C, W or S.
+  double crop_as_crop = 0.0, crop_as_weed = 0.0, crop_as_soil = 0.0;
+  double weed_as_crop = 0.0, weed_as_weed = 0.0, weed_as_soil = 0.0;
+  double crop_pixel_rate = 0.0;  // = crop_as_crop
+  int frames_classified = 0;
+  int ticks = 0, ticks_fail_safe = 0, shots = 0, map_resets = 0, plants_recorded = 0;
+};
+
+struct TreatmentEvaluation {
+  std::string preset;
+  int seeds = 0;
+  std::string mode;
+  double distance_m = 0.0;
+  TreatmentMetrics ours;
+  std::optional<TreatmentMetrics> thesis;
+  std::optional<classify::Mrroc> mrroc;
+  classify::MrrocPoint operating_point;  // for costs_ratio
+  classify::MrrocPoint nearest_corner;   // thesis table 7.2
+  std::vector<std::string> example_why;  // a few plant records' `why`
+};
+
+TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options);
+
+}  // namespace plantscale::app

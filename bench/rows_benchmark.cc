@@ -1,0 +1,81 @@
+// Crop-row detection speed (issue 11): a photograph's whole detect-rows
+// pipeline after decoding (segmentation as `plantscale segment --method
+// auto`, then the row detector) on one core, at most 5 ms per 320×240 and
+// 15 ms per 640×480; and the detector alone on the plant mask.
+// Run: build/bench/rows_benchmark
+#include <benchmark/benchmark.h>
+
+#include <numbers>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "app/rows_eval.h"
+#include "engine/geometry/test_cameras.h"
+#include "engine/rows/row_detector.h"
+#include "engine/sim/simulator.h"
+
+namespace plantscale::rows {
+namespace {
+
+// A low, perspective colour view (horizon in view) of 6-week crop with
+// weeds and shadows, at 640×480 and scaled to `width`.
+cv::Mat Photo(int width) {
+  static cv::Mat full;
+  if (full.empty()) {
+    sim::SimulatorOptions o;
+    o.camera = geometry::testing::ThesisCamera();
+    o.camera.tilt_rad = 12.0 * std::numbers::pi / 180.0;
+    o.field.crop_radius_m = 0.14;
+    o.field.weed_density_per_m2 = 6.0;
+    o.render.kind = sim::ImageKind::kRgb;
+    o.render.plant_shadow_depth = 0.2;
+    o.render.leaf_shadow_fraction = 0.2;
+    o.seed = 3;
+    sim::Simulator simulator(o);
+    sim::SimFrame frame;
+    for (int i = 0; i < 30; ++i) simulator.Next(frame);
+    full = frame.rendered.image.clone();
+  }
+  if (width == full.cols) return full;
+  cv::Mat small;
+  cv::resize(full, small, cv::Size(width, width * full.rows / full.cols), 0, 0, cv::INTER_AREA);
+  return small;
+}
+
+void BM_DetectRowsInPhoto(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const cv::Mat photo = Photo(static_cast<int>(state.range(0)));
+  RowDetector detector{RowDetectorOptions{}};
+  double rows = 0;
+  for (auto _ : state) {
+    const RowDetection det = app::DetectRowsInPhoto(photo, detector);
+    rows = static_cast<double>(det.rows.size());
+    benchmark::DoNotOptimize(det.spacing_px);
+  }
+  state.counters["rows"] = rows;
+}
+BENCHMARK(BM_DetectRowsInPhoto)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond);
+
+void BM_RowDetectorOnMask(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const cv::Mat photo = Photo(static_cast<int>(state.range(0)));
+  cv::Mat exg(photo.size(), CV_8UC1);
+  // A plant mask: 2G − R − B above a fixed level.
+  cv::Mat channels[3];
+  cv::split(photo, channels);
+  cv::Mat index;
+  cv::addWeighted(channels[1], 2.0, channels[0], -1.0, 0.0, index, CV_16S);
+  cv::subtract(index, channels[2], index, cv::noArray(), CV_16S);
+  cv::compare(index, 20, exg, cv::CMP_GT);
+  RowDetector detector{RowDetectorOptions{}};
+  for (auto _ : state) {
+    const RowDetection det = detector.Detect(exg);
+    benchmark::DoNotOptimize(det.spacing_px);
+  }
+}
+BENCHMARK(BM_RowDetectorOnMask)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace plantscale::rows
+
+BENCHMARK_MAIN();

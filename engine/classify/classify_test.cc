@@ -1,0 +1,182 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "engine/classify/crop_classifier.h"
+#include "engine/classify/mrroc.h"
+#include "engine/geometry/test_cameras.h"
+
+namespace plantscale::classify {
+namespace {
+
+PredictedCrop CropAt(double x, double y) {
+  PredictedCrop c;
+  c.ground_m = {x, y};
+  c.jacobian.setZero();
+  c.jacobian(0, 0) = 1.0;  // t_x moves the plant across
+  c.jacobian(1, 1) = 1.0;  // Y moves it along
+  return c;
+}
+
+tracking::Feature FeatureAt(double x, double y, double area_m2, bool clipped = false) {
+  tracking::Feature f;
+  f.ground_m = {x, y};
+  f.area_m2 = area_m2;
+  f.clipped = clipped;
+  return f;
+}
+
+TEST(CropClassifier, AssociationCovarianceIsHPHtPlusGroundNoise) {
+  ClassifierOptions o;
+  o.feature_sd_m = 0.01;
+  o.plant_sd_m = 0.02;
+  geometry::Matrix5d p = geometry::Matrix5d::Zero();
+  p(0, 0) = 0.03 * 0.03;
+  p(1, 1) = 0.04 * 0.04;
+  const Eigen::Matrix2d s = AssociationCovariance(CropAt(0, 1), p, o);
+  EXPECT_NEAR(s(0, 0), 0.03 * 0.03 + 0.01 * 0.01 + 0.02 * 0.02, 1e-12);
+  EXPECT_NEAR(s(1, 1), 0.04 * 0.04 + 0.01 * 0.01 + 0.02 * 0.02, 1e-12);
+  EXPECT_NEAR(s(0, 1), 0.0, 1e-12);
+}
+
+TEST(CropClassifier, SizeFilterThenAssociation) {
+  ClassifierOptions o;
+  o.min_crop_area_m2 = 0.004;
+  o.assoc_chi2 = 9.21;
+  o.feature_sd_m = 0.01;
+  o.plant_sd_m = 0.0;
+  o.sure_crop_area_m2 = 0.03;
+  const CropClassifier classifier(o);
+  const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.475, 1.0)};
+  const std::vector<tracking::Feature> features = {
+      FeatureAt(0.01, 1.01, 0.02),         // big, near: crop
+      FeatureAt(0.01, 1.01, 0.001),        // small, near: weed by size
+      FeatureAt(0.2, 1.0, 0.02),           // big, between rows: weed by association
+      FeatureAt(0.47, 0.99, 0.001, true),  // clipped (area cut) but associated: crop
+  };
+  std::vector<BlobDecision> d;
+  classifier.Classify(features, crops, geometry::Matrix5d::Zero(), d);
+  ASSERT_EQ(d.size(), 4u);
+  EXPECT_TRUE(d[0].crop);
+  EXPECT_NEAR(d[0].gamma2, (0.01 * 0.01 + 0.01 * 0.01) / 1e-4, 1e-9);
+  EXPECT_NEAR(d[0].distance_m, std::sqrt(2.0) * 0.01, 1e-12);
+  EXPECT_FALSE(d[1].crop);
+  EXPECT_FALSE(d[2].crop);
+  EXPECT_NEAR(d[2].distance_m, 0.2, 1e-12);
+  EXPECT_TRUE(d[3].crop);
+  EXPECT_EQ(d[3].n, 0);
+  // A blob bigger than any weed is crop wherever it lies (merged plants).
+  const std::vector<tracking::Feature> merged = {FeatureAt(0.2, 1.0, 0.05)};
+  classifier.Classify(merged, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_TRUE(d[0].crop);  // nearest is the second prediction (n defaults to 0 in CropAt)
+  EXPECT_NEAR(d[3].distance_m, std::hypot(0.005, 0.01), 1e-12);
+}
+
+TEST(CropClassifier, RegionGrowsWithTrackerUncertainty) {
+  ClassifierOptions o;
+  o.feature_sd_m = 0.01;
+  o.plant_sd_m = 0.0;
+  const CropClassifier classifier(o);
+  const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0)};
+  const std::vector<tracking::Feature> f = {FeatureAt(0.06, 1.0, 0.02)};  // below sure_crop_area
+  std::vector<BlobDecision> d;
+  classifier.Classify(f, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_FALSE(d[0].crop);  // γ² = 36 with σ = 1 cm
+  geometry::Matrix5d p = geometry::Matrix5d::Zero();
+  p(0, 0) = 0.03 * 0.03;  // σ(t_x) = 3 cm: γ² = 36 / 10 = 3.6
+  classifier.Classify(f, crops, p, d);
+  EXPECT_TRUE(d[0].crop);
+  EXPECT_NEAR(d[0].gamma2, 0.0036 / 0.001, 1e-9);
+}
+
+TEST(CropClassifier, WithoutPredictionsEverythingIsWeed) {
+  const CropClassifier classifier(ClassifierOptions{});
+  std::vector<BlobDecision> d;
+  const std::vector<tracking::Feature> f = {FeatureAt(0.0, 1.0, 0.05)};
+  classifier.Classify(f, {}, geometry::Matrix5d::Zero(), d);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_FALSE(d[0].crop);
+  EXPECT_TRUE(std::isinf(d[0].gamma2));
+}
+
+TEST(CropClassifier, PredictionsComeFromTheGrid) {
+  const geometry::CameraModel camera(geometry::testing::ThesisCamera());
+  const geometry::GridModel model(camera, geometry::GridModelOptions{});
+  geometry::GridState s;
+  s.offset_m = 0.02;
+  s.forward_m = 1.2;
+  const std::vector<PredictedCrop> crops = PredictCrops(model, s);
+  ASSERT_FALSE(crops.empty());
+  for (const PredictedCrop& c : crops) {
+    const Eigen::Vector2d expected = geometry::PlantInVehicle(s, c.m, c.n);
+    EXPECT_NEAR((c.ground_m - expected).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(c.jacobian(0, 0), 1.0, 1e-12);  // d x / d t_x at Ψ = 0
+  }
+}
+
+TEST(CropClassifier, BadOptionsAreNamed) {
+  ClassifierOptions o;
+  o.assoc_chi2 = 0.0;
+  o.feature_sd_m = -1.0;
+  try {
+    CropClassifier c(o);
+    FAIL() << "expected InvalidOptionsError";
+  } catch (const InvalidOptionsError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("assoc_chi2"), std::string::npos) << what;
+    EXPECT_NE(what.find("feature_sd_m"), std::string::npos) << what;
+  }
+}
+
+MrrocPoint Point(double fpr, double tpr) {
+  MrrocPoint p;
+  p.fpr = fpr;
+  p.tpr = tpr;
+  return p;
+}
+
+TEST(Mrroc, HullDropsPointsUnderIt) {
+  const std::vector<MrrocPoint> hull =
+      UpperHull({Point(0.1, 0.8), Point(0.2, 0.85), Point(0.3, 0.95), Point(0.5, 0.9)});
+  // (0.2, 0.85) lies under the segment (0.1, 0.8)–(0.3, 0.95) at 0.875.
+  ASSERT_EQ(hull.size(), 4u);
+  EXPECT_DOUBLE_EQ(hull[0].fpr, 0.0);
+  EXPECT_DOUBLE_EQ(hull[1].fpr, 0.1);
+  EXPECT_DOUBLE_EQ(hull[2].fpr, 0.3);
+  EXPECT_DOUBLE_EQ(hull[3].fpr, 1.0);
+}
+
+TEST(Mrroc, SweepAucAndOperatingPoints) {
+  // Crops are big and associate; weeds are small, and one weed sits on a crop.
+  const std::vector<ClassifierSample> samples = {
+      {0.02, false, 1.0, 100, 0},  {0.015, false, 2.0, 80, 0}, {0.002, false, 1.5, 20, 0},
+      {0.002, false, 30.0, 0, 10}, {0.010, false, 40.0, 0, 10}, {0.002, false, 1.0, 0, 10},
+  };
+  const std::vector<double> areas = {0.0, 0.0025, 0.005};
+  const std::vector<double> gates = {4.0, 100.0};
+  const Mrroc r = SweepClassifier(samples, areas, gates);
+  EXPECT_DOUBLE_EQ(r.positives, 200.0);
+  EXPECT_DOUBLE_EQ(r.negatives, 30.0);
+  ASSERT_EQ(r.classifiers.size(), 6u);
+  // ς = 0.0025, χ² = 4: both big crops (180 of 200), no weed.
+  const MrrocPoint& best = r.classifiers[2];
+  EXPECT_NEAR(best.tpr, 0.9, 1e-12);
+  EXPECT_NEAR(best.fpr, 0.0, 1e-12);
+  // ς = 0, χ² = 4: every crop, and the weed on a crop (10 of 30).
+  EXPECT_NEAR(r.classifiers[0].tpr, 1.0, 1e-12);
+  EXPECT_NEAR(r.classifiers[0].fpr, 1.0 / 3.0, 1e-12);
+  // Hull (0,0) (0,0.9) (1/3,1) (1,1): area 0.9·1/3·... by trapezia.
+  const double auc = (1.0 / 3.0) * 0.5 * (0.9 + 1.0) + (2.0 / 3.0) * 1.0;
+  EXPECT_NEAR(r.Auc(), auc, 1e-12);
+  EXPECT_NEAR(r.NearestToCorner().tpr, 0.9, 1e-12);
+  // Missing a crop pixel costs as much as spraying 1/Φ weed pixels; risk is
+  // Φ·N·FPR − P·TPR: at Φ = 1, (0, 0.9) → −180, (1/3, 1) → 10 − 200 = −190.
+  EXPECT_NEAR(r.OperatingPoint(1.0).tpr, 1.0, 1e-12);
+  // At Φ = 3 spraying a weed pixel is dearer: (1/3, 1) → 30 − 200 = −170.
+  EXPECT_NEAR(r.OperatingPoint(3.0).tpr, 0.9, 1e-12);
+  EXPECT_THROW(r.OperatingPoint(0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace plantscale::classify

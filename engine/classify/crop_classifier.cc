@@ -1,0 +1,93 @@
+#include "engine/classify/crop_classifier.h"
+
+#include <Eigen/Dense>
+
+#include "engine/tracking/observation_model.h"
+
+namespace plantscale::classify {
+
+OptionErrors ClassifierOptions::Validate() const {
+  OptionErrors e;
+  RequireNonNegative(e, "min_crop_area_m2", min_crop_area_m2);
+  RequirePositive(e, "assoc_chi2", assoc_chi2);
+  if (!(sure_crop_area_m2 > 0.0)) e.push_back({"sure_crop_area_m2", "must be > 0 (inf: never)"});
+  RequirePositive(e, "feature_sd_m", feature_sd_m);
+  RequireNonNegative(e, "plant_sd_m", plant_sd_m);
+  RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
+  RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
+  RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
+  return e;
+}
+
+std::vector<PredictedCrop> PredictCrops(const geometry::GridModel& model,
+                                        const geometry::GridState& state) {
+  std::vector<PredictedCrop> out;
+  const auto& cam = model.camera().options();
+  const double above_plane_m = cam.height_m - cam.virtual_plane_height_m;
+  for (const geometry::GridPlant& g : model.PlantsInView(state)) {
+    PredictedCrop c;
+    c.m = g.m;
+    c.n = g.n;
+    c.ground_m = geometry::PlantInVehicle(state, g.m, g.n);
+    c.jacobian = geometry::PlantInVehicleJacobian(state, g.m, g.n);
+    c.bounce_jacobian = tracking::BounceJacobian(c.ground_m, above_plane_m);
+    out.push_back(c);
+  }
+  return out;
+}
+
+Eigen::Matrix2d AssociationCovariance(const PredictedCrop& crop, const geometry::Matrix5d& p,
+                                      const ClassifierOptions& o) {
+  // Eq. 7.4: S_assoc = H P Hᵀ + F_w R F_wᵀ; R on the ground is isotropic.
+  const double r = o.feature_sd_m * o.feature_sd_m + o.plant_sd_m * o.plant_sd_m;
+  const Eigen::Vector3d bounce(o.camera_pitch_sd_rad, o.camera_roll_sd_rad, o.camera_height_sd_m);
+  const Eigen::Matrix3d b = bounce.cwiseAbs2().asDiagonal();
+  return crop.jacobian * p * crop.jacobian.transpose() +
+         crop.bounce_jacobian * b * crop.bounce_jacobian.transpose() +
+         r * Eigen::Matrix2d::Identity();
+}
+
+bool IsCrop(double area_m2, bool clipped, double gamma2, double min_crop_area_m2,
+            double assoc_chi2, double sure_crop_area_m2) {
+  if (!clipped && area_m2 < min_crop_area_m2) return false;  // size filter first
+  if (area_m2 >= sure_crop_area_m2) return true;             // merged plants
+  return gamma2 <= assoc_chi2;
+}
+
+CropClassifier::CropClassifier(const ClassifierOptions& options) : options_(options) {
+  ThrowIfInvalid("crop classifier", options_.Validate());
+}
+
+void CropClassifier::Classify(std::span<const tracking::Feature> features,
+                              std::span<const PredictedCrop> predictions,
+                              const geometry::Matrix5d& covariance,
+                              std::vector<BlobDecision>& out) const {
+  std::vector<Eigen::Matrix2d> s_inverse;
+  s_inverse.reserve(predictions.size());
+  for (const PredictedCrop& c : predictions) {
+    s_inverse.push_back(AssociationCovariance(c, covariance, options_).inverse());
+  }
+  out.clear();
+  for (const tracking::Feature& f : features) {
+    BlobDecision d;
+    d.area_m2 = f.area_m2;
+    d.clipped = f.clipped;
+    for (size_t i = 0; i < predictions.size(); ++i) {
+      const Eigen::Vector2d nu = f.ground_m - predictions[i].ground_m;
+      const double g2 = nu.dot(s_inverse[i] * nu);
+      if (g2 < d.gamma2) {
+        d.gamma2 = g2;
+        d.distance_m = nu.norm();
+        d.m = predictions[i].m;
+        d.n = predictions[i].n;
+      }
+    }
+    d.associated = d.gamma2 <= options_.assoc_chi2;
+    d.crop = !predictions.empty() &&
+             IsCrop(d.area_m2, d.clipped, d.gamma2, options_.min_crop_area_m2,
+                    options_.assoc_chi2, options_.sure_crop_area_m2);
+    out.push_back(d);
+  }
+}
+
+}  // namespace plantscale::classify

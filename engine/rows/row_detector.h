@@ -1,0 +1,128 @@
+#pragma once
+// Crop-row detection in an image from an unknown, uncalibrated camera
+// (issue 11). Crop rows are parallel, equally spaced lines on the ground; a
+// pinhole camera maps them to lines through one vanishing point whose
+// slopes are affine in the row number. Written with the image's bottom
+// pixel row as reference (Δv = v_bottom − v, pixel centres at +0.5):
+//
+//   u_n(v) = (s_c + n·d) · (1 − g·Δv) + c·Δv
+//
+// s_c: the central row's u at the bottom row, d: the row spacing at the
+// bottom row, g: the convergence (the vanishing point lies 1/g above the
+// bottom row; g = 0: parallel rows, seen from straight above), c: the lean
+// (the vanishing point's u is c/g). Every pixel maps to
+//
+//   s = (u − c·Δv) / (1 − g·Δv),
+//
+// the bottom-row crossing of the line through it and the vanishing point;
+// in s the rows are a comb of period d. The detector therefore votes with
+// all rows at once (the perspective constraint ties them together, as the
+// tracker's initialiser does on the calibrated ground plane):
+//   1. a Hough over (g, lean) scoring how sharply the plant matter piles up
+//      in s (all rows must converge on one point); the sharpest cells and
+//      the sharpest leans of every convergence go on,
+//   2. the row comb (comb.h, whose votes the ground-plane initialiser
+//      shares) over period and phase, each hypothesis scored by the comb's
+//      coherence × the agreement of its phase from band to band × the
+//      occupancy of its rows × their contrast against the matter half-way
+//      between them (which rules out a comb of twice the spacing) × n/(n+1)
+//      for n rows (two rows fit any vanishing point; more rows test it),
+//   3. a local search of that score and a weighted least-squares refit of
+//      the four parameters (linear in (s_c, d, c − g·s_c, g·d)) to each
+//      row's centre in thin bands, the centroid of its plant matter between
+//      the gaps on either side: narrow rows are centred by their mass, rows
+//      whose plants nearly touch by their edges.
+// Weeds between rows add a floor to the comb; missing plants, shadows and
+// tyre tracks take parts of teeth away; rows are reported only where their
+// tooth has plant matter along its length (or, between two such rows, some).
+// No rows (confidence 0) when the band agreement, contrast or coherence is
+// too low: bare soil, sky, walls, scattered plants.
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/common/options.h"
+
+namespace plantscale::rows {
+
+struct RowDetectorOptions {
+  int work_width_px = 128;           // the mask is area-averaged to this width for the Hough
+  int fit_width_px = 320;            // ... and to this width for the least-squares refit
+  int strips = 16;                   // horizontal bands of the Hough
+  double max_convergence = 1.5;      // g × image height: vanishing point no lower than this
+  int convergence_steps = 13;
+  double max_lean = 1.2;             // |du/dv| of the rows at the image's centre column
+  int lean_steps = 25;
+  double min_spacing_fraction = 0.05;  // spacing at the bottom row, of the image width
+  double max_spacing_fraction = 1.0;
+  double spacing_step = 0.025;       // relative step of the period search
+  int candidates = 4;                // best Hough cells taken on to the comb
+  double row_halfwidth_fraction = 0.25;  // plant matter within ± this × spacing supports a row
+  double min_plant_fraction = 0.002; // less plant matter in the image: no rows
+  double min_coherence = 0.15;       // comb phase coherence below this: no rows
+  double min_alignment = 0.85;       // agreement of the bands' comb phases below this: no rows
+  double min_contrast = 0.2;         // 1 − (matter half-way between rows) / (on them)
+  double gap_search_fraction = 0.25;  // the refit looks for the gap between two rows within
+                                      // ± this × spacing of their midpoint
+  int fit_iterations = 6;
+  double min_row_occupancy = 0.4;    // fraction of its bands in which a row has plant matter
+  double min_gap_row_occupancy = 0.15;  // ... for a row between two such rows (plants missing)
+  double min_visible_spacing_px = 6.0;  // rows are reported up to where they are this close
+
+  OptionErrors Validate() const;
+};
+
+struct DetectedRow {
+  int n = 0;               // comb index relative to the central row (0)
+  double bottom_u_px = 0;  // u at the bottom pixel row's centre
+  double occupancy = 0.0;  // fraction of its in-image bands with plant matter
+};
+
+struct RowDetection {
+  int width_px = 0;
+  int height_px = 0;
+  double confidence = 0.0;     // 0: no rows; else comb coherence × mean row occupancy (≥ 0.001)
+  std::string reason;          // why no rows, when confidence is 0
+  double centre_u_px = 0.0;    // s_c
+  double spacing_px = 0.0;     // d, at the bottom row
+  double convergence = 0.0;    // g, 1/px
+  double lean = 0.0;           // c
+  double coherence = 0.0;      // |Σ w e^{2πi s/d}| / Σ w of the plant matter
+  double alignment = 0.0;      // |Σ z_k| / Σ |z_k| of the bands' comb phasors z_k
+  double contrast = 0.0;       // 1 − (matter half-way between the rows) / (on the rows)
+  double top_v_px = 0.0;       // rows are told apart from the bottom up to this v
+  std::vector<DetectedRow> rows;  // left to right
+
+  double bottom_v_px() const { return height_px - 0.5; }
+  // u of comb row n at image height v (continuous; v = row index + 0.5).
+  double U(int n, double v_px) const;
+  // Row spacing at image height v.
+  double SpacingAt(double v_px) const;
+  // (u, v) of the vanishing point; nullopt when the rows are parallel.
+  std::optional<Eigen::Vector2d> VanishingPoint() const;
+  // The central row's offset from the image's centre column at the bottom.
+  double CentralOffsetPx() const { return centre_u_px - 0.5 * width_px; }
+};
+
+class RowDetector {
+ public:
+  explicit RowDetector(const RowDetectorOptions& options);
+
+  // `plant` is CV_8UC1, plant matter > 0 (a segmentation mask, 255 plant)
+  // or CV_32FC1 in [0, 1]. Throws DataError for an empty image or another type.
+  RowDetection Detect(const cv::Mat& plant);
+  const RowDetectorOptions& options() const { return options_; }
+
+ private:
+  RowDetectorOptions options_;
+  cv::Mat work_;  // CV_32F plant fraction at the Hough resolution
+  cv::Mat fit_;   // CV_32F at the refit resolution
+  std::vector<float> profiles_;
+  std::vector<float> fit_profiles_;
+  std::vector<double> histogram_;
+};
+
+}  // namespace plantscale::rows

@@ -1,0 +1,212 @@
+#include "engine/rows/row_detector.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+namespace plantscale::rows {
+namespace {
+
+// A synthetic plant mask of crop rows u_n(v) = (sc + n d)(1 − gΔv) + cΔv:
+// plants along each row, smaller and closer together towards the vanishing
+// point, a fraction missing, plus weeds scattered between the rows.
+struct Scene {
+  int width = 640, height = 480;
+  double sc = 300.0, d = 180.0, g = 0.0, c = 0.0;
+  int n_min = -3, n_max = 3;
+  double plant_radius = 0.12;  // of the local row spacing
+  double missing = 0.2;
+  int weeds = 0;
+  double weed_radius_px = 4.0;
+  double top_v = 0.0;  // no plants above this
+
+  double Shrink(double v) const { return 1.0 - g * (height - 0.5 - v); }
+  double U(int n, double v) const {
+    return (sc + n * d) * Shrink(v) + c * (height - 0.5 - v);
+  }
+  cv::Mat Draw(uint32_t seed) const {
+    cv::Mat mask(height, width, CV_8UC1, cv::Scalar(0));
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int n = n_min; n <= n_max; ++n) {
+      for (double v = height - 0.5 + 0.3 * d * unit(rng); v > top_v;) {
+        const double s = Shrink(v);
+        if (s * d < 4.0) break;
+        if (unit(rng) >= missing) {
+          const int r = std::max(1, static_cast<int>(std::lround(plant_radius * d * s)));
+          cv::circle(mask, cv::Point(static_cast<int>(U(n, v)), static_cast<int>(v)), r,
+                     cv::Scalar(255), cv::FILLED);
+        }
+        v -= 0.25 * d * s;
+      }
+    }
+    for (int k = 0; k < weeds; ++k) {
+      const int r = std::max(1, static_cast<int>(std::lround(weed_radius_px * (0.5 + unit(rng)))));
+      cv::circle(mask, cv::Point(static_cast<int>(unit(rng) * width), static_cast<int>(top_v + unit(rng) * (height - top_v))),
+                 r, cv::Scalar(255), cv::FILLED);
+    }
+    return mask;
+  }
+};
+
+// Largest |u − u_true| over the detected rows at image height v, in units
+// of the true local spacing; rows are matched by their position.
+double WorstError(const RowDetection& det, const Scene& scene, double v) {
+  double worst = 0.0;
+  for (const DetectedRow& row : det.rows) {
+    const double u = det.U(row.n, v);
+    double best = 1e9;
+    for (int n = scene.n_min; n <= scene.n_max; ++n) best = std::min(best, std::abs(u - scene.U(n, v)));
+    worst = std::max(worst, best / (scene.d * scene.Shrink(v)));
+  }
+  return worst;
+}
+
+TEST(RowDetectorTest, ConvergingRowsGiveVanishingPointSpacingAndRows) {
+  Scene scene;
+  scene.g = 1.0 / 520.0;  // vanishing point 520 px above the bottom row
+  scene.c = scene.g * 350.0;  // ... at u = 350
+  scene.weeds = 60;
+  scene.top_v = 40.0;
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(scene.Draw(1));
+  ASSERT_GT(det.confidence, 0.3) << det.reason;
+  EXPECT_NEAR(det.spacing_px, 180.0, 180.0 * 0.03);
+  const auto vp = det.VanishingPoint();
+  ASSERT_TRUE(vp.has_value());
+  EXPECT_NEAR(vp->x(), 350.0, 25.0);
+  EXPECT_NEAR(vp->y(), 479.5 - 520.0, 30.0);
+  EXPECT_NEAR(det.CentralOffsetPx(), 300.0 - 320.0, 5.0);
+  // Rows n = −1, 0, 1 cross the bottom in the image; −2 and 2 enter from the sides.
+  EXPECT_GE(det.rows.size(), 5U);
+  EXPECT_LT(WorstError(det, scene, 479.5), 0.05);
+  EXPECT_LT(WorstError(det, scene, 240.0), 0.05);
+  EXPECT_LT(det.top_v_px, 200.0);
+}
+
+TEST(RowDetectorTest, ParallelLeaningRowsFromAboveWithWeeds) {
+  Scene scene;
+  scene.width = 320;
+  scene.height = 240;
+  scene.sc = 150.0;
+  scene.d = 64.0;
+  scene.c = 0.25;  // rows lean right going up
+  scene.n_min = -6;
+  scene.n_max = 6;
+  scene.weeds = 40;
+  scene.weed_radius_px = 2.0;
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(scene.Draw(2));
+  ASSERT_GT(det.confidence, 0.3) << det.reason;
+  EXPECT_NEAR(det.spacing_px, 64.0, 64.0 * 0.03);
+  EXPECT_LT(std::abs(det.convergence) * 240.0, 0.05);  // parallel
+  EXPECT_NEAR(det.lean, 0.25, 0.02);
+  EXPECT_LT(WorstError(det, scene, 239.5), 0.05);
+  EXPECT_LT(WorstError(det, scene, 10.0), 0.05);
+  EXPECT_GE(det.rows.size(), 5U);
+}
+
+TEST(RowDetectorTest, RowsAreNumberedLeftToRightAndCentralIsNearestTheMiddle) {
+  Scene scene;
+  scene.g = 1.0 / 700.0;
+  scene.c = scene.g * 200.0;
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(scene.Draw(3));
+  ASSERT_GT(det.confidence, 0.3) << det.reason;
+  for (size_t i = 1; i < det.rows.size(); ++i) {
+    EXPECT_EQ(det.rows[i].n, det.rows[i - 1].n + 1);
+    EXPECT_GT(det.rows[i].bottom_u_px, det.rows[i - 1].bottom_u_px);
+  }
+  EXPECT_NEAR(det.U(0, 479.5), 300.0, 5.0);  // the row at 300 is nearest u = 320
+}
+
+TEST(RowDetectorTest, WideRowsThatNearlyTouchAreCentredByTheirGaps) {
+  Scene scene;
+  scene.g = 1.0 / 520.0;
+  scene.c = scene.g * 330.0;
+  scene.plant_radius = 0.42;  // rows 84 % of their spacing wide
+  scene.missing = 0.1;
+  scene.n_min = -1;
+  scene.n_max = 1;  // one bed of three rows on bare soil
+  scene.top_v = 60.0;
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(scene.Draw(4));
+  ASSERT_GT(det.confidence, 0.0) << det.reason;
+  EXPECT_EQ(det.rows.size(), 3U);
+  EXPECT_NEAR(det.spacing_px, 180.0, 180.0 * 0.04);
+  EXPECT_LT(WorstError(det, scene, 479.5), 0.06);
+  EXPECT_LT(WorstError(det, scene, 200.0), 0.06);
+}
+
+TEST(RowDetectorTest, ARowWithMorePlantsMissingThanPresentIsStillARow) {
+  // Outer rows full, the central row with 60 % of its plants missing: the
+  // comb of twice the spacing through the outer rows must not win.
+  Scene outer;
+  outer.g = 1.0 / 600.0;
+  outer.c = outer.g * 320.0;
+  outer.n_min = -1;
+  outer.n_max = 1;
+  outer.missing = 0.05;
+  Scene centre = outer;
+  centre.n_min = 0;
+  centre.n_max = 0;
+  centre.missing = 0.6;
+  Scene sides = outer;
+  cv::Mat mask = cv::Mat::zeros(480, 640, CV_8UC1);
+  for (int n : {-1, 1}) {
+    sides.n_min = sides.n_max = n;
+    cv::bitwise_or(mask, sides.Draw(static_cast<uint32_t>(5 + n)), mask);
+  }
+  cv::bitwise_or(mask, centre.Draw(9), mask);
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(mask);
+  ASSERT_GT(det.confidence, 0.0) << det.reason;
+  EXPECT_NEAR(det.spacing_px, 180.0, 180.0 * 0.04);
+  EXPECT_EQ(det.rows.size(), 3U);
+  EXPECT_LT(WorstError(det, outer, 479.5), 0.05);
+}
+
+TEST(RowDetectorTest, NoPlantMatterGivesNoRows) {
+  RowDetector detector{RowDetectorOptions{}};
+  const RowDetection det = detector.Detect(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0)));
+  EXPECT_EQ(det.confidence, 0.0);
+  EXPECT_TRUE(det.rows.empty());
+  EXPECT_NE(det.reason.find("no plant matter"), std::string::npos) << det.reason;
+}
+
+TEST(RowDetectorTest, ScatteredBlobsAreNotRows) {
+  RowDetector detector{RowDetectorOptions{}};
+  int with_rows = 0;
+  for (uint32_t seed = 10; seed < 20; ++seed) {
+    Scene scene;
+    scene.n_min = 1;
+    scene.n_max = 0;  // no rows at all
+    scene.weeds = 150;
+    scene.weed_radius_px = 8.0;
+    const RowDetection det = detector.Detect(scene.Draw(seed));
+    if (det.confidence > 0.0) ++with_rows;
+    EXPECT_EQ(det.rows.empty(), det.confidence == 0.0);
+  }
+  EXPECT_EQ(with_rows, 0);
+}
+
+TEST(RowDetectorTest, RejectsEmptyAndWrongTypeImages) {
+  RowDetector detector{RowDetectorOptions{}};
+  EXPECT_THROW(detector.Detect(cv::Mat()), DataError);
+  EXPECT_THROW(detector.Detect(cv::Mat(10, 10, CV_8UC3, cv::Scalar(0, 0, 0))), DataError);
+}
+
+TEST(RowDetectorTest, InvalidOptionsAreNamed) {
+  RowDetectorOptions o;
+  o.strips = 1;
+  o.max_spacing_fraction = 0.01;
+  const OptionErrors e = o.Validate();
+  ASSERT_EQ(e.size(), 2U);
+  EXPECT_EQ(e[0].key, "strips");
+  EXPECT_EQ(e[1].key, "max_spacing_fraction");
+}
+
+}  // namespace
+}  // namespace plantscale::rows

@@ -1,0 +1,112 @@
+#pragma once
+// Nozzle scheduling (thesis §8.2): a bar of N nozzles a known distance
+// behind the camera's ground point passes over the treatment map; a nozzle
+// opens when the strip of ground it will cover during the next tick holds a
+// cell of the treated class. "Will": the valve opens `valve_latency_s` after
+// the command, so the strip is where the nozzle will be then, led by the
+// forward speed from the 50 Hz pose. Fail-safe: every nozzle closed when the
+// pose is stale, the camera is lost, odometry is invalid or the tracker has
+// lost the grid; each reason is reported.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "engine/common/options.h"
+#include "engine/treatment/bed_frame.h"
+#include "engine/treatment/treatment_map.h"
+
+namespace plantscale::treatment {
+
+enum class SprayMode { kCrop, kWeed };  // fertiliser/protectant on the crop, or herbicide
+const char* ToString(SprayMode mode);
+bool ParseSprayMode(const std::string& name, SprayMode& mode);
+
+struct SprayBarOptions {
+  int nozzles = 64;                // at most 64 (one bit each in the open mask)
+  double nozzle_spacing_m = 0.0225;  // and the width each nozzle covers
+  double bar_offset_m = 0.6;       // behind the camera's ground point (vehicle y = −offset)
+  double centre_x_m = 0.0;         // vehicle x of the bar's centre
+  double valve_latency_s = 0.04;   // command to spray on the ground
+
+  OptionErrors Validate() const;
+  // Vehicle-frame ground position of nozzle i (0: leftmost).
+  Eigen::Vector2d Nozzle(int i) const;
+};
+
+struct FailSafeOptions {
+  double max_pose_age_s = 0.1;   // issue: pose stale beyond 100 ms
+  double max_frame_age_s = 0.5;  // no camera frame for this long: camera lost
+
+  OptionErrors Validate() const;
+};
+
+struct SchedulerOptions {
+  SprayBarOptions bar;
+  SprayMode mode = SprayMode::kCrop;
+  FailSafeOptions fail_safe;
+  double tick_s = 0.02;  // the 50 Hz pose rate
+
+  OptionErrors Validate() const;
+};
+
+// What the vehicle knows about its own health at a tick.
+struct SafetyInputs {
+  int64_t pose_utime = -1;        // time of the pose used (−1: none)
+  int64_t last_frame_utime = -1;  // last camera frame received (−1: none)
+  bool camera_ok = true;          // the camera source reports no fault
+  bool odometry_valid = true;     // the last odometry sample was accepted
+  bool tracking = false;          // the tracker holds the grid
+};
+
+enum FailReason : uint32_t {
+  kPoseStale = 1u << 0,
+  kCameraLost = 1u << 1,
+  kOdometryInvalid = 1u << 2,
+  kTrackerLost = 1u << 3,
+};
+// "pose stale (130 ms > 100 ms)", ...: one message per reason set in `reasons`.
+std::vector<std::string> FailReasonMessages(uint32_t reasons);
+
+// Fail-safe check alone: reasons bitmask, 0 when safe to spray.
+uint32_t CheckFailSafe(int64_t now_utime, const SafetyInputs& in, const FailSafeOptions& o,
+                       std::vector<std::string>* messages = nullptr);
+
+struct NozzleTarget {
+  int nozzle = 0;
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // bed strip the nozzle covers next tick
+};
+
+struct TickResult {
+  int64_t utime = 0;
+  uint64_t open_mask = 0;
+  uint32_t fail_reasons = 0;
+  std::vector<std::string> messages;  // why the bar is closed, when it is
+  std::vector<NozzleTarget> opened;   // strips of the nozzles opened
+};
+
+// Called on every tick with the open mask (all zero on fail-safe).
+using NozzleSink = std::function<void(int64_t utime, uint64_t open_mask)>;
+
+class NozzleScheduler {
+ public:
+  // Throws InvalidOptionsError.
+  explicit NozzleScheduler(const SchedulerOptions& options, NozzleSink sink = {});
+
+  TickResult Tick(int64_t now_utime, const BedPose& pose, const TreatmentMap& map,
+                  const SafetyInputs& safety);
+  // The bed strip nozzle i covers during the tick starting at the pose's time
+  // plus the valve latency.
+  NozzleTarget Target(int i, const BedPose& pose) const;
+
+  const SchedulerOptions& options() const { return options_; }
+  void set_sink(NozzleSink sink) { sink_ = std::move(sink); }
+
+ private:
+  SchedulerOptions options_;
+  NozzleSink sink_;
+};
+
+}  // namespace plantscale::treatment

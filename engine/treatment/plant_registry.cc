@@ -1,0 +1,85 @@
+#include "engine/treatment/plant_registry.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace plantscale::treatment {
+
+OptionErrors RegistryOptions::Validate() const {
+  OptionErrors e;
+  RequireInRange(e, "merge_radius_m", merge_radius_m, 0.001, 1.0);
+  return e;
+}
+
+PlantRegistry::PlantRegistry(const RegistryOptions& options) : options_(options) {
+  ThrowIfInvalid("plant registry", options_.Validate());
+}
+
+int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecision& d,
+                           const classify::ClassifierOptions& c) {
+  PlantRecord* best = nullptr;
+  double best_d = options_.merge_radius_m;
+  // Records are appended as plants come into view; look back from the newest.
+  for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < 400; ++it) {
+    const double dist = (it->bed_m - bed).norm();
+    if (dist <= best_d) {
+      best_d = dist;
+      best = &*it;
+    }
+  }
+  if (!best) {
+    records_.emplace_back();
+    best = &records_.back();
+    best->id = static_cast<int>(records_.size()) - 1;
+  }
+  PlantRecord& r = *best;
+  r.bed_m = (r.bed_m * r.observations + bed) / (r.observations + 1);
+  ++r.observations;
+  (d.crop ? r.crop_votes : r.weed_votes) += 1;
+  if (!d.clipped && d.area_m2 > r.area_m2) {
+    r.area_m2 = d.area_m2;
+    r.small = d.area_m2 < c.min_crop_area_m2;
+  }
+  if (d.gamma2 < r.gamma2) {
+    r.gamma2 = d.gamma2;
+    r.distance_m = d.distance_m;
+  }
+  return r.id;
+}
+
+void PlantRegistry::MarkSprayed(const NozzleTarget& s, std::vector<int>* newly) {
+  for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < 400; ++it) {
+    const Eigen::Vector2d& p = it->bed_m;
+    if (p.x() >= s.x0 && p.x() <= s.x1 && p.y() >= s.y0 - 0.01 && p.y() <= s.y1 + 0.01) {
+      if (!it->sprayed && newly) newly->push_back(it->id);
+      it->sprayed = true;
+    }
+  }
+}
+
+void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
+                            const classify::ClassifierOptions& c) {
+  for (PlantRecord& r : records_) {
+    int column = 0, row = 0;
+    if (map.CellOf(r.bed_m, column, row)) {
+      r.counts = map.Counts(column, row);
+      r.map_class = map.ClassOf(column, row);
+    }
+    char text[320];
+    const char* reason = r.crop() ? "associated with a predicted crop"
+                         : r.small ? "below the size filter"
+                         : "outside every crop association region";
+    std::snprintf(text, sizeof text,
+                  "%s (%d crop / %d weed votes): %s; area %.4f m2 (filter %.4f), "
+                  "gamma2 %.2f (gate %.2f), %.0f mm from the predicted crop; cell counters "
+                  "crop %d weed %d -> %s; %s (spray-%s mode)",
+                  r.crop() ? "crop" : "weed", r.crop_votes, r.weed_votes, reason, r.area_m2,
+                  c.min_crop_area_m2, std::isfinite(r.gamma2) ? r.gamma2 : -1.0, c.assoc_chi2,
+                  std::isfinite(r.distance_m) ? r.distance_m * 1000.0 : -1.0, r.counts.crop,
+                  r.counts.weed, ToString(r.map_class), r.sprayed ? "sprayed" : "not sprayed",
+                  ToString(mode));
+    r.why = text;
+  }
+}
+
+}  // namespace plantscale::treatment

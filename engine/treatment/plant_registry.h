@@ -1,0 +1,64 @@
+#pragma once
+// Per-plant record (issue 6): every classified blob is merged, in the bed
+// frame, into the nearest plant record within `merge_radius_m` (or starts a
+// new one), so each plant carries its votes, size, distance to the predicted
+// crop position, the map counters under it and whether a nozzle sprayed it —
+// and a sentence saying why, for the map and the station.
+
+#include <Eigen/Core>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "engine/classify/crop_classifier.h"
+#include "engine/treatment/nozzle_scheduler.h"
+#include "engine/treatment/treatment_map.h"
+
+namespace plantscale::treatment {
+
+struct PlantRecord {
+  int id = 0;
+  Eigen::Vector2d bed_m{0.0, 0.0};  // mean of its observations
+  int observations = 0;
+  int crop_votes = 0;
+  int weed_votes = 0;
+  double area_m2 = 0.0;  // largest seen
+  double gamma2 = std::numeric_limits<double>::infinity();  // smallest to a predicted crop
+  double distance_m = std::numeric_limits<double>::infinity();
+  bool small = false;  // its largest unclipped view failed the size filter
+  CellCounts counts;   // map counters under its position at the last update
+  CellClass map_class = CellClass::kSoil;
+  bool sprayed = false;
+  std::string why;
+
+  bool crop() const { return crop_votes >= weed_votes && crop_votes > 0; }
+};
+
+struct RegistryOptions {
+  double merge_radius_m = 0.05;
+
+  OptionErrors Validate() const;
+};
+
+class PlantRegistry {
+ public:
+  explicit PlantRegistry(const RegistryOptions& options = {});
+
+  // One classified blob at `bed_m`; returns the record's id.
+  int Observe(const Eigen::Vector2d& bed_m, const classify::BlobDecision& decision,
+              const classify::ClassifierOptions& classifier);
+  // A nozzle covered this bed strip: records inside it are sprayed. Appends
+  // the ids of records that were not sprayed before to `newly` when given.
+  void MarkSprayed(const NozzleTarget& strip, std::vector<int>* newly = nullptr);
+  // Reads the map under every record and writes its `why`.
+  void Explain(const TreatmentMap& map, SprayMode mode, const classify::ClassifierOptions& c);
+  void Clear() { records_.clear(); }
+
+  const std::vector<PlantRecord>& records() const { return records_; }
+
+ private:
+  RegistryOptions options_;
+  std::vector<PlantRecord> records_;  // bed y increasing, within a merge radius
+};
+
+}  // namespace plantscale::treatment

@@ -1,0 +1,167 @@
+#include "engine/treatment/treatment_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace plantscale::treatment {
+
+namespace {
+
+// Row index of the last cell the map will grow to (≈ 1.3 km at 13 mm).
+constexpr int kMaxRows = 100000;
+
+double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& p) {
+  return (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+}
+
+// Inside a convex quad of either winding (boundary counts).
+bool Inside(const Quad& q, const Eigen::Vector2d& p) {
+  bool any_pos = false, any_neg = false;
+  for (size_t i = 0; i < 4; ++i) {
+    const double c = Cross(q[i], q[(i + 1) % 4], p);
+    any_pos |= c > 0.0;
+    any_neg |= c < 0.0;
+  }
+  return !(any_pos && any_neg);
+}
+
+}  // namespace
+
+const char* ToString(CellClass c) {
+  switch (c) {
+    case CellClass::kSoil: return "soil";
+    case CellClass::kCrop: return "crop";
+    case CellClass::kWeed: return "weed";
+  }
+  return "?";
+}
+
+OptionErrors TreatmentMapOptions::Validate() const {
+  OptionErrors e;
+  RequireInRange(e, "cell_m", cell_m, 0.001, 0.5);
+  RequireInRange(e, "width_m", width_m, 0.1, 50.0);
+  if (!std::isfinite(start_y_m)) e.push_back({"start_y_m", "must be finite"});
+  if (majority_threshold < 1) e.push_back({"majority_threshold", "must be >= 1"});
+  return e;
+}
+
+TreatmentMap::TreatmentMap(const TreatmentMapOptions& options) : options_(options) {
+  ThrowIfInvalid("treatment map", options_.Validate());
+  columns_ = static_cast<int>(std::ceil(options_.width_m / options_.cell_m));
+}
+
+void TreatmentMap::GrowTo(int row) {
+  if (row >= rows()) {
+    counts_.resize(static_cast<size_t>(row + 1) * columns_);
+    treated_.resize(counts_.size());
+  }
+}
+
+void TreatmentMap::Clear() {
+  counts_.clear();
+  treated_.clear();
+}
+
+bool TreatmentMap::CellOf(const Eigen::Vector2d& b, int& column, int& row) const {
+  const double c = std::floor((b.x() - origin_x_m()) / options_.cell_m);
+  const double r = std::floor((b.y() - options_.start_y_m) / options_.cell_m);
+  if (!(c >= 0 && c < columns_ && r >= 0 && r < kMaxRows)) return false;
+  column = static_cast<int>(c);
+  row = static_cast<int>(r);
+  return true;
+}
+
+Eigen::Vector2d TreatmentMap::CellCentre(int column, int row) const {
+  return {origin_x_m() + (column + 0.5) * options_.cell_m,
+          options_.start_y_m + (row + 0.5) * options_.cell_m};
+}
+
+CellCounts TreatmentMap::Counts(int column, int row) const {
+  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return {};
+  return counts_[static_cast<size_t>(row) * columns_ + column];
+}
+
+CellClass TreatmentMap::ClassOf(int column, int row) const {
+  const CellCounts c = Counts(column, row);
+  const int top = std::max(c.crop, c.weed);
+  if (top < options_.majority_threshold) return CellClass::kSoil;
+  return c.crop >= c.weed ? CellClass::kCrop : CellClass::kWeed;
+}
+
+CellClass TreatmentMap::ClassAt(const Eigen::Vector2d& b) const {
+  int column = 0, row = 0;
+  return CellOf(b, column, row) ? ClassOf(column, row) : CellClass::kSoil;
+}
+
+int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
+  double x0 = q[0].x(), x1 = x0, y0 = q[0].y(), y1 = y0;
+  for (const Eigen::Vector2d& p : q) {
+    if (!p.allFinite()) return 0;
+    x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x());
+    y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+  }
+  const double s = options_.cell_m;
+  const int c0 = std::max(0, static_cast<int>(std::floor((x0 - origin_x_m()) / s)));
+  const int c1 = std::min(columns_ - 1, static_cast<int>(std::floor((x1 - origin_x_m()) / s)));
+  const int r0 = std::max(0, static_cast<int>(std::floor((y0 - options_.start_y_m) / s)));
+  const int r1 = std::min(kMaxRows - 1, static_cast<int>(std::floor((y1 - options_.start_y_m) / s)));
+  if (c0 > c1 || r0 > r1) return 0;
+  GrowTo(r1);
+  int counted = 0;
+  for (int r = r0; r <= r1; ++r) {
+    for (int c = c0; c <= c1; ++c) {
+      if (!Inside(q, CellCentre(c, r))) continue;
+      CellCounts& cell = counts_[static_cast<size_t>(r) * columns_ + c];
+      uint16_t& n = crop ? cell.crop : cell.weed;
+      if (n < std::numeric_limits<uint16_t>::max()) ++n;
+      ++counted;
+    }
+  }
+  return counted;
+}
+
+TreatmentMap::CellRange TreatmentMap::RangeOf(double x0, double x1, double y0, double y1) const {
+  const double s = options_.cell_m;
+  // Cells whose centre lies in the rectangle: centre = origin + (i + ½) s.
+  CellRange k{static_cast<int>(std::ceil((x0 - origin_x_m()) / s - 0.5)),
+              static_cast<int>(std::floor((x1 - origin_x_m()) / s - 0.5)),
+              static_cast<int>(std::ceil((y0 - options_.start_y_m) / s - 0.5)),
+              static_cast<int>(std::floor((y1 - options_.start_y_m) / s - 0.5))};
+  int column = 0, row = 0;
+  if ((k.c0 > k.c1 || k.r0 > k.r1) && CellOf({0.5 * (x0 + x1), 0.5 * (y0 + y1)}, column, row)) {
+    if (k.c0 > k.c1) k.c0 = k.c1 = column;
+    if (k.r0 > k.r1) k.r0 = k.r1 = row;
+  }
+  k.c0 = std::max(k.c0, 0);
+  k.c1 = std::min(k.c1, columns_ - 1);
+  k.r0 = std::max(k.r0, 0);
+  k.r1 = std::min(k.r1, kMaxRows - 1);
+  return k;
+}
+
+bool TreatmentMap::AnyIn(double x0, double x1, double y0, double y1, CellClass cls) const {
+  const CellRange k = RangeOf(x0, x1, y0, y1);
+  for (int r = k.r0; r <= std::min(k.r1, rows() - 1); ++r) {
+    for (int c = k.c0; c <= k.c1; ++c) {
+      if (ClassOf(c, r) == cls) return true;
+    }
+  }
+  return false;
+}
+
+void TreatmentMap::MarkTreated(double x0, double x1, double y0, double y1) {
+  const CellRange k = RangeOf(x0, x1, y0, y1);
+  if (k.c0 > k.c1 || k.r0 > k.r1) return;
+  GrowTo(k.r1);
+  for (int r = k.r0; r <= k.r1; ++r) {
+    for (int c = k.c0; c <= k.c1; ++c) treated_[static_cast<size_t>(r) * columns_ + c] = 1;
+  }
+}
+
+bool TreatmentMap::Treated(int column, int row) const {
+  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return false;
+  return treated_[static_cast<size_t>(row) * columns_ + column] != 0;
+}
+
+}  // namespace plantscale::treatment

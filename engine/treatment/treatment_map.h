@@ -1,0 +1,79 @@
+#pragma once
+// The treatment map (thesis §8.2, after Hague): a grid of counters over the
+// bed in the bed frame (bed_frame.h), 13.33 mm cells by default. Each frame,
+// every classified blob's footprint adds one to the crop or the weed counter
+// of the cells whose centre it covers, so a plant seen in many frames
+// accumulates. A cell's class is the larger counter when it reaches the
+// threshold (a tie goes to crop: the crop is what must not be wronged), and
+// soil otherwise. The map grows along the bed as the vehicle drives.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "engine/common/options.h"
+#include "engine/treatment/bed_frame.h"
+
+namespace plantscale::treatment {
+
+enum class CellClass : uint8_t { kSoil = 0, kCrop = 1, kWeed = 2 };
+const char* ToString(CellClass c);
+
+struct TreatmentMapOptions {
+  double cell_m = 0.01333;   // thesis: 256 × 3000 cells of 13.33 mm
+  double width_m = 3.4;      // across, centred on the central row
+  double start_y_m = -5.0;   // bed y of the first cell row (behind the start)
+  int majority_threshold = 3;  // counts a class needs before a cell is not soil
+
+  OptionErrors Validate() const;
+};
+
+struct CellCounts {
+  uint16_t crop = 0;
+  uint16_t weed = 0;
+};
+
+class TreatmentMap {
+ public:
+  // Throws InvalidOptionsError.
+  explicit TreatmentMap(const TreatmentMapOptions& options);
+
+  // Adds one vote to every cell whose centre lies inside the convex quad
+  // (bed frame). Returns the number of cells counted.
+  int AddFootprint(const Quad& bed_quad, bool crop);
+  void Clear();
+
+  // Cell (column, row) of a bed point; false outside the map across or
+  // behind its start (ahead it grows on demand when counting).
+  bool CellOf(const Eigen::Vector2d& bed_m, int& column, int& row) const;
+  Eigen::Vector2d CellCentre(int column, int row) const;
+  CellCounts Counts(int column, int row) const;
+  CellClass ClassOf(int column, int row) const;
+  CellClass ClassAt(const Eigen::Vector2d& bed_m) const;
+  // Is any cell of `cls` in the bed rectangle [x0, x1] × [y0, y1]? Cells count
+  // when their centre lies inside; a rectangle narrower than a cell tests the
+  // cell under its centre.
+  bool AnyIn(double x0, double x1, double y0, double y1, CellClass cls) const;
+  // A nozzle sprayed the bed rectangle: its cells (as AnyIn picks them) are treated.
+  void MarkTreated(double x0, double x1, double y0, double y1);
+  bool Treated(int column, int row) const;
+
+  int columns() const { return columns_; }
+  int rows() const { return static_cast<int>(counts_.size()) / columns_; }
+  const TreatmentMapOptions& options() const { return options_; }
+  double origin_x_m() const { return -0.5 * options_.width_m; }
+
+ private:
+  void GrowTo(int row);
+  struct CellRange {
+    int c0, c1, r0, r1;  // inclusive; empty when c0 > c1 or r0 > r1
+  };
+  CellRange RangeOf(double x0, double x1, double y0, double y1) const;
+
+  TreatmentMapOptions options_;
+  int columns_ = 0;
+  std::vector<CellCounts> counts_;  // row-major, row 0 at start_y_m
+  std::vector<uint8_t> treated_;     // same layout: 1 where a nozzle sprayed
+};
+
+}  // namespace plantscale::treatment

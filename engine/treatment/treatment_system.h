@@ -1,0 +1,93 @@
+#pragma once
+// The treatment chain of one vehicle (DESIGN.md §1): classify each frame's
+// blobs against the tracker's predicted crop grid, accumulate their
+// footprints in the treatment map and the plant registry, and on every 50 Hz
+// pose tick schedule the nozzles (with the fail-safe). Shared by the
+// evaluation (app/) and the vehicle runner (telemetry/stages).
+
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "engine/classify/crop_classifier.h"
+#include "engine/geometry/camera_model.h"
+#include "engine/tracking/grid_tracker.h"
+#include "engine/treatment/nozzle_scheduler.h"
+#include "engine/treatment/plant_registry.h"
+#include "engine/treatment/treatment_map.h"
+#include "engine/vision/blobs.h"
+
+namespace plantscale::treatment {
+
+struct TreatmentOptions {
+  classify::ClassifierOptions classifier;
+  TreatmentMapOptions map;
+  SchedulerOptions scheduler;
+  RegistryOptions registry;
+  // Crop blobs mark the map only when associated with a predicted crop. A
+  // crop footprint is its blob's bounding box scaled about the centroid by
+  // this (1: the thesis's whole box); weeds always use the whole box.
+  double crop_footprint_scale = 0.45;
+  double weed_footprint_scale = 1.0;
+
+  OptionErrors Validate() const;
+};
+
+struct FrameTreatment {
+  bool classified = false;  // the grid was tracked, so blobs were classified
+  bool map_reset = false;   // the tracker (re)initialised: a new bed frame
+  std::vector<classify::BlobDecision> decisions;  // per feature
+  std::vector<int> plant_ids;                     // per feature, −1 when not mapped
+};
+
+class TreatmentSystem {
+ public:
+  // Throws InvalidOptionsError.
+  TreatmentSystem(const geometry::CameraModel& camera, const TreatmentOptions& options,
+                  NozzleSink sink = {});
+
+  // A camera frame: `features[i]` came from `blobs[blob_of_feature[i]]`
+  // (FeaturesFromBlobs drops blobs whose ray misses the plane).
+  const FrameTreatment& OnFrame(int64_t utime, const tracking::GridTracker& tracker,
+                                const tracking::FrameReport& report,
+                                std::span<const vision::Blob> blobs,
+                                std::span<const tracking::Feature> features,
+                                std::span<const int> blob_of_feature);
+  // A pose tick (after the tracker took the odometry sample at utime).
+  TickResult OnPose(int64_t utime, const tracking::GridTracker& tracker, double speed_m_s,
+                    bool odometry_ok, bool camera_ok = true);
+  // The same with the pose and health given (a runner that ticks after the
+  // tracker has moved on dead-reckons the pose back to the tick).
+  TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
+  int64_t last_frame_utime() const { return last_frame_utime_; }
+  // Writes every plant record's `why`.
+  void Explain() { registry_.Explain(map_, options_.scheduler.mode, options_.classifier); }
+
+  const TreatmentMap& map() const { return map_; }
+  const PlantRegistry& registry() const { return registry_; }
+  // Ids of the records sprayed since the last call (for publishing them again).
+  std::vector<int> TakeNewlySprayed() { return std::exchange(newly_sprayed_, {}); }
+  const TreatmentOptions& options() const { return options_; }
+  void set_sink(NozzleSink sink) { scheduler_.set_sink(std::move(sink)); }
+  int map_resets() const { return map_resets_; }
+
+ private:
+  void AddFootprint(const BedPose& pose, const vision::Blob& blob, bool crop);
+
+  geometry::CameraModel camera_;
+  std::vector<int> newly_sprayed_;
+  TreatmentOptions options_;
+  classify::CropClassifier classifier_;
+  TreatmentMap map_;
+  NozzleScheduler scheduler_;
+  PlantRegistry registry_;
+  FrameTreatment frame_;
+  int64_t last_frame_utime_ = -1;
+  int map_resets_ = 0;
+};
+
+// Indices of the blobs FeaturesFromBlobs keeps, in its order.
+void FeatureBlobIndices(std::span<const vision::Blob> blobs, std::vector<int>& out);
+
+}  // namespace plantscale::treatment

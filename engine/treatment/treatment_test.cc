@@ -1,0 +1,309 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "engine/geometry/grid_model.h"
+#include "engine/treatment/bed_frame.h"
+#include "engine/treatment/nozzle_scheduler.h"
+#include "engine/treatment/plant_registry.h"
+#include "engine/treatment/simulated_bar.h"
+#include "engine/treatment/treatment_map.h"
+
+namespace plantscale::treatment {
+namespace {
+
+BedPose Pose(double offset, double bearing, double distance, double speed = 0.0) {
+  BedPose p;
+  p.offset_m = offset;
+  p.bearing_rad = bearing;
+  p.distance_m = distance;
+  p.speed_m_s = speed;
+  return p;
+}
+
+Quad Square(double x, double y, double half) {
+  return {Eigen::Vector2d(x - half, y - half), Eigen::Vector2d(x + half, y - half),
+          Eigen::Vector2d(x + half, y + half), Eigen::Vector2d(x - half, y + half)};
+}
+
+TEST(BedFrame, RoundTripAndGridPlantsStayPut) {
+  const BedPose p = Pose(0.03, 0.05, 2.0);
+  const Eigen::Vector2d v(0.4, 1.3);
+  EXPECT_NEAR((BedToVehicle(p, VehicleToBed(p, v)) - v).norm(), 0.0, 1e-12);
+  // Plant (m, n) of a grid state maps to bed (n r̄, s + m l̄ + Y); after a
+  // reference shift (m → m − 1, Y → Y + l̄) the same plant keeps its place.
+  geometry::GridState g;
+  g.offset_m = 0.03;
+  g.bearing_rad = 0.05;
+  g.forward_m = 0.2;
+  const double s = 2.0 - g.forward_m;  // forward_distance = passed − Y
+  const Eigen::Vector2d b1 =
+      VehicleToBed(BedPoseFromGrid(0, g, s, 0.0), geometry::PlantInVehicle(g, 2, 1));
+  EXPECT_NEAR(b1.x(), g.row_spacing_m, 1e-12);
+  EXPECT_NEAR(b1.y(), 2.0 + 2 * g.plant_spacing_m, 1e-12);
+  geometry::GridState shifted = g;
+  shifted.forward_m += g.plant_spacing_m;
+  const Eigen::Vector2d b2 = VehicleToBed(BedPoseFromGrid(0, shifted, s, 0.0),
+                                          geometry::PlantInVehicle(shifted, 1, 1));
+  EXPECT_NEAR((b1 - b2).norm(), 0.0, 1e-12);
+}
+
+TEST(TreatmentMap, MajorityWithThreshold) {
+  TreatmentMapOptions o;
+  o.majority_threshold = 2;
+  TreatmentMap map(o);
+  const Eigen::Vector2d c(0.1, 1.0);
+  // A 40 mm square covers 3 × 3 cells of 13.33 mm.
+  EXPECT_EQ(map.AddFootprint(Square(c.x(), c.y(), 0.02), true), 9);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);  // one vote < threshold
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), true);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kCrop);
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), false);
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), false);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kCrop);  // 2 : 2 goes to crop
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), false);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kWeed);
+  EXPECT_EQ(map.ClassAt({0.3, 1.0}), CellClass::kSoil);
+  EXPECT_TRUE(map.AnyIn(0.09, 0.11, 0.99, 1.01, CellClass::kWeed));
+  EXPECT_FALSE(map.AnyIn(0.2, 0.3, 0.99, 1.01, CellClass::kWeed));
+  map.Clear();
+  EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);
+}
+
+TEST(TreatmentMap, RotatedQuadCountsCellsInside) {
+  TreatmentMap map(TreatmentMapOptions{});
+  // A diamond of half-diagonal 0.1 m: area 0.02 m² ≈ 112.6 cells.
+  const Quad diamond = {Eigen::Vector2d(0.0, 0.9), Eigen::Vector2d(0.1, 1.0),
+                        Eigen::Vector2d(0.0, 1.1), Eigen::Vector2d(-0.1, 1.0)};
+  const int n = map.AddFootprint(diamond, true);
+  EXPECT_NEAR(n, 0.02 / (0.01333 * 0.01333), 8.0);
+}
+
+TEST(TreatmentMap, SprayedStripsMarkExactlyTheirCellsAsTreated) {
+  TreatmentMapOptions o;
+  o.cell_m = 0.01;
+  o.width_m = 1.0;
+  o.start_y_m = 0.0;
+  TreatmentMap map(o);
+  // Centres of columns 49..52 (x −0.005, 0.005, 0.015, 0.025) and rows 10..11 (y 0.105, 0.115).
+  map.MarkTreated(-0.006, 0.026, 0.101, 0.119);
+  int treated = 0;
+  for (int r = 0; r < map.rows(); ++r) {
+    for (int c = 0; c < map.columns(); ++c) treated += map.Treated(c, r);
+  }
+  EXPECT_EQ(treated, 8);
+  EXPECT_TRUE(map.Treated(49, 10));
+  EXPECT_FALSE(map.Treated(48, 10));
+  EXPECT_TRUE(map.Treated(52, 11));
+  EXPECT_FALSE(map.Treated(53, 11));
+  EXPECT_FALSE(map.Treated(50, 12));
+  EXPECT_EQ(map.ClassOf(50, 10), CellClass::kSoil);  // treating does not vote
+  map.Clear();
+  EXPECT_FALSE(map.Treated(50, 10));
+}
+
+TEST(TreatmentMap, BadOptionsAreNamed) {
+  TreatmentMapOptions o;
+  o.cell_m = 0.0;
+  o.majority_threshold = 0;
+  try {
+    TreatmentMap map(o);
+    FAIL();
+  } catch (const InvalidOptionsError& e) {
+    EXPECT_NE(std::string(e.what()).find("cell_m"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("majority_threshold"), std::string::npos);
+  }
+}
+
+SchedulerOptions Bar() {
+  SchedulerOptions o;
+  o.bar.nozzles = 8;
+  o.bar.nozzle_spacing_m = 0.05;
+  o.bar.bar_offset_m = 0.5;
+  o.bar.valve_latency_s = 0.05;
+  return o;
+}
+
+SafetyInputs Healthy(int64_t now) {
+  SafetyInputs s;
+  s.pose_utime = now;
+  s.last_frame_utime = now;
+  s.tracking = true;
+  return s;
+}
+
+TEST(NozzleScheduler, OpensAheadByTheLatencyOverCropCells) {
+  TreatmentMapOptions mo;
+  mo.majority_threshold = 1;
+  TreatmentMap map(mo);
+  // Crop cells around bed (0.125, 1.0): under nozzle 6 (x = 0.125).
+  map.AddFootprint(Square(0.125, 1.0, 0.02), true);
+  std::vector<uint64_t> masks;
+  NozzleScheduler scheduler(Bar(), [&](int64_t, uint64_t m) { masks.push_back(m); });
+  EXPECT_NEAR(scheduler.options().bar.Nozzle(6).x(), 0.125, 1e-12);
+  const double speed = 0.5;
+  // The nozzle is at bed y = s − 0.5; at the latency it will be 25 mm further.
+  // Open when [s − 0.5 + 0.025, + 10 mm] holds a crop cell centre (0.98..1.02).
+  int first_open = -1;
+  for (int k = 0; k < 200; ++k) {
+    const double s = 1.3 + k * 0.001;
+    const TickResult r = scheduler.Tick(k, Pose(0.0, 0.0, s, speed), map, Healthy(k));
+    if (r.open_mask && first_open < 0) {
+      first_open = k;
+      EXPECT_EQ(r.open_mask, uint64_t{1} << 6);
+      ASSERT_EQ(r.opened.size(), 1u);
+      EXPECT_EQ(r.opened[0].nozzle, 6);
+    }
+  }
+  // The strip [s − 0.475, s − 0.465] first reaches the lowest crop cell
+  // centre at or above 0.98 (within one 1 mm step of s).
+  int column = 0, row = 0;
+  ASSERT_TRUE(map.CellOf({0.125, 0.98 + 0.5 * mo.cell_m}, column, row));
+  const double lowest = map.CellCentre(column, row).y();
+  ASSERT_EQ(map.ClassOf(column, row), CellClass::kCrop);
+  ASSERT_EQ(map.ClassOf(column, row - 1), CellClass::kSoil);
+  ASSERT_GE(first_open, 0);
+  const double s_open = 1.3 + first_open * 0.001;
+  EXPECT_NEAR(s_open - 0.465, lowest, 0.0011);
+  EXPECT_EQ(masks.size(), 200u);
+}
+
+TEST(NozzleScheduler, FailSafeClosesEveryNozzleAndSaysWhy) {
+  TreatmentMapOptions mo;
+  mo.majority_threshold = 1;
+  TreatmentMap map(mo);
+  map.AddFootprint(Square(0.0, 0.0, 1.0), true);  // crop everywhere under the bar
+  uint64_t last = 0;
+  NozzleScheduler scheduler(Bar(), [&](int64_t, uint64_t m) { last = m; });
+  const BedPose pose = Pose(0.0, 0.0, 0.5, 0.5);
+  const int64_t now = 1'000'000;
+  EXPECT_EQ(scheduler.Tick(now, pose, map, Healthy(now)).open_mask, 0xFFu);
+  EXPECT_EQ(last, 0xFFu);
+  struct Case {
+    SafetyInputs in;
+    uint32_t reason;
+    const char* text;
+  };
+  std::vector<Case> cases;
+  SafetyInputs stale = Healthy(now);
+  stale.pose_utime = now - 150'000;
+  cases.push_back({stale, kPoseStale, "pose stale (150 ms > 100 ms)"});
+  SafetyInputs camera = Healthy(now);
+  camera.last_frame_utime = now - 600'000;
+  cases.push_back({camera, kCameraLost, "camera lost (no frame for 600 ms > 500 ms)"});
+  SafetyInputs fault = Healthy(now);
+  fault.camera_ok = false;
+  cases.push_back({fault, kCameraLost, "camera lost (source reports a fault)"});
+  SafetyInputs odo = Healthy(now);
+  odo.odometry_valid = false;
+  cases.push_back({odo, kOdometryInvalid, "odometry invalid (last sample refused)"});
+  SafetyInputs lost = Healthy(now);
+  lost.tracking = false;
+  cases.push_back({lost, kTrackerLost, "tracker has lost the grid"});
+  for (const Case& c : cases) {
+    const TickResult r = scheduler.Tick(now, pose, map, c.in);
+    EXPECT_EQ(r.open_mask, 0u) << c.text;
+    EXPECT_EQ(last, 0u) << c.text;
+    EXPECT_EQ(r.fail_reasons, c.reason) << c.text;
+    ASSERT_EQ(r.messages.size(), 1u);
+    EXPECT_EQ(r.messages[0], c.text);
+  }
+  // A pose exactly 100 ms old is still fresh.
+  SafetyInputs edge = Healthy(now);
+  edge.pose_utime = now - 100'000;
+  EXPECT_EQ(scheduler.Tick(now, pose, map, edge).fail_reasons, 0u);
+}
+
+TEST(NozzleScheduler, WeedModeSpraysWeedCellsOnly) {
+  TreatmentMapOptions mo;
+  mo.majority_threshold = 1;
+  TreatmentMap map(mo);
+  map.AddFootprint(Square(0.125, 0.0, 0.03), true);
+  map.AddFootprint(Square(-0.125, 0.0, 0.03), false);
+  SchedulerOptions o = Bar();
+  o.mode = SprayMode::kWeed;
+  NozzleScheduler scheduler(o);
+  // Bar over bed y = 0: s = 0.5 (latency lead at speed 0 is nil).
+  const TickResult r = scheduler.Tick(0, Pose(0.0, 0.0, 0.5, 0.0), map, Healthy(0));
+  EXPECT_EQ(r.open_mask, uint64_t{1} << 1);  // x = −0.125
+}
+
+TEST(NozzleScheduler, BadOptionsAreNamed) {
+  SchedulerOptions o;
+  o.bar.nozzles = 65;
+  o.fail_safe.max_pose_age_s = 0.0;
+  try {
+    NozzleScheduler s(o);
+    FAIL();
+  } catch (const InvalidOptionsError& e) {
+    EXPECT_NE(std::string(e.what()).find("bar.nozzles"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fail_safe.max_pose_age_s"), std::string::npos);
+  }
+}
+
+TEST(SimulatedBar, ShotsLandWhereTheNozzleWasAfterTheLatency) {
+  SprayBarOptions bar;
+  bar.nozzles = 4;
+  bar.nozzle_spacing_m = 0.1;
+  bar.bar_offset_m = 0.5;
+  SimulatedBar sim(bar, 0.04, 0.02);
+  // Vehicle drives along field y at 1 m/s from y = 0, heading 0.
+  std::vector<FieldPose> track;
+  for (int k = 0; k <= 100; ++k) track.push_back({k * 10'000, 0.0, k * 0.01, 0.0});
+  sim.Command(100'000, 0b0100);
+  sim.Command(120'000, 0b0100);
+  sim.Command(140'000, 0);
+  const std::vector<Shot> shots = sim.Shots(track);
+  ASSERT_EQ(shots.size(), 1u);
+  EXPECT_EQ(shots[0].nozzle, 2);
+  EXPECT_EQ(shots[0].open_utime, 140'000);
+  EXPECT_EQ(shots[0].close_utime, 180'000);
+  ASSERT_EQ(shots[0].path_field_m.size(), 3u);
+  EXPECT_NEAR(shots[0].path_field_m.front().x(), 0.05, 1e-12);
+  EXPECT_NEAR(shots[0].path_field_m.front().y(), 0.14 - 0.5, 1e-9);
+  EXPECT_NEAR(shots[0].path_field_m.back().y(), 0.18 - 0.5, 1e-9);
+  // Heading +90° (forward axis along −x): vehicle x (right) is field +y.
+  const FieldPose turned{0, 1.0, 2.0, M_PI / 2};
+  const Eigen::Vector2d f = VehicleToField(turned, {0.1, 0.0});
+  EXPECT_NEAR(f.x(), 1.0, 1e-12);
+  EXPECT_NEAR(f.y(), 2.1, 1e-12);
+}
+
+TEST(PlantRegistry, MergesObservationsAndExplains) {
+  PlantRegistry reg;
+  classify::ClassifierOptions c;
+  classify::BlobDecision crop;
+  crop.crop = true;
+  crop.area_m2 = 0.05;
+  crop.gamma2 = 0.5;
+  crop.distance_m = 0.012;
+  classify::BlobDecision weed;
+  weed.area_m2 = 0.001;
+  weed.gamma2 = 40.0;
+  weed.distance_m = 0.2;
+  EXPECT_EQ(reg.Observe({0.0, 1.0}, crop, c), 0);
+  EXPECT_EQ(reg.Observe({0.01, 1.01}, crop, c), 0);
+  EXPECT_EQ(reg.Observe({0.2, 1.0}, weed, c), 1);
+  ASSERT_EQ(reg.records().size(), 2u);
+  EXPECT_NEAR(reg.records()[0].bed_m.x(), 0.005, 1e-12);
+  EXPECT_EQ(reg.records()[0].crop_votes, 2);
+  reg.MarkSprayed({0, -0.01, 0.02, 0.99, 1.0});
+  TreatmentMapOptions mo;
+  mo.majority_threshold = 1;
+  TreatmentMap map(mo);
+  map.AddFootprint(Square(0.005, 1.005, 0.02), true);
+  reg.Explain(map, SprayMode::kCrop, c);
+  const PlantRecord& a = reg.records()[0];
+  EXPECT_TRUE(a.sprayed);
+  EXPECT_EQ(a.map_class, CellClass::kCrop);
+  EXPECT_NE(a.why.find("crop (2 crop / 0 weed votes)"), std::string::npos) << a.why;
+  EXPECT_NE(a.why.find("12 mm from the predicted crop"), std::string::npos) << a.why;
+  const PlantRecord& b = reg.records()[1];
+  EXPECT_FALSE(b.sprayed);
+  EXPECT_NE(b.why.find("below the size filter"), std::string::npos) << b.why;
+  EXPECT_NE(b.why.find("not sprayed"), std::string::npos) << b.why;
+}
+
+}  // namespace
+}  // namespace plantscale::treatment

@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# plantscale detect-rows / evaluate rows (issue 11): outputs and their
+# contract (CSV header row,v,u; JSON vanishing point, spacing, confidence),
+# a folder with progress, no-row images (bare soil, sky), bad input.
+# usage: rows_cli_test.sh PLANTSCALE WORKDIR
+set -euo pipefail
+bin="$1"; work="$2"
+rm -rf "$work"; mkdir -p "$work/in" "$work/empty"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# Photographs made by the simulator (a clone has no photographs): a low,
+# perspective view of preset C (horizon in view) and a colour view.
+cat > "$work/low.yaml" <<YAML
+camera: thesis
+camera_overrides: {tilt_deg: 12, virtual_plane_height_m: 0.1}
+field: {crop_radius_m: 0.12, weed_density_per_m2: 4.0}
+length_m: 2
+YAML
+"$bin" simulate --preset "$work/low.yaml" --length-m 2 --every 10 --out "$work/sim" --quiet >/dev/null
+cp "$work/sim/frames/000000.png" "$work/in/low.png"
+"$bin" simulate --preset sanchiz_pla --length-m 2 --every 10 --out "$work/simrgb" --quiet >/dev/null
+cp "$work/simrgb/frames/000000.png" "$work/in/colour.png"
+
+# No rows: bare soil (brown noise) and a clear sky, written as PNG by Python.
+python3 - "$work/in" <<'PY'
+import random, struct, sys, zlib
+def png(path, w, h, pixel):
+    raw = b"".join(b"\0" + b"".join(bytes(pixel(x, y)) for x in range(w)) for y in range(h))
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+random.seed(3)
+def soil(x, y):
+    g = random.randint(-25, 25)
+    return (max(0, min(255, 120 + g)), max(0, min(255, 90 + g)), max(0, min(255, 65 + g)))
+png(sys.argv[1] + "/soil.png", 320, 240, soil)
+png(sys.argv[1] + "/sky.png", 200, 150, lambda x, y: (110 + y // 3, 160 + y // 4, 235))
+PY
+
+# Bad input: empty, truncated, not an image, a missing file, an empty folder.
+: > "$work/in/zero.jpg"
+head -c 3000 "$work/in/low.png" > "$work/in/truncated.png"
+echo "not an image" > "$work/in/text.png"
+
+set +e
+"$bin" detect-rows "$work/in" "$work/empty" "$work/missing.png" --out "$work/out" \
+  >"$work/stdout" 2>"$work/stderr"
+rc=$?
+set -e
+[[ $rc -eq 1 ]] || fail "exit code $rc with bad images, want 1"
+for f in zero.jpg truncated.png text.png missing.png; do
+  grep -q "$f" "$work/stderr" || fail "no error naming $f"
+done
+grep -q "empty: no PNG or JPEG images" "$work/stderr" || fail "no error for the empty folder"
+grep -q "detect-rows.*100%" "$work/stderr" || fail "no progress on standard error"
+grep -q "4 image(s)" "$work/stdout" || fail "the batch did not go on past the bad files"
+for n in low colour soil sky; do
+  for ext in csv png json; do
+    [[ -s "$work/out/${n}_rows.$ext" ]] || fail "missing ${n}_rows.$ext"
+  done
+  head -1 "$work/out/${n}_rows.csv" | grep -q "^row,v,u$" || fail "$n: CSV header"
+  for key in vanishing_point spacing_bottom_px confidence; do
+    grep -q "\"$key\"" "$work/out/${n}_rows.json" || fail "$n: JSON key $key missing"
+  done
+done
+ls "$work/out" | grep -q partial && fail "staging files left behind"
+
+# The perspective frame: three rows (the simulated bed), a vanishing point
+# above the rows, rows from the bottom image row up, u measured in pixels.
+python3 - "$work/out" <<'PY'
+import csv, json, sys
+out = sys.argv[1]
+j = json.load(open(out + "/low_rows.json"))
+assert j["confidence"] > 0.2, j
+assert j["row_count"] == 3, j
+assert j["vanishing_point"] is not None and j["vanishing_point"]["v"] < 200, j
+assert 60 < j["spacing_bottom_px"] < 200, j
+rows = list(csv.DictReader(open(out + "/low_rows.csv")))
+assert {r["row"] for r in rows} == {"0", "1", "2"}, "rows numbered 0..2"
+assert rows[0]["v"] == "479", "the CSV starts at the bottom image row"
+bottom = [float(r["u"]) for r in rows if r["v"] == "479"]
+assert bottom == sorted(bottom), "rows left to right"
+assert abs(bottom[1] - 320) < 80, bottom
+top = min(int(r["v"]) for r in rows)
+assert top < 300, top
+# No rows: confidence 0, no rows, an empty CSV (header only).
+for n in ("soil", "sky"):
+    j = json.load(open(out + "/" + n + "_rows.json"))
+    assert j["confidence"] == 0 and j["row_count"] == 0 and j["rows"] == [], (n, j)
+    assert j["vanishing_point"] is None and "reason" in j, (n, j)
+    assert open(out + "/" + n + "_rows.csv").read() == "row,v,u\n", n
+print("rows outputs: ok")
+PY
+
+# Only good images: exit 0.
+"$bin" detect-rows "$work/in/low.png" --out "$work/out2" --quiet >/dev/null \
+  || fail "exit code on a good image"
+
+# evaluate rows --json: the contract's key, and a real score.
+"$bin" evaluate rows --preset C --seeds 1 --frames 3 --json > "$work/eval.json"
+python3 - "$work/eval.json" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+for key in ("preset", "crda_mean", "frames", "image_rows_scored"):
+    assert key in j, key
+assert j["frames"] == 3 and j["image_rows_scored"] > 300, j
+assert j["crda_mean"] >= 0.85, j
+PY
+set +e
+"$bin" evaluate rows --preset no_such_preset --json >/dev/null 2>"$work/stderr4"
+rc=$?
+set -e
+[[ $rc -ne 0 ]] && grep -qi "no_such_preset" "$work/stderr4" || fail "unknown preset must fail clearly"
+echo "rows CLI: ok"

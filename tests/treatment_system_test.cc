@@ -1,0 +1,103 @@
+// Crop/weed classification, the treatment map and spraying on the
+// calibrated presets (issue 6), with the thesis's chain (its tracker,
+// adaptive threshold, whole bounding boxes, table 7.2's classifier) on the
+// same frames. Fixed seeds. The bounds guard the figures reached now (see
+// README); where they fall short of the issue's targets the comment says so.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "app/config_loader.h"
+#include "app/treatment_eval.h"
+
+namespace plantscale::app {
+namespace {
+
+TreatmentEvaluation Evaluate(const char* preset, int seeds, double length_m, bool thesis) {
+  TreatmentEvalOptions o;
+  o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
+  if (length_m > 0) o.sim.length_m = length_m;
+  o.seeds = seeds;
+  o.treatment = OurTreatmentOptions(o.sim);
+  o.baseline_thesis = thesis;
+  return EvaluateTreatment(o);
+}
+
+TEST(TreatmentSystem, FieldSprayCrop) {
+  const TreatmentEvaluation e = Evaluate("field", 5, 0.0, true);
+  ASSERT_TRUE(e.thesis);
+  const TreatmentMetrics& m = e.ours;
+  ASSERT_GE(m.crop_plants, 1000);  // issue: ≥ 1000 crop plants over the seeds
+  EXPECT_EQ(e.mode, "crop");
+  // Issue target 99.5 %; reached 99.27 % (8 of 1103 missed).
+  EXPECT_GE(m.crop_hit_rate, 0.99);
+  // Issue: |bias| ≤ 3 mm on both axes (thesis 9.7 / −23.1 mm): met.
+  EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
+  EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
+  // Issue target RMS ≤ 10 mm; reached 28.5 mm along, 12.6 mm across (the
+  // root itself is ±10 mm from the leaves' centre by the crop's lean), inside
+  // the thesis's 34.4 / 33.6 mm.
+  EXPECT_LE(m.placement_rms_along_m, 0.032);
+  EXPECT_LE(m.placement_rms_across_m, 0.015);
+  EXPECT_LE(m.centre_rms_across_m, 0.012);
+  // Issue target ≤ 15 % of the bed; reached 16.3 % (thesis 33 %).
+  EXPECT_LE(m.treated_area_fraction, 0.18);
+  EXPECT_GE(m.treated_area_fraction, 0.08);  // a real spray pattern, not nothing
+  // Weeds clear of the crop's leaves are rarely sprayed (≈ 3.6 %); weeds
+  // under a crop's leaves share its spray (issue target 0.5 % not met).
+  EXPECT_LE(m.weed_hit_rate_clear, 0.06);
+  EXPECT_LE(m.weed_hit_rate, 0.3);
+  // Never sprayed while the fail-safe holds the bar closed: at most the
+  // initialisation frames.
+  EXPECT_LT(m.ticks_fail_safe, m.ticks / 50);
+  // Against the thesis's chain on the same frames: far less of the bed and
+  // of the weeds sprayed.
+  EXPECT_LT(m.treated_area_fraction, 0.5 * e.thesis->treated_area_fraction);
+  EXPECT_LT(m.weed_hit_rate, 0.6 * e.thesis->weed_hit_rate);
+  EXPECT_GT(m.crop_pixel_rate, e.thesis->crop_pixel_rate);
+  EXPECT_LT(m.placement_rms_along_m, e.thesis->placement_rms_along_m);
+}
+
+TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
+  TreatmentEvalOptions o;
+  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
+  o.sim.length_m = 15.0;
+  o.seeds = 1;
+  o.treatment = OurTreatmentOptions(o.sim);
+  o.treatment.scheduler.mode = treatment::SprayMode::kWeed;
+  const TreatmentEvaluation e = EvaluateTreatment(o);
+  EXPECT_EQ(e.mode, "weed");
+  ASSERT_GT(e.ours.weeds, 50);
+  // 43 % of the weeds clear of the crop are sprayed now: small weeds are
+  // lost to segmentation (≈ 30 % of weed pixels labelled soil) or stay
+  // below the map's majority threshold. The crop is spared (1.6 % hit).
+  EXPECT_GT(e.ours.weed_hit_rate_clear, 0.35);
+  EXPECT_LT(e.ours.crop_hit_rate, 0.05);
+}
+
+// Crop pixels labelled crop (thesis tables 7.5–7.8: 95.1, 78.9, 81.7, 55.0 %
+// on A–D). Issue target ≥ 95 % on every preset: not met — segmentation alone
+// loses 7–15 % of the crop pixels to soil, and on A touching plants merge
+// into blobs whose centroid misses every association region (README). Now
+// 48 / 79 / 78 / 79 %; bounds 5 points below.
+struct PixelCase {
+  const char* preset;
+  double at_least;
+};
+
+class TreatmentPixels : public ::testing::TestWithParam<PixelCase> {};
+
+TEST_P(TreatmentPixels, CropPixelsLabelledCrop) {
+  const PixelCase c = GetParam();
+  const TreatmentEvaluation e = Evaluate(c.preset, 1, 10.0, false);
+  ASSERT_GT(e.ours.frames_classified, 50);
+  EXPECT_GE(e.ours.crop_pixel_rate, c.at_least) << c.preset;
+}
+
+INSTANTIATE_TEST_SUITE_P(Presets, TreatmentPixels,
+                         ::testing::Values(PixelCase{"A", 0.43}, PixelCase{"B", 0.74},
+                                           PixelCase{"C", 0.73}, PixelCase{"D", 0.74}),
+                         [](const auto& test_param) { return std::string(test_param.param.preset); });
+
+}  // namespace
+}  // namespace plantscale::app
