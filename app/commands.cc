@@ -5,6 +5,7 @@
 #include "app/rows_commands.h"
 #include "app/segment_commands.h"
 #include "app/simulate_commands.h"
+#include "app/spraybar_commands.h"
 #include "app/telemetry_commands.h"
 #include "app/tracking_commands.h"
 #include "app/treatment_commands.h"
@@ -22,6 +23,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddMotionCommands(registry_);
   AddRowsCommands(registry_);
   AddUiCommands(registry_);
+  AddSprayBarCommands(registry_);
 }
 
 }  // namespace plantscale::app

@@ -12,6 +12,8 @@
 #include "app/camera_source.h"
 #include "app/config_loader.h"
 #include "app/tracking_eval.h"
+#include "telemetry/can/spray_bar.h"
+#include "telemetry/can/spray_bar_stage.h"
 #include "telemetry/log.h"
 #include "telemetry/log_stats.h"
 #include "telemetry/replay.h"
@@ -54,9 +56,48 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
   cmd->add_option("--lcm-url", a.lcm_url,
                   "with --publish: LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
+  AddCanOption(cmd, a);
+}
+
+void AddCanOption(CLI::App* cmd, PublishArgs& a) {
+  cmd->add_option("--can", a.can,
+                  "SocketCAN interface of the spray bar (e.g. can0; telemetry/can/PROTOCOL.md), "
+                  "not with --fast; simulate also takes 'simulated' (a simulated bar)");
+}
+
+SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
+                              const telemetry::can::SprayBarOptions& options) {
+  namespace can = telemetry::can;
+  SprayBarEndpoint e;
+  if (args.can.empty()) return e;
+  if (args.can == kSimulatedBar) {
+    if (!allow_simulated) {
+      throw ConfigError("command line", "--can", "'simulated' only with simulate --publish");
+    }
+    auto [vehicle_end, bar_end] = can::CanFramePipe();
+    e.bar = std::make_unique<can::SprayBar>(std::move(vehicle_end), options, kSimulatedBar);
+    can::SimulatedBarOptions sim;
+    sim.num_nozzles = options.num_nozzles;
+    sim.ids = options.ids;
+    e.simulated = std::make_unique<can::SimulatedBar>(std::move(bar_end), sim);
+    return e;
+  }
+  if (args.fast) {
+    throw ConfigError("command line", "--can",
+                      "not with --fast: the spray bar's heartbeat watchdog needs real time");
+  }
+  e.bar = std::make_unique<can::SprayBar>(can::SprayBar::Open(args.can, options));
+  return e;
 }
 
 namespace {
+
+// The CAN bar has as many nozzles as the treatment scheduler's bar.
+tm::can::SprayBarOptions BarOptionsOfTreatment() {
+  tm::can::SprayBarOptions o;
+  o.num_nozzles = treatment::TreatmentOptions{}.scheduler.bar.nozzles;
+  return o;
+}
 
 using SourceFactory =
     std::function<std::unique_ptr<tm::FrameSource>(tm::Transport& transport, int64_t boot)>;
@@ -71,7 +112,8 @@ struct TrackerSetup {
 };
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
-               const std::string& title, const std::optional<TrackerSetup>& tracker = {}) {
+               const std::string& title, const SprayBarEndpoint& endpoint,
+               const std::optional<TrackerSetup>& tracker = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
@@ -89,6 +131,26 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
   clock = &runner;
   runner.ListenForCommands(*transport);  // start, pause and mode from the station
+  // The spray bar (--can): with the treatment stage (a calibrated camera)
+  // its scheduler drives the bar through the bar's sink every tick; without
+  // one the bar stage commands every nozzle closed each frame so the bar
+  // stays supervised. The bar stage goes before HealthStage, which reports
+  // its fail-safe state and faults; the simulated bar steps after the
+  // treatment stage has commanded it.
+  tm::can::SprayBar* bar = endpoint.bar.get();
+  treatment::NozzleSink nozzle_sink = tracker ? tracker->nozzle_sink : treatment::NozzleSink{};
+  if (bar != nullptr) {
+    const bool scheduler_drives_bar = tracker.has_value();
+    if (scheduler_drives_bar) {
+      const treatment::NozzleSink to_bar = bar->Sink();
+      const treatment::NozzleSink other = nozzle_sink;
+      nozzle_sink = [to_bar, other](int64_t utime, uint64_t mask) {
+        if (other) other(utime, mask);
+        to_bar(utime, mask);
+      };
+    }
+    runner.AddStage(std::make_unique<tm::can::SprayBarStage>(*bar, !scheduler_drives_bar));
+  }
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   runner.AddStage(std::make_unique<tm::HealthStage>());
   auto segmentation = std::make_unique<tm::SegmentationStage>(
@@ -100,9 +162,12 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
     const tm::TrackerStage& tracked = *grid;
     runner.AddStage(std::move(grid));
     runner.AddStage(std::make_unique<tm::TreatmentStage>(
-        tracker->camera, treatment::TreatmentOptions{}, *blobs, tracked, tracker->nozzle_sink));
+        tracker->camera, treatment::TreatmentOptions{}, *blobs, tracked, nozzle_sink));
   }
   runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
+  if (endpoint.simulated) {
+    runner.AddStage(std::make_unique<tm::can::SimulatedBarStage>(*endpoint.simulated));
+  }
   if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
   g_stop = false;
   std::signal(SIGINT, OnSignal);
@@ -115,6 +180,19 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
             << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
   PrintPublisherTraffic(publisher, s.seconds);
   if (log) std::cout << "  log               " << args.log << " (" << log->events() << " events)\n";
+  if (bar != nullptr) {
+    const tm::can::SprayBarStatus& b = bar->status();
+    std::cout << "  spray bar         " << bar->endpoint() << ": " << b.commands_sent
+              << " commands, " << b.acks << " acks, " << b.heartbeats << " heartbeats, "
+              << b.frames_rejected << " frames rejected, " << b.sequence_gaps << " sequence gaps"
+              << (b.failsafe ? ", fail-safe" : "") << '\n';
+    for (const std::string& line : bar->HealthFaults()) std::cout << "    " << line << '\n';
+  }
+  if (endpoint.simulated) {
+    std::cout << "  simulated bar     " << endpoint.simulated->commands().size()
+              << " commands received, " << endpoint.simulated->history().size()
+              << " valve changes, " << endpoint.simulated->errors().size() << " bad frames\n";
+  }
   return 0;
 }
 
@@ -124,17 +202,21 @@ struct RunArgs {
 };
 
 int Run(const RunArgs& a) {
+  const SprayBarEndpoint bar =
+      OpenSprayBar(a.publish, false, BarOptionsOfTreatment());  // before anything else
   return RunVehicle(
       a.publish,
       [&a](tm::Transport& t, int64_t boot) {
         return std::make_unique<CameraFrameSource>(a.camera, t, boot);
       },
-      false, "plantscale run: camera " + a.camera.camera);
+      false, "plantscale run: camera " + a.camera.camera, bar);
 }
 
 }  // namespace
 
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+  const SprayBarEndpoint bar =
+      OpenSprayBar(args, true, BarOptionsOfTreatment());  // before anything else
   sim::Simulator simulator(options);
   return RunVehicle(
       args,
@@ -144,7 +226,7 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
+      bar, TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
 }
 
 namespace {
@@ -222,6 +304,7 @@ void AddTelemetryCommands(CommandRegistry& registry) {
   rc->add_option("--lcm-url", run.publish.lcm_url,
                  "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
+  AddCanOption(rc, run.publish);
 
   ReplayArgs& replay = registry.Keep(ReplayArgs{});
   CLI::App* r = registry.Add("replay", "republish an LCM log with its original timing",

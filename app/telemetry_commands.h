@@ -1,13 +1,18 @@
 #pragma once
 // Telemetry commands: `replay` and `telemetry-stats`, and the publishing
-// mode of `simulate` (--publish, --fast, --lcm-url, --log), which runs the
-// vehicle runner (telemetry/runner.h) on the simulator.
+// mode of `simulate` (--publish, --fast, --lcm-url, --log, --can), which runs
+// the vehicle runner (telemetry/runner.h) on the simulator. With --can IFACE
+// the spray bar (telemetry/can) is opened on that interface before anything
+// else; a failure to open it ends the command with the reason.
 
 #include <CLI/CLI.hpp>
+#include <memory>
 #include <string>
 
 #include "app/command_registry.h"
 #include "engine/sim/simulator.h"
+#include "telemetry/can/simulated_bar.h"
+#include "telemetry/can/spray_bar.h"
 
 namespace plantscale::app {
 
@@ -16,9 +21,25 @@ struct PublishArgs {
   bool fast = false;
   std::string lcm_url;  // empty: LCM's default udpm:// group
   std::string log;      // empty: no log
+  std::string can;      // SocketCAN interface of the spray bar; empty: no bar
 };
 
 void AddPublishOptions(CLI::App* command, PublishArgs& args);
+// --can IFACE (in AddPublishOptions and on `run`).
+void AddCanOption(CLI::App* command, PublishArgs& args);
+// The spray bar of --can: a SocketCAN interface, or (simulate only) the
+// word `simulated` for a SimulatedBar in process over a socketpair.
+struct SprayBarEndpoint {
+  std::unique_ptr<telemetry::can::SprayBar> bar;  // nullptr: no --can
+  std::unique_ptr<telemetry::can::SimulatedBar> simulated;
+};
+inline constexpr char kSimulatedBar[] = "simulated";
+// Throws CanError naming the interface and why it cannot be opened;
+// ConfigError for --fast with a real interface, or `simulated` without
+// `allow_simulated`.
+// A simulated bar has options.num_nozzles nozzles.
+SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
+                              const telemetry::can::SprayBarOptions& options = {});
 // Runs the simulator through the vehicle runner and publishes; prints a
 // summary with the traffic per channel. Returns the exit code.
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args);

@@ -15,6 +15,9 @@
 #include <thread>
 #include <vector>
 
+#include "telemetry/can/protocol.h"
+#include "telemetry/can/simulated_bar.h"
+#include "telemetry/can/spray_bar.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 #include "telemetry/convert.h"
@@ -97,6 +100,37 @@ void BM_PublisherGridState(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_PublisherGridState);
+
+// Spray bar (telemetry/can): encode + decode of one nozzle command, and one
+// scheduler tick over a socketpair (command, simulated bar acknowledges,
+// vehicle reads the acknowledgement): the syscalls dominate.
+void BM_CanCommandEncodeDecode(benchmark::State& state) {
+  const can::ProtocolIds ids;
+  can::NozzleCommand c{0, 0, 0x5A, 200};
+  for (auto _ : state) {
+    ++c.seq;
+    const can_frame f = can::Encode(ids, c);
+    benchmark::DoNotOptimize(can::Decode(ids, f));
+  }
+}
+BENCHMARK(BM_CanCommandEncodeDecode);
+
+void BM_SprayBarTickOverSocketpair(benchmark::State& state) {
+  auto [vehicle_end, bar_end] = can::CanFramePipe();
+  can::SprayBar bar(std::move(vehicle_end), can::SprayBarOptions{}, "socketpair");
+  can::SimulatedBar sim(std::move(bar_end), can::SimulatedBarOptions{});
+  const auto sink = bar.Sink();
+  int64_t utime = 1'000'000'000;
+  uint64_t mask = 0;
+  for (auto _ : state) {
+    utime += 20'000;
+    mask = (mask + 1) & 0xFF;
+    sink(utime, mask);
+    sim.Step(utime);
+  }
+  state.counters["failsafe"] = bar.status().failsafe ? 1 : 0;
+}
+BENCHMARK(BM_SprayBarTickOverSocketpair);
 
 }  // namespace
 }  // namespace plantscale::telemetry
