@@ -152,7 +152,6 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
     runner.AddStage(std::make_unique<tm::can::SprayBarStage>(*bar, !scheduler_drives_bar));
   }
   runner.AddStage(std::make_unique<tm::OdometryStage>());
-  runner.AddStage(std::make_unique<tm::HealthStage>());
   auto segmentation = std::make_unique<tm::SegmentationStage>(
       vision::SegmenterOptions{}, tracker ? &tracker->camera : nullptr);
   const tm::SegmentationStage* blobs = segmentation.get();
@@ -164,6 +163,9 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
     runner.AddStage(std::make_unique<tm::TreatmentStage>(
         tracker->camera, treatment::TreatmentOptions{}, *blobs, tracked, nozzle_sink));
   }
+  // After every stage that reports faults or the fail-safe state this frame
+  // (the runner starts each frame's fault list afresh from the source).
+  runner.AddStage(std::make_unique<tm::HealthStage>());
   runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
   if (endpoint.simulated) {
     runner.AddStage(std::make_unique<tm::can::SimulatedBarStage>(*endpoint.simulated));
