@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "app/photo_segmentation.h"
+#include "engine/common/stats.h"
 #include "engine/vision/segmenter.h"
 
 namespace plantscale::app {
@@ -41,15 +42,6 @@ double CrdaScore(double u, double u_true, double d) {
 }
 
 namespace {
-
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const size_t i = static_cast<size_t>(std::floor(pos));
-  const size_t j = std::min(i + 1, v.size() - 1);
-  return v[i] + (pos - static_cast<double>(i)) * (v[j] - v[i]);
-}
 
 // True u of rows −1, 0, 1 of the bed per image row (NaN where not scored).
 struct TrueRows {

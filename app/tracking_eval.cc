@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "engine/common/stats.h"
 #include "engine/tracking/blob_features.h"
 
 namespace plantscale::app {
@@ -17,15 +18,6 @@ constexpr double kNeesLow = 0.2158;
 constexpr double kNeesHigh = 9.3484;
 
 int RowsEachSide(const sim::SimulatorOptions& s) { return (s.field.rows - 1) / 2; }
-
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const size_t i = static_cast<size_t>(std::floor(pos));
-  const size_t j = std::min(i + 1, v.size() - 1);
-  return v[i] + (pos - static_cast<double>(i)) * (v[j] - v[i]);
-}
 
 // One tracker under test on one run, with its error sums.
 struct Scorer {

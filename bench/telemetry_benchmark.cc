@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "engine/common/stats.h"
 #include "telemetry/can/protocol.h"
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
@@ -37,12 +38,6 @@ plantscale_grid_state_t SomeGrid() {
   e.lines_in_view = {0, 1, 2, 3, 4};
   e.covariance = geometry::Matrix5d::Identity() * 1e-4;
   return ToLcm(e);
-}
-
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<size_t>(p * static_cast<double>(v.size() - 1))];
 }
 
 // Each iteration publishes one grid state (stamped with the wall clock) and
