@@ -8,18 +8,8 @@ plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
 failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-expect() {  # expect CODE PATTERN -- command...
-  local code="$1" pattern="$2"
-  shift 3
-  local output status
-  output=$("$@" 2>&1)
-  status=$?
-  if [[ $status -ne $code ]]; then fail "'$*' exited $status, expected $code"; echo "$output" | tail -5; return; fi
-  if ! grep -qE -- "$pattern" <<<"$output"; then fail "'$*' output lacks /$pattern/"; echo "$output" | tail -5; return; fi
-  echo "ok: $* -> $status"
-}
+# shellcheck source=/dev/null
+source "$(dirname "$0")/../tests/cli_lib.sh"
 
 "$plantscale" simulate --preset field --length-m 3 --seed 4 --every 100 --quiet --out "$work/sim" >/dev/null \
   || { echo "FAIL: simulate"; exit 1; }

@@ -1,6 +1,5 @@
 # Shared helpers of the CLI contract scripts: `source tests/cli_lib.sh` after
-# setting `failures=0`. (The older scripts carry their own copies; new ones
-# source this.)
+# setting `failures=0`.
 
 fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 

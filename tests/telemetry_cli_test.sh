@@ -9,22 +9,8 @@ plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
 failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-expect() {  # expect CODE PATTERN -- command...
-  local code="$1" pattern="$2"
-  shift 3
-  local output status
-  output=$("$@" 2>&1)
-  status=$?
-  if [[ $status -ne $code ]]; then
-    fail "'$*' exited $status, expected $code"; echo "$output" | tail -5; return
-  fi
-  if ! grep -qE -- "$pattern" <<<"$output"; then
-    fail "'$*' output lacks /$pattern/"; echo "$output" | tail -5; return
-  fi
-  echo "ok: $* -> $status"
-}
+# shellcheck source=/dev/null
+source "$(dirname "$0")/cli_lib.sh"
 
 log="$work/run.lcmlog"
 expect 0 "PLANTSCALE_SIM_TRUTH +[0-9]+" -- "$plantscale" simulate --preset testbed --length-m 4 --seed 2 \
