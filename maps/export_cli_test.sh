@@ -22,6 +22,8 @@ ls -A "$out" | grep -q partial && fail "staging folder left in $out"
 gdalinfo "$out/map.tif" | grep -q 'ID\["EPSG",32630\]' || fail "gdalinfo: map.tif lacks EPSG:32630"
 gdalinfo "$out/map.tif" | grep -q "Overviews:" || fail "gdalinfo: map.tif has no overviews"
 gdalinfo "$out/map.tif" | grep -q "NoData Value=65535" || fail "gdalinfo: map.tif has no nodata"
+gdalinfo "$out/map_northup.tif" | grep -q "^Origin = " || fail "gdalinfo: map_northup.tif is not north-up"
+gdalinfo "$out/map_northup.tif" | grep -q 'ID\["EPSG",32630\]' || fail "gdalinfo: map_northup.tif lacks EPSG:32630"
 gdalinfo "$out/map.png" >/dev/null || fail "gdalinfo rejects map.png"
 for layer in plants rows treated_areas run_metadata; do
   ogrinfo -so "$out/map.gpkg" "$layer" | grep -q "Feature Count: [1-9]" || fail "ogrinfo: map.gpkg layer $layer empty or unreadable"
