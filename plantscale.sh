@@ -57,7 +57,10 @@ case "$command" in
     ensure_packages
     build ON
     cd build
-    xvfb-run -a ctest --output-on-failure --parallel "$(nproc)" --timeout 900
+    # -noreset: an X server resets when its last client leaves, and a test
+    # that connects during the reset aborts ("bad X server connection").
+    xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \
+      ctest --output-on-failure --parallel "$(nproc)" --timeout 900
     ;;
   *) usage ;;
 esac

@@ -109,7 +109,8 @@ int Wait(pid_t pid) {
 // calls race for display numbers). Returns only when that is not possible.
 void ReexecUnderXvfb(const std::string& self, const DemoArgs& a) {
   if (ui::DisplayAvailable() || !OnPath("xvfb-run")) return;
-  std::vector<std::string> args{"xvfb-run", "-a", self, "demo-system", "--out", a.out, "--preset", a.preset,
+  // -noreset: the server must not reset between the station and the report.
+  std::vector<std::string> args{"xvfb-run", "-a", "-s", "-screen 0 1280x1024x24 -noreset", self, "demo-system", "--out", a.out, "--preset", a.preset,
                                 "--length-m", std::to_string(a.length_m), "--lcm-url", a.lcm_url,
                                 "--origin", a.origin};
   if (a.real_time) args.push_back("--real-time");
