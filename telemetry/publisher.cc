@@ -9,7 +9,9 @@ namespace plantscale::telemetry {
 
 std::map<std::string, ChannelLimit> PublisherOptions::DefaultChannelLimits() {
   using namespace channels;
-  return {{kGrid, {12.5, false}},     {kPlants, {12.5, false}},      {kMapTiles, {0.0, false}},
+  // Map tiles are sent once, when the bar has passed them: one dropped is a
+  // hole in the map for good, so they are never dropped by the budget.
+  return {{kGrid, {12.5, false}},     {kPlants, {12.5, false}},      {kMapTiles, {0.0, true}},
           {kNozzles, {12.5, true}},   {kHealth, {2.0, true}},        {kThumbnail, {2.0, false}},
           {kEvents, {0.0, true}},     {kOdometry, {12.5, false}},    {kPose, {12.5, false}},
           {kSimTruth, {12.5, false}}, {kSimTruthPose, {12.5, false}}};

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
+#include <plantscale_lcmtypes/plantscale_map_tile_t.hpp>
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
@@ -81,6 +82,32 @@ TEST(Publisher, BudgetDropsBulkButNeverEssentialMessages) {
   EXPECT_EQ(p.counters().at(channels::kThumbnail).dropped_budget, 100 - thumbs);
   EXPECT_EQ(p.counters().at(channels::kEvents).sent, 100);
   EXPECT_EQ(p.total_dropped(), 100 - thumbs);
+}
+
+// A tile is sent once, when the bar has passed it: over budget the
+// thumbnails go, never a tile.
+TEST(Publisher, MapTilesAreNeverDroppedByTheBudget) {
+  RecordingTransport t;
+  PublisherOptions o;
+  o.budget_kbit_s = 8.0;  // 1 kB/s
+  o.burst_s = 0.5;
+  Publisher p(t, o);
+  for (int i = 0; i < 50; ++i) {
+    const int64_t utime = 500'000LL * i;
+    p.Publish(channels::kThumbnail, Thumbnail(utime, 2000));
+    for (int k = 0; k < 4; ++k) {
+      plantscale_map_tile_t tile{};
+      tile.utime = utime;
+      tile.tile_x = k;
+      tile.tile_y = i;
+      tile.width = tile.height = 16;
+      tile.cells.assign(256, 1);
+      tile.num_bytes = 256;
+      EXPECT_TRUE(p.Publish(channels::kMapTiles, tile)) << i << "," << k;
+    }
+  }
+  EXPECT_EQ(p.counters().at(channels::kMapTiles).sent, 200);
+  EXPECT_GT(p.counters().at(channels::kThumbnail).dropped_budget, 40);
 }
 
 TEST(Publisher, InvalidOptionsNameTheKey) {
