@@ -1,6 +1,7 @@
 #include "telemetry/runner.h"
 
 #include <gtest/gtest.h>
+#include <plantscale_lcmtypes/plantscale_map_tile_t.hpp>
 
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
@@ -118,6 +119,27 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
   }
   EXPECT_GT(crops, 10);
   EXPECT_GE(sprayed, 0.8 * crops) << sprayed << " of " << crops;
+  // The tiles: treated cells where the bar sprayed, soil only where the
+  // camera looked (the map behind the start is unknown, not soil).
+  std::map<int, int> cells;
+  double soil_min_y = 1e9;
+  for (const auto& [id, tile] : snap.tiles) {
+    for (int r = 0; r < tile.height; ++r) {
+      for (int c = 0; c < tile.width; ++c) {
+        const uint8_t v = tile.cells[static_cast<size_t>(r * tile.width + c)];
+        ++cells[v];
+        if (v == plantscale_map_tile_t::CELL_SOIL) {
+          soil_min_y = std::min(soil_min_y, tile.origin_m.y() + (r + 0.5) * tile.resolution_m);
+        }
+      }
+    }
+  }
+  EXPECT_GT(cells[plantscale_map_tile_t::CELL_TREATED], 100);
+  EXPECT_GT(cells[plantscale_map_tile_t::CELL_SOIL], 1000);
+  EXPECT_GT(cells[plantscale_map_tile_t::CELL_UNKNOWN], 1000);
+  // The thesis camera's view starts about 0.5 m ahead of the vehicle, which
+  // starts tracking at bed y ≈ 0: nothing behind it was seen.
+  EXPECT_GT(soil_min_y, 0.0);
 }
 
 TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {
