@@ -163,7 +163,7 @@ void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publish
 namespace {
 
 constexpr int kTileCells = 64;
-constexpr int64_t kPlantListPeriodUs = 400'000;
+constexpr int64_t kPlantListPeriodUs = 500'000;
 
 uint8_t TileCell(treatment::CellClass c) {
   switch (c) {
@@ -311,7 +311,7 @@ bool TreatmentStage::Observed(int column, int row) const {
   return row >= 0 && i < observed_.size() && observed_[i] != 0;
 }
 
-// Plants whose record changed since the last message, every 0.4 s of
+// Plants whose record changed since the last message, every 0.5 s of
 // message time (the list is the largest channel: it must fit the budget),
 // leaving out records seen only once (leaf fragments, noise).
 void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
