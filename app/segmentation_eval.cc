@@ -80,8 +80,8 @@ void ScoreFrame(const cv::Mat& image, const cv::Mat& labels, const cv::Mat& vali
   vision::AdaptiveScore(raw, vision::ComputeInterpolatedMean(raw), score);
   acc.adaptive.AddImage(score, labels, valid);
   acc.ours_threshold = segmenter.Score(score);
-  if (segmenter.options().method == vision::ThresholdMethod::kFixed ||
-      segmenter.options().method == vision::ThresholdMethod::kOtsu) {
+  if (segmenter.used_method() == vision::ThresholdMethod::kFixed ||
+      segmenter.used_method() == vision::ThresholdMethod::kOtsu) {
     score *= 1.0 / 32.0;  // grey levels into the histogram's range
     acc.ours_threshold /= 32.0;
   }

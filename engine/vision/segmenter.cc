@@ -70,16 +70,27 @@ void Segmenter::Threshold(const cv::Mat& image) {
     result_.plant_image = *plant;  // a header: no copy
   }
   const cv::Mat& grey = result_.plant_image;
-  switch (options_.method) {
+  ThresholdMethod method = options_.method;
+  double otsu_floor = options_.otsu_floor;
+  if (plant == &index_ && method == ThresholdMethod::kLocal) {
+    // The local soil level is a reflectance ratio (plant ≥ α × soil), made
+    // for near-infrared. A colour index is a difference about neutral grey
+    // (127.5): soil sits there, so α × soil is past white and nothing would
+    // be plant. Colour frames take Otsu on the index above a neutral floor.
+    method = ThresholdMethod::kOtsu;
+    otsu_floor = std::max(otsu_floor, kColourIndexFloor);
+  }
+  used_ = method;
+  switch (method) {
     case ThresholdMethod::kFixed:
       FixedThreshold(grey, options_.fixed_threshold, result_.mask);
       result_.threshold_at_top = result_.threshold_at_bottom = options_.fixed_threshold;
       break;
     case ThresholdMethod::kOtsu:
       result_.threshold_at_top = result_.threshold_at_bottom = OtsuThreshold(grey, result_.mask);
-      if (result_.threshold_at_top < options_.otsu_floor) {
-        FixedThreshold(grey, options_.otsu_floor, result_.mask);
-        result_.threshold_at_top = result_.threshold_at_bottom = options_.otsu_floor;
+      if (result_.threshold_at_top < otsu_floor) {
+        FixedThreshold(grey, otsu_floor, result_.mask);
+        result_.threshold_at_top = result_.threshold_at_bottom = otsu_floor;
       }
       break;
     case ThresholdMethod::kAdaptive: {
@@ -102,7 +113,7 @@ void Segmenter::Threshold(const cv::Mat& image) {
 double Segmenter::Score(cv::Mat& score) {
   const cv::Mat& grey = result_.plant_image;
   PLANTSCALE_CHECK(!grey.empty(), "Score() before Process()");
-  switch (options_.method) {
+  switch (used_) {
     case ThresholdMethod::kFixed:
     case ThresholdMethod::kOtsu:
       grey.convertTo(score, CV_32F);

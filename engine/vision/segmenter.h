@@ -71,6 +71,10 @@ class Segmenter {
 
   const SegmenterOptions& options() const { return options_; }
 
+  // The method the last frame was thresholded with: options().method, except
+  // that a colour frame under kLocal takes kOtsu (see segmenter.cc).
+  ThresholdMethod used_method() const { return used_; }
+
  private:
   void Threshold(const cv::Mat& image);
 
@@ -78,7 +82,12 @@ class Segmenter {
   BlobExtractor blobs_;
   LocalThreshold local_;
   cv::Mat index_;
+  ThresholdMethod used_ = ThresholdMethod::kLocal;  // by the last frame
   Segmentation result_;
 };
+
+// Lowest Otsu threshold on a colour index for a colour frame under the local
+// method: ExG ≥ 0.05, visibly greener than neutral grey (127.5).
+inline constexpr double kColourIndexFloor = 127.5 + 127.5 * 0.05;
 
 }  // namespace plantscale::vision

@@ -60,5 +60,38 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
   EXPECT_NEAR(big_blobs, big_crops, 2);
 }
 
+// A colour camera with the product's default options: the local soil-level
+// ratio would put the threshold past white on a colour index (soil at
+// neutral 127.5), so colour frames take Otsu above the neutral floor.
+TEST(Segmenter, ColourFrameWithTheDefaultOptions) {
+  sim::SimulatorOptions o;
+  o.camera = geometry::testing::ThesisCamera();
+  o.field.crop_radius_m = 0.14;
+  o.render.kind = sim::ImageKind::kRgb;
+  o.render.leaf_shadow_fraction = 0.2;
+  o.seed = 4;
+  sim::Simulator simulator(o);
+  sim::SimFrame frame;
+  for (int i = 0; i < 20; ++i) ASSERT_TRUE(simulator.Next(frame));
+  ASSERT_EQ(frame.rendered.image.type(), CV_8UC3);
+  Segmenter segmenter({});
+  const Segmentation& s = segmenter.Process(frame.rendered.image, simulator.camera());
+  EXPECT_EQ(segmenter.used_method(), ThresholdMethod::kOtsu);
+  EXPECT_GE(s.threshold_at_top, kColourIndexFloor);
+  const cv::Mat plant = frame.rendered.labels != 0;
+  const double tp = cv::countNonZero(s.mask & plant);
+  const double fp = cv::countNonZero(s.mask & ~plant);
+  EXPECT_GT(tp / cv::countNonZero(plant), 0.9);
+  EXPECT_GT(tp / (tp + fp), 0.95);
+  EXPECT_GT(s.blobs.size(), 3u);
+  // A grey frame afterwards is thresholded by the configured local method again.
+  sim::SimulatorOptions g = o;
+  g.render.kind = sim::ImageKind::kNir;
+  sim::Simulator grey(g);
+  ASSERT_TRUE(grey.Next(frame));
+  segmenter.Process(frame.rendered.image);
+  EXPECT_EQ(segmenter.used_method(), ThresholdMethod::kLocal);
+}
+
 }  // namespace
 }  // namespace plantscale::vision
