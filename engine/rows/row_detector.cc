@@ -150,6 +150,9 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     }
   }
 
+  double total_mass = 0.0;
+  for (const float m : profiles_) total_mass += static_cast<double>(m);
+
   // The s histogram over [−W, 2W) for one geometry, from the bands with
   // Δv ≤ max_dv whose rows are not too compressed. Each column's mass is
   // spread over its stretched width so that stretching adds no holes.
@@ -400,7 +403,11 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     }
     BandComb r;
     if (mass <= 0.0 || z_abs <= 0.0) return r;
-    r.coherence = std::abs(z_sum) / mass;
+    // Coherence over all the image's plant matter, not only the bands this
+    // geometry can use: a vanishing point placed low in the image (or a
+    // narrow comb) drops the upper bands, and must not be rewarded for
+    // explaining less of the image.
+    r.coherence = std::abs(z_sum) / std::max(mass, total_mass);
     r.alignment = std::abs(z_sum) / z_abs;
     double phase = -std::arg(z_sum) * d / (2.0 * std::numbers::pi);
     phase = std::fmod(phase, d);
