@@ -60,6 +60,9 @@ struct RowDetectorOptions {
   double max_spacing_fraction = 1.0;
   double spacing_step = 0.025;       // relative step of the period search
   int candidates = 4;                // best Hough cells taken on to the comb
+  int refined_hypotheses = 3;        // best hypotheses of distinct row counts refined
+  int refine_row_checks = 6;         // neighbours per refinement step whose rows are checked
+  double prune_fraction = 0.3;       // combs below this × the best score so far are not refined
   double row_halfwidth_fraction = 0.25;  // plant matter within ± this × spacing supports a row
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
   double min_coherence = 0.15;       // comb phase coherence below this: no rows
@@ -121,6 +124,7 @@ class RowDetector {
   cv::Mat work_;  // CV_32F plant fraction at the Hough resolution
   cv::Mat fit_;   // CV_32F at the refit resolution
   std::vector<float> profiles_;
+  std::vector<double> cumulative_;  // running sums of profiles_, w + 1 per band
   std::vector<float> fit_profiles_;
   std::vector<double> histogram_;
 };
