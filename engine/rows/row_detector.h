@@ -26,8 +26,14 @@
 //      coherence × the agreement of its phase from band to band × the
 //      occupancy of its rows × their contrast against the matter half-way
 //      between them (which rules out a comb of twice the spacing) × n/(n+1)
-//      for n rows (two rows fit any vanishing point; more rows test it),
-//   3. a local search of that score and a weighted least-squares refit of
+//      for n rows (two rows fit any vanishing point; more rows test it);
+//      the coherence is taken over all the image's plant matter, so that a
+//      geometry that cannot use the upper bands (a low vanishing point, a
+//      narrow comb) is not rewarded for explaining less of the image,
+//   3. a local search of that score from the best hypothesis of each of
+//      the best row counts (a comb of twice the spacing through two full
+//      rows must not win against the true comb before the latter's period
+//      is refined), and a weighted least-squares refit of
 //      the four parameters (linear in (s_c, d, c − g·s_c, g·d)) to each
 //      row's centre in thin bands, the centroid of its plant matter between
 //      the gaps on either side: narrow rows are centred by their mass, rows
