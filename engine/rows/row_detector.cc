@@ -234,7 +234,27 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       if (x1 < x0) return -1.0;
       return (cum[x1 + 1] - cum[x0]) / ((x1 - x0 + 1) * rows_in_band);
     };
-    for (int k = 0; k < n_bands; ++k) {
+    // Towards the vanishing point the rows merge into one canopy: the
+    // bands at the top where the teeth hold no more plant matter than the
+    // gaps between them are left out (of occupancy and contrast alike), as
+    // a geometry that cannot use them at all leaves them out.
+    int k_first = 0;
+    for (; k_first < n_bands; ++k_first) {
+      const Band& b = bands[static_cast<size_t>(k_first)];
+      const double shrink = 1.0 - geo.g * b.dv;
+      if (shrink < kMinShrink || d * shrink < min_spacing) continue;
+      const double* p = &cumulative_[static_cast<size_t>(k_first) * (w + 1)];
+      const double half = std::max(0.5 * kw, hw * d * shrink);
+      double on = 0.0, between = 0.0;
+      for (size_t r = 0; r < n_rows; ++r) {
+        const double u = (sc + (n_lo + static_cast<int>(r)) * d) * shrink + geo.c * b.dv;
+        const double m = u + 0.5 * d * shrink;
+        if (u >= 0.0 && u <= W) on += std::max(0.0, window(p, u, half, b.rows));
+        if (m >= 0.0 && m <= W) between += std::max(0.0, window(p, m, half, b.rows));
+      }
+      if (on > 0.0 && 1.0 - between / on >= o.min_contrast) break;
+    }
+    for (int k = k_first; k < n_bands; ++k) {
       const Band& b = bands[static_cast<size_t>(k)];
       const double shrink = 1.0 - geo.g * b.dv;
       if (shrink < kMinShrink || d * shrink < min_spacing) continue;
@@ -390,22 +410,39 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       const float* p = &profiles_[static_cast<size_t>(k) * w];
       const double s_first = (0.5 * kw - geo.c * b.dv) / shrink;
       // The phasor advances by a fixed rotation per column (written out:
-      // std::complex's product checks for NaN at every step).
+      // std::complex's product checks for NaN at every step), in four
+      // interleaved chains (columns x, x + 1, x + 2, x + 3, each rotated by
+      // four columns' angle) so that the steps do not wait on each other.
       const double a0 = -2.0 * std::numbers::pi * s_first / d;
       const double da = -2.0 * std::numbers::pi * kw / (shrink * d);
-      double pr = std::cos(a0), pi = std::sin(a0);
-      const double sr = std::cos(da), si = std::sin(da);
-      double zr = 0.0, zi = 0.0, m = 0.0;
-      for (int x = 0; x < w; ++x) {
-        const double wx = static_cast<double>(p[x]);
-        zr += wx * pr;
-        zi += wx * pi;
-        m += wx;
-        const double next_r = pr * sr - pi * si;
-        pi = pr * si + pi * sr;
-        pr = next_r;
+      constexpr int kChains = 4;
+      double pr[kChains], pi[kChains], zr[kChains] = {}, zi[kChains] = {}, mc[kChains] = {};
+      for (int q = 0; q < kChains; ++q) {
+        pr[q] = std::cos(a0 + q * da);
+        pi[q] = std::sin(a0 + q * da);
       }
-      const std::complex<double> z(zr, zi);
+      const double sr = std::cos(kChains * da), si = std::sin(kChains * da);
+      int x = 0;
+      for (; x + kChains <= w; x += kChains) {
+        for (int q = 0; q < kChains; ++q) {
+          const double wx = static_cast<double>(p[x + q]);
+          zr[q] += wx * pr[q];
+          zi[q] += wx * pi[q];
+          mc[q] += wx;
+          const double next_r = pr[q] * sr - pi[q] * si;
+          pi[q] = pr[q] * si + pi[q] * sr;
+          pr[q] = next_r;
+        }
+      }
+      for (int q = 0; x < w; ++x, ++q) {  // the last columns, fewer than four
+        const double wx = static_cast<double>(p[x]);
+        zr[q] += wx * pr[q];
+        zi[q] += wx * pi[q];
+        mc[q] += wx;
+      }
+      const double m = mc[0] + mc[1] + mc[2] + mc[3];
+      if (m <= 0.0) continue;
+      const std::complex<double> z(zr[0] + zr[1] + zr[2] + zr[3], zi[0] + zi[1] + zi[2] + zi[3]);
       z_sum += z;
       z_abs += std::abs(z);
       mass += m;
