@@ -29,7 +29,10 @@
 //      for n rows (two rows fit any vanishing point; more rows test it);
 //      the coherence is taken over all the image's plant matter, so that a
 //      geometry that cannot use the upper bands (a low vanishing point, a
-//      narrow comb) is not rewarded for explaining less of the image,
+//      narrow comb) is not rewarded for explaining less of the image, and
+//      occupancy and contrast leave out the bands at the top where the
+//      rows have merged into one canopy (teeth no denser than the gaps),
+//      as a geometry that cannot use those bands leaves them out,
 //   3. a local search of that score from the best hypothesis of each of
 //      the best row counts (a comb of twice the spacing through two full
 //      rows must not win against the true comb before the latter's period
