@@ -26,6 +26,9 @@ OptionErrors RowDetectorOptions::Validate() const {
   }
   RequireInRange(e, "spacing_step", spacing_step, 0.0, 0.5, false);
   if (candidates < 1) e.push_back({"candidates", "must be >= 1"});
+  if (refined_hypotheses < 1) e.push_back({"refined_hypotheses", "must be >= 1"});
+  if (refine_row_checks < 1) e.push_back({"refine_row_checks", "must be >= 1"});
+  RequireInRange(e, "prune_fraction", prune_fraction, 0.0, 1.0);
   RequireInRange(e, "row_halfwidth_fraction", row_halfwidth_fraction, 0.0, 0.5, false);
   RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
   RequireInRange(e, "min_coherence", min_coherence, 0.0, 1.0);
@@ -150,6 +153,17 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     }
   }
 
+  double total_mass = 0.0;
+  for (const float m : profiles_) total_mass += static_cast<double>(m);
+  // Running sums of the band profiles: the plant matter in a window of
+  // columns in constant time.
+  cumulative_.assign(static_cast<size_t>(n_bands) * (w + 1), 0.0);
+  for (int k = 0; k < n_bands; ++k) {
+    const float* p = &profiles_[static_cast<size_t>(k) * w];
+    double* cum = &cumulative_[static_cast<size_t>(k) * (w + 1)];
+    for (int x = 0; x < w; ++x) cum[x + 1] = cum[x] + static_cast<double>(p[x]);
+  }
+
   // The s histogram over [−W, 2W) for one geometry, from the bands with
   // Δv ≤ max_dv whose rows are not too compressed. Each column's mass is
   // spread over its stretched width so that stretching adds no holes.
@@ -214,19 +228,37 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     std::vector<double> density(n_rows);
     std::vector<double> on_sum(n_rows, 0.0), between_sum(n_rows, 0.0);
     std::vector<int> on_count(n_rows, 0), between_count(n_rows, 0);
-    const auto window = [&](const float* p, double u, double half, int rows_in_band) {
+    const auto window = [&](const double* cum, double u, double half, int rows_in_band) {
       const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw - 0.5)));
       const int x1 = std::min(w - 1, static_cast<int>(std::floor((u + half) / kw - 0.5)));
       if (x1 < x0) return -1.0;
-      double sum = 0.0;
-      for (int x = x0; x <= x1; ++x) sum += static_cast<double>(p[x]);
-      return sum / ((x1 - x0 + 1) * rows_in_band);
+      return (cum[x1 + 1] - cum[x0]) / ((x1 - x0 + 1) * rows_in_band);
     };
-    for (int k = 0; k < n_bands; ++k) {
+    // Towards the vanishing point the rows merge into one canopy: the
+    // bands at the top where the teeth hold no more plant matter than the
+    // gaps between them are left out (of occupancy and contrast alike), as
+    // a geometry that cannot use them at all leaves them out.
+    int k_first = 0;
+    for (; k_first < n_bands; ++k_first) {
+      const Band& b = bands[static_cast<size_t>(k_first)];
+      const double shrink = 1.0 - geo.g * b.dv;
+      if (shrink < kMinShrink || d * shrink < min_spacing) continue;
+      const double* p = &cumulative_[static_cast<size_t>(k_first) * (w + 1)];
+      const double half = std::max(0.5 * kw, hw * d * shrink);
+      double on = 0.0, between = 0.0;
+      for (size_t r = 0; r < n_rows; ++r) {
+        const double u = (sc + (n_lo + static_cast<int>(r)) * d) * shrink + geo.c * b.dv;
+        const double m = u + 0.5 * d * shrink;
+        if (u >= 0.0 && u <= W) on += std::max(0.0, window(p, u, half, b.rows));
+        if (m >= 0.0 && m <= W) between += std::max(0.0, window(p, m, half, b.rows));
+      }
+      if (on > 0.0 && 1.0 - between / on >= o.min_contrast) break;
+    }
+    for (int k = k_first; k < n_bands; ++k) {
       const Band& b = bands[static_cast<size_t>(k)];
       const double shrink = 1.0 - geo.g * b.dv;
       if (shrink < kMinShrink || d * shrink < min_spacing) continue;
-      const float* p = &profiles_[static_cast<size_t>(k) * w];
+      const double* p = &cumulative_[static_cast<size_t>(k) * (w + 1)];
       const double half = std::max(0.5 * kw, hw * d * shrink);
       double background = 0.0;
       int n_background = 0;
@@ -378,29 +410,50 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       const float* p = &profiles_[static_cast<size_t>(k) * w];
       const double s_first = (0.5 * kw - geo.c * b.dv) / shrink;
       // The phasor advances by a fixed rotation per column (written out:
-      // std::complex's product checks for NaN at every step).
+      // std::complex's product checks for NaN at every step), in four
+      // interleaved chains (columns x, x + 1, x + 2, x + 3, each rotated by
+      // four columns' angle) so that the steps do not wait on each other.
       const double a0 = -2.0 * std::numbers::pi * s_first / d;
       const double da = -2.0 * std::numbers::pi * kw / (shrink * d);
-      double pr = std::cos(a0), pi = std::sin(a0);
-      const double sr = std::cos(da), si = std::sin(da);
-      double zr = 0.0, zi = 0.0, m = 0.0;
-      for (int x = 0; x < w; ++x) {
-        const double wx = static_cast<double>(p[x]);
-        zr += wx * pr;
-        zi += wx * pi;
-        m += wx;
-        const double next_r = pr * sr - pi * si;
-        pi = pr * si + pi * sr;
-        pr = next_r;
+      constexpr int kChains = 4;
+      double pr[kChains], pi[kChains], zr[kChains] = {}, zi[kChains] = {}, mc[kChains] = {};
+      for (int q = 0; q < kChains; ++q) {
+        pr[q] = std::cos(a0 + q * da);
+        pi[q] = std::sin(a0 + q * da);
       }
-      const std::complex<double> z(zr, zi);
+      const double sr = std::cos(kChains * da), si = std::sin(kChains * da);
+      int x = 0;
+      for (; x + kChains <= w; x += kChains) {
+        for (int q = 0; q < kChains; ++q) {
+          const double wx = static_cast<double>(p[x + q]);
+          zr[q] += wx * pr[q];
+          zi[q] += wx * pi[q];
+          mc[q] += wx;
+          const double next_r = pr[q] * sr - pi[q] * si;
+          pi[q] = pr[q] * si + pi[q] * sr;
+          pr[q] = next_r;
+        }
+      }
+      for (int q = 0; x < w; ++x, ++q) {  // the last columns, fewer than four
+        const double wx = static_cast<double>(p[x]);
+        zr[q] += wx * pr[q];
+        zi[q] += wx * pi[q];
+        mc[q] += wx;
+      }
+      const double m = mc[0] + mc[1] + mc[2] + mc[3];
+      if (m <= 0.0) continue;
+      const std::complex<double> z(zr[0] + zr[1] + zr[2] + zr[3], zi[0] + zi[1] + zi[2] + zi[3]);
       z_sum += z;
       z_abs += std::abs(z);
       mass += m;
     }
     BandComb r;
     if (mass <= 0.0 || z_abs <= 0.0) return r;
-    r.coherence = std::abs(z_sum) / mass;
+    // Coherence over all the image's plant matter, not only the bands this
+    // geometry can use: a vanishing point placed low in the image (or a
+    // narrow comb) drops the upper bands, and must not be rewarded for
+    // explaining less of the image.
+    r.coherence = std::abs(z_sum) / std::max(mass, total_mass);
     r.alignment = std::abs(z_sum) / z_abs;
     double phase = -std::arg(z_sum) * d / (2.0 * std::numbers::pi);
     phase = std::fmod(phase, d);
@@ -414,7 +467,23 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   struct Hypothesis {
     double g = 0.0, lean = 0.0, d = 0.0, sc = 0.0, score = -1.0;
   };
-  Hypothesis best;
+  // Hypotheses are kept per row count: a comb of twice the spacing (two
+  // rows, every other row sparse) and the true comb (more rows, but a
+  // coarse period grid drifts in phase across them) are both refined
+  // before they are compared.
+  std::vector<Hypothesis> by_count(12);
+  double best_start = -1.0;
+  const auto score_of = [&](const Geometry& geo, double period, double floor,
+                            Hypothesis& hyp, size_t& n_rows) {
+    const BandComb bc = band_comb(geo, period);
+    if (bc.score() <= floor) return false;
+    const Rows rows = find_rows(geo, period, bc.phase);
+    if (!rows.adjacent) return false;
+    hyp.sc = bc.phase;
+    hyp.score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows);
+    n_rows = rows.rows.size();
+    return true;
+  };
   for (int index : chosen) {
     const double g = (index / nl) * g_step;
     const double lean = -o.max_lean + (index % nl) * l_step;
@@ -429,41 +498,68 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       if (fit.period / 2.0 >= d_min) periods.push_back(fit.period / 2.0);
     }
     for (const double period : periods) {
-      const BandComb bc = band_comb(geo, period);
-      if (bc.score() <= best.score) continue;
-      const Rows rows = find_rows(geo, period, bc.phase);
-      if (!rows.adjacent) continue;
-      const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows);
-      if (score > best.score) best = {g, lean, period, bc.phase, score};
+      Hypothesis hyp{g, lean, period, 0.0, -1.0};
+      size_t n_rows = 0;
+      // A comb far below the best so far will not win after refinement.
+      if (!score_of(geo, period, o.prune_fraction * best_start, hyp, n_rows)) continue;
+      best_start = std::max(best_start, hyp.score);
+      Hypothesis& slot = by_count[std::min(n_rows, by_count.size() - 1)];
+      if (hyp.score > slot.score) slot = hyp;
     }
+  }
+
+  // 3. Local search on (g, lean, d) by the same score, for each row count's
+  // best hypothesis; the best refined one goes on.
+  std::sort(by_count.begin(), by_count.end(),
+            [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+  by_count.resize(std::min(by_count.size(), static_cast<size_t>(o.refined_hypotheses)));
+  Hypothesis best;
+  for (const Hypothesis& start : by_count) {
+    if (start.score < 0.0) continue;
+    Hypothesis local = start;
+    double step_g = g_step, step_l = l_step, step_d = 2.0 * o.spacing_step;
+    for (int level = 0; level < 4; ++level) {
+      step_g *= 0.5;
+      step_l *= 0.5;
+      const Hypothesis centre = local;
+      // The comb (cheap) on the 27 neighbours; the rows (dearer) only on
+      // the few whose comb could still beat the current best.
+      struct Neighbour {
+        Geometry geo;
+        double g, lean, d, comb;
+      };
+      std::vector<Neighbour> neighbours;
+      neighbours.reserve(27);
+      for (int i = -1; i <= 1; ++i) {
+        for (int j = -1; j <= 1; ++j) {
+          const double g = std::max(0.0, centre.g + i * step_g);
+          const double lean = centre.lean + j * step_l;
+          for (int k = -1; k <= 1; ++k) {
+            const double d = centre.d * (1.0 + k * step_d);
+            const Geometry geo_n = geometry_at(g, lean);
+            const double comb = band_comb(geo_n, d).score();
+            if (comb > local.score) neighbours.push_back({geo_n, g, lean, d, comb});
+          }
+        }
+      }
+      const size_t keep = std::min(neighbours.size(), static_cast<size_t>(o.refine_row_checks));
+      std::partial_sort(neighbours.begin(), neighbours.begin() + static_cast<std::ptrdiff_t>(keep),
+                        neighbours.end(),
+                        [](const Neighbour& a, const Neighbour& b) { return a.comb > b.comb; });
+      for (size_t q = 0; q < keep; ++q) {
+        const Neighbour& nb = neighbours[q];
+        Hypothesis hyp{nb.g, nb.lean, nb.d, 0.0, -1.0};
+        size_t n_rows = 0;
+        if (!score_of(nb.geo, nb.d, local.score, hyp, n_rows)) continue;
+        if (hyp.score > local.score) local = hyp;
+      }
+      step_d *= 0.5;
+    }
+    if (local.score > best.score) best = local;
   }
   if (best.score < 0.0) {
     out.reason = "no rows: no comb of evenly spaced rows with plant matter along them";
     return out;
-  }
-
-  // 3. Local search on (g, lean, d) by the same score.
-  double step_g = g_step, step_l = l_step, step_d = o.spacing_step;
-  for (int level = 0; level < 4; ++level) {
-    step_g *= 0.5;
-    step_l *= 0.5;
-    const Hypothesis centre = best;
-    for (int i = -1; i <= 1; ++i) {
-      for (int j = -1; j <= 1; ++j) {
-        const double g = std::max(0.0, centre.g + i * step_g);
-        const double lean = centre.lean + j * step_l;
-        for (int k = -1; k <= 1; ++k) {
-          const double d = centre.d * (1.0 + k * step_d);
-          const BandComb bc = band_comb(geometry_at(g, lean), d);
-          if (bc.score() <= best.score) continue;
-          const Rows rows = find_rows(geometry_at(g, lean), d, bc.phase);
-          if (!rows.adjacent) continue;
-          const double score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows);
-          if (score > best.score) best = {g, lean, d, bc.phase, score};
-        }
-      }
-    }
-    step_d *= 0.5;
   }
   Geometry geo = geometry_at(best.g, best.lean);
   double d = best.d;

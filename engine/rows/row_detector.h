@@ -26,8 +26,17 @@
 //      coherence × the agreement of its phase from band to band × the
 //      occupancy of its rows × their contrast against the matter half-way
 //      between them (which rules out a comb of twice the spacing) × n/(n+1)
-//      for n rows (two rows fit any vanishing point; more rows test it),
-//   3. a local search of that score and a weighted least-squares refit of
+//      for n rows (two rows fit any vanishing point; more rows test it);
+//      the coherence is taken over all the image's plant matter, so that a
+//      geometry that cannot use the upper bands (a low vanishing point, a
+//      narrow comb) is not rewarded for explaining less of the image, and
+//      occupancy and contrast leave out the bands at the top where the
+//      rows have merged into one canopy (teeth no denser than the gaps),
+//      as a geometry that cannot use those bands leaves them out,
+//   3. a local search of that score from the best hypothesis of each of
+//      the best row counts (a comb of twice the spacing through two full
+//      rows must not win against the true comb before the latter's period
+//      is refined), and a weighted least-squares refit of
 //      the four parameters (linear in (s_c, d, c − g·s_c, g·d)) to each
 //      row's centre in thin bands, the centroid of its plant matter between
 //      the gaps on either side: narrow rows are centred by their mass, rows
@@ -60,6 +69,9 @@ struct RowDetectorOptions {
   double max_spacing_fraction = 1.0;
   double spacing_step = 0.025;       // relative step of the period search
   int candidates = 4;                // best Hough cells taken on to the comb
+  int refined_hypotheses = 3;        // best hypotheses of distinct row counts refined
+  int refine_row_checks = 6;         // neighbours per refinement step whose rows are checked
+  double prune_fraction = 0.3;       // combs below this × the best score so far are not refined
   double row_halfwidth_fraction = 0.25;  // plant matter within ± this × spacing supports a row
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
   double min_coherence = 0.15;       // comb phase coherence below this: no rows
@@ -121,6 +133,7 @@ class RowDetector {
   cv::Mat work_;  // CV_32F plant fraction at the Hough resolution
   cv::Mat fit_;   // CV_32F at the refit resolution
   std::vector<float> profiles_;
+  std::vector<double> cumulative_;  // running sums of profiles_, w + 1 per band
   std::vector<float> fit_profiles_;
   std::vector<double> histogram_;
 };

@@ -168,6 +168,96 @@ TEST(RowDetectorTest, ARowWithMorePlantsMissingThanPresentIsStillARow) {
   EXPECT_LT(WorstError(det, outer, 479.5), 0.05);
 }
 
+// A low-tilt view like a grower's photograph (dev image 0's geometry): the
+// vanishing point just above the image, two rows crossing the bottom and
+// the outer rows fanning out through the image's sides; optionally,
+// towards the horizon, the rows merged into one canopy (blobs as wide as
+// the rows are apart), whose bands a vanishing point placed too low drops.
+cv::Mat LowTiltField(const Scene& scene, double canopy_bottom_v, uint32_t seed) {
+  cv::Mat mask = scene.Draw(seed);
+  std::mt19937 rng(seed + 100);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int k = 0; k < 400 && canopy_bottom_v > 0.0; ++k) {
+    const double v = unit(rng) * canopy_bottom_v;
+    const double r = 0.3 * scene.d * scene.Shrink(v);
+    cv::circle(mask, cv::Point(static_cast<int>(unit(rng) * scene.width), static_cast<int>(v)),
+               std::max(1, static_cast<int>(r)), cv::Scalar(255), cv::FILLED);
+  }
+  return mask;
+}
+
+Scene LowTiltScene() {
+  Scene scene;
+  scene.width = 512;
+  scene.height = 512;
+  scene.g = 1.0 / 670.0;      // vanishing point 158 px above the image's top
+  scene.c = scene.g * 276.0;  // ... at u = 276
+  scene.sc = 290.0;
+  scene.d = 227.0;            // rows 227 px apart at the bottom: 2 cross it
+  scene.n_min = -5;
+  scene.n_max = 4;
+  scene.plant_radius = 0.15;
+  scene.missing = 0.1;
+  return scene;
+}
+
+TEST(RowDetectorTest, LowTiltFanOutFindsTheRowsEnteringThroughTheSides) {
+  const Scene scene = LowTiltScene();
+  RowDetector detector{RowDetectorOptions{}};
+  int good = 0;
+  for (uint32_t seed = 30; seed < 34; ++seed) {
+    // Half the seeds with a canopy over the top 60 px where the rows merge.
+    const double canopy = seed % 2 == 0 ? 60.0 : 0.0;
+    const RowDetection det = detector.Detect(LowTiltField(scene, canopy, seed));
+    ASSERT_GT(det.confidence, 0.0) << det.reason;
+    // Tolerances: spacing within 5 %, every row within 8 % of the local
+    // spacing at the bottom and half-way up, at least 4 rows (2 cross the
+    // bottom, the others enter through the sides).
+    const bool ok = std::abs(det.spacing_px - scene.d) < 0.05 * scene.d &&
+                    WorstError(det, scene, 511.5) < 0.08 && WorstError(det, scene, 256.0) < 0.08 &&
+                    det.rows.size() >= 4U;
+    if (ok) ++good;
+    EXPECT_TRUE(ok) << "seed " << seed << ": spacing " << det.spacing_px << ", rows "
+                    << det.rows.size() << ", error " << WorstError(det, scene, 511.5) << " / "
+                    << WorstError(det, scene, 256.0);
+  }
+  EXPECT_EQ(good, 4);
+}
+
+TEST(RowDetectorTest, ARowWithThreeQuartersOfItsPlantsMissingIsNotSkipped) {
+  // The low-tilt field with the central row 75 % missing: the comb of twice
+  // the spacing through the full rows on either side must not win.
+  Scene full = LowTiltScene();
+  Scene sparse = full;
+  sparse.n_min = sparse.n_max = 0;
+  sparse.missing = 0.75;
+  RowDetector detector{RowDetectorOptions{}};
+  int good = 0;
+  for (uint32_t seed = 40; seed < 44; ++seed) {
+    cv::Mat mask = cv::Mat::zeros(full.height, full.width, CV_8UC1);
+    for (int n = full.n_min; n <= full.n_max; ++n) {
+      if (n == 0) continue;
+      Scene one = full;
+      one.n_min = one.n_max = n;
+      cv::bitwise_or(mask, one.Draw(seed * 16 + static_cast<uint32_t>(n + 8)), mask);
+    }
+    cv::bitwise_or(mask, sparse.Draw(seed), mask);
+    const RowDetection det = detector.Detect(mask);
+    ASSERT_GT(det.confidence, 0.0) << det.reason;
+    // Tolerances: spacing within 5 % (twice the spacing is 100 % off), the
+    // sparse row found within 8 % of the spacing at the bottom.
+    const bool spacing_ok = std::abs(det.spacing_px - full.d) < 0.05 * full.d;
+    bool sparse_found = false;
+    for (const DetectedRow& row : det.rows) {
+      if (std::abs(det.U(row.n, 511.5) - full.U(0, 511.5)) < 0.08 * full.d) sparse_found = true;
+    }
+    if (spacing_ok && sparse_found) ++good;
+    EXPECT_TRUE(spacing_ok && sparse_found)
+        << "seed " << seed << ": spacing " << det.spacing_px << ", rows " << det.rows.size();
+  }
+  EXPECT_EQ(good, 4);
+}
+
 TEST(RowDetectorTest, NoPlantMatterGivesNoRows) {
   RowDetector detector{RowDetectorOptions{}};
   const RowDetection det = detector.Detect(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0)));
