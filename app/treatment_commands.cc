@@ -29,6 +29,7 @@ struct TreatmentArgs {
   std::optional<double> sure_crop_area_m2;
   std::optional<int> majority;
   bool mrroc = false;
+  bool no_split_merged = false;
   double costs_ratio = 1.0;
   bool json = false;
 };
@@ -134,6 +135,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
+  o.split_merged = !a.no_split_merged;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
@@ -199,6 +201,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(1, 10000));
   cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
       ->check(CLI::IsMember({"thesis"}));
+  cmd->add_flag("--no-split-merged", args.no_split_merged,
+                "label merged blobs' pixels whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");
   cmd->add_option("--costs-ratio", args.costs_ratio, "cost ratio for the MRROC operating point")
       ->check(CLI::PositiveNumber)->capture_default_str();

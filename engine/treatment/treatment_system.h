@@ -69,6 +69,7 @@ class TreatmentSystem {
   // Ids of the records sprayed since the last call (for publishing them again).
   std::vector<int> TakeNewlySprayed() { return std::exchange(newly_sprayed_, {}); }
   const TreatmentOptions& options() const { return options_; }
+  const classify::CropClassifier& classifier() const { return classifier_; }
   void set_sink(NozzleSink sink) { scheduler_.set_sink(std::move(sink)); }
   int map_resets() const { return map_resets_; }
 
