@@ -28,6 +28,7 @@ struct TreatmentArgs {
   std::optional<double> assoc_chi2;
   std::optional<double> sure_crop_area_m2;
   std::optional<int> majority;
+  std::optional<double> split_radius_m;
   bool mrroc = false;
   bool no_split_merged = false;
   double costs_ratio = 1.0;
@@ -133,6 +134,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
   if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
+  if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   o.split_merged = !a.no_split_merged;
@@ -201,6 +203,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(1, 10000));
   cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
       ->check(CLI::IsMember({"thesis"}));
+  cmd->add_option("--split-radius-m", args.split_radius_m,
+                  "merged blobs: a pixel joins the nearest predicted crop this close");
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "label merged blobs' pixels whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");

@@ -83,6 +83,7 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
         d.distance_m = nu.norm();
         d.m = predictions[i].m;
         d.n = predictions[i].n;
+        d.predicted_ground_m = predictions[i].ground_m;
       }
     }
     d.associated = d.gamma2 <= options_.assoc_chi2;

@@ -46,7 +46,7 @@ struct ClassifierOptions {
   double camera_roll_sd_rad = 0.0035;
   double camera_height_sd_m = 0.004;
   // SplitMerged: a pixel belongs to the nearest predicted crop this close.
-  double split_radius_m = 0.12;
+  double split_radius_m = 0.3;  // beyond the largest crop's leaves (A: 0.2 m plants) plus spread
 
   OptionErrors Validate() const;
 };
@@ -78,6 +78,7 @@ struct BlobDecision {
   double gamma2 = std::numeric_limits<double>::infinity();  // to the nearest prediction (γ²)
   double distance_m = std::numeric_limits<double>::infinity();  // Euclidean, to that prediction
   int m = 0, n = 0;  // the nearest prediction's grid indices (valid when gamma2 is finite)
+  Eigen::Vector2d predicted_ground_m{0.0, 0.0};  // and its position (vehicle frame)
 };
 
 // The two-parameter rule alone (for sweeps): size filter, then association.

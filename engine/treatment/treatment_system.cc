@@ -70,8 +70,10 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     if (!d.crop || d.associated) {
       AddFootprint(pose, blobs[static_cast<size_t>(blob_of_feature[i])], d.crop);
     }
-    frame_.plant_ids[i] =
-        registry_.Observe(VehicleToBed(pose, features[i].ground_m), d, options_.classifier);
+    frame_.plant_ids[i] = registry_.Observe(
+        VehicleToBed(pose, features[i].ground_m), d, options_.classifier,
+        d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
+                     : std::nullopt);
   }
   return frame_;
 }
