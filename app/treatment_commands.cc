@@ -31,6 +31,7 @@ struct TreatmentArgs {
   std::optional<double> split_radius_m;
   bool mrroc = false;
   bool no_split_merged = false;
+  bool footprint_per_blob = false;
   double costs_ratio = 1.0;
   bool json = false;
 };
@@ -138,6 +139,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   o.split_merged = !a.no_split_merged;
+  if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
@@ -205,6 +207,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::IsMember({"thesis"}));
   cmd->add_option("--split-radius-m", args.split_radius_m,
                   "merged blobs: a pixel joins the nearest predicted crop this close");
+  cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
+                "every crop blob its own footprint (not one per predicted plant)");
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "label merged blobs' pixels whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");

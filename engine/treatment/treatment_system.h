@@ -30,6 +30,12 @@ struct TreatmentOptions {
   // this (1: the thesis's whole box); weeds always use the whole box.
   double crop_footprint_scale = 0.45;
   double weed_footprint_scale = 1.0;
+  // Crop blobs of one frame associated with the same predicted plant are
+  // its leaves, cut apart by segmentation: they mark one footprint, their
+  // joint bounding box scaled about their joint (area-weighted) centroid,
+  // so the footprint is centred on the plant's canopy rather than on each
+  // leaf. Off: every blob its own footprint (as before).
+  bool crop_footprint_per_plant = true;
 
   OptionErrors Validate() const;
 };
@@ -75,6 +81,8 @@ class TreatmentSystem {
 
  private:
   void AddFootprint(const BedPose& pose, const vision::Blob& blob, bool crop);
+  void AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px, const cv::Rect& bbox,
+                    bool crop);
 
   geometry::CameraModel camera_;
   std::vector<int> newly_sprayed_;
