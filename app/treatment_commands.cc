@@ -32,6 +32,7 @@ struct TreatmentArgs {
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
+  bool abstain_merged = false;
   double costs_ratio = 1.0;
   bool json = false;
 };
@@ -140,6 +141,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   o.mrroc = a.mrroc;
   o.split_merged = !a.no_split_merged;
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
+  if (a.abstain_merged) o.treatment.abstain_merged = true;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
@@ -209,6 +211,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                   "merged blobs: a pixel joins the nearest predicted crop this close");
   cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
                 "every crop blob its own footprint (not one per predicted plant)");
+  cmd->add_flag("--abstain-merged", args.abstain_merged,
+                "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "label merged blobs' pixels whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");

@@ -282,6 +282,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   treatment::TreatmentOptions o;
   o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
   o.crop_footprint_per_plant = false;  // each feature's own box
+  o.abstain_merged = false;
   // Table 7.2's operating points: size ς in pixels and clustering radius r
   // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).
   double size_px = 80.0, radius_m = 0.1;

@@ -22,6 +22,27 @@ void FeatureBlobIndices(std::span<const vision::Blob> blobs, std::vector<int>& o
   }
 }
 
+bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
+                                        std::span<const classify::PredictedCrop> crops) const {
+  const std::optional<Quad> q =
+      FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
+                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0);
+  if (!q) return false;
+  for (const classify::PredictedCrop& c : crops) {
+    bool pos = false, neg = false;
+    for (size_t i = 0; i < 4; ++i) {
+      const Eigen::Vector2d& a = (*q)[i];
+      const Eigen::Vector2d& e = (*q)[(i + 1) % 4];
+      const double cross = (e.x() - a.x()) * (c.ground_m.y() - a.y()) -
+                           (e.y() - a.y()) * (c.ground_m.x() - a.x());
+      pos |= cross > 0.0;
+      neg |= cross < 0.0;
+    }
+    if (!(pos && neg)) return true;
+  }
+  return false;
+}
+
 TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
                                  const TreatmentOptions& options, NozzleSink sink)
     : camera_(camera),
@@ -89,6 +110,10 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
       it->area_px += blob.area_px;
       it->moment_px += blob.area_px * blob.centroid_px;
       it->box |= blob.bbox_px;
+    } else if (options_.abstain_merged && !d.crop && !d.associated &&
+               (d.clipped || d.area_m2 >= options_.classifier.min_crop_area_m2) &&
+               CoversAPrediction(blob, crops)) {
+      // Possibly merged plants: no votes either way.
     } else if (!d.crop || d.associated) {
       // Crop by size alone (merged plants): its centroid is no plant's
       // centre, so it marks no cells; the plants in it are mapped from other

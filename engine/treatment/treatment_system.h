@@ -38,6 +38,14 @@ struct TreatmentOptions {
   // so the footprint is centred on the plant's canopy rather than on each
   // leaf. Off: every blob its own footprint (as before).
   bool crop_footprint_per_plant = true;
+  // A blob that passed the size filter but missed every association region
+  // while its bounding box covers a predicted crop position may be touching
+  // plants merged (its centroid between them): it casts no weed votes, which
+  // would otherwise outvote the crop cells those plants marked in other
+  // frames. Off by default: field, 5 seeds, it hits every crop (99.27 ->
+  // 100 %) but treats 17.0 % of the bed (14.6 %), the along bias grows to
+  // 4.0 mm and weeds clear of crop hit to 5.2 % (2.6 %).
+  bool abstain_merged = false;
 
   OptionErrors Validate() const;
 };
@@ -83,6 +91,9 @@ class TreatmentSystem {
 
  private:
   void AddFootprint(const BedPose& pose, const vision::Blob& blob, bool crop);
+  // Does the blob's bounding box, projected, hold a predicted crop position?
+  bool CoversAPrediction(const vision::Blob& blob,
+                         std::span<const classify::PredictedCrop> crops) const;
   void AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px, const cv::Rect& bbox,
                     bool crop);
 
