@@ -28,7 +28,11 @@ struct TreatmentArgs {
   std::optional<double> assoc_chi2;
   std::optional<double> sure_crop_area_m2;
   std::optional<int> majority;
+  std::optional<double> split_radius_m;
   bool mrroc = false;
+  bool no_split_merged = false;
+  bool footprint_per_blob = false;
+  bool abstain_merged = false;
   double costs_ratio = 1.0;
   bool json = false;
 };
@@ -132,8 +136,12 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
   if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
+  if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
+  o.split_merged = !a.no_split_merged;
+  if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
+  if (a.abstain_merged) o.treatment.abstain_merged = true;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
@@ -199,6 +207,14 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(1, 10000));
   cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
       ->check(CLI::IsMember({"thesis"}));
+  cmd->add_option("--split-radius-m", args.split_radius_m,
+                  "merged blobs: a pixel joins the nearest predicted crop this close");
+  cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
+                "every crop blob its own footprint (not one per predicted plant)");
+  cmd->add_flag("--abstain-merged", args.abstain_merged,
+                "unassociated blobs covering a predicted crop cast no weed votes");
+  cmd->add_flag("--no-split-merged", args.no_split_merged,
+                "label merged blobs' pixels whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");
   cmd->add_option("--costs-ratio", args.costs_ratio, "cost ratio for the MRROC operating point")
       ->check(CLI::PositiveNumber)->capture_default_str();

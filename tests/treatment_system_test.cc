@@ -29,24 +29,32 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   const TreatmentMetrics& m = e.ours;
   ASSERT_GE(m.crop_plants, 1000);  // issue: ≥ 1000 crop plants over the seeds
   EXPECT_EQ(e.mode, "crop");
-  // Issue target 99.5 %; reached 99.27 % (8 of 1103 missed).
+  // Issue target 99.5 %; reached 99.27 % (8 of 1103 missed: merged blobs'
+  // weed votes outvote their crop cells; --abstain-merged hits all, README).
   EXPECT_GE(m.crop_hit_rate, 0.99);
   // Issue: |bias| ≤ 3 mm on both axes (thesis 9.7 / −23.1 mm): met.
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
-  // Issue target RMS ≤ 10 mm; reached 28.5 mm along, 12.6 mm across (the
-  // root itself is ±10 mm from the leaves' centre by the crop's lean), inside
-  // the thesis's 34.4 / 33.6 mm.
-  EXPECT_LE(m.placement_rms_along_m, 0.032);
-  EXPECT_LE(m.placement_rms_across_m, 0.015);
-  EXPECT_LE(m.centre_rms_across_m, 0.012);
-  // Issue target ≤ 15 % of the bed; reached 16.3 % (thesis 33 %).
-  EXPECT_LE(m.treated_area_fraction, 0.18);
+  // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3);
+  // reached 28.4 mm along, 12.4 mm across; to the canopy centre (root +
+  // lean) 28.8 / 9.1 mm; inside the thesis's 34.4 / 33.6 mm. Along is the
+  // tracker's forward error between sighting and spraying.
+  EXPECT_LE(m.placement_rms_along_m, 0.031);
+  EXPECT_LE(m.placement_rms_across_m, 0.014);
+  EXPECT_LE(m.centre_rms_across_m, 0.0105);
+  // Issue target ≤ 15 % of the bed: met, 14.6 % (thesis 33 %).
+  EXPECT_LE(m.treated_area_fraction, 0.15);
   EXPECT_GE(m.treated_area_fraction, 0.08);  // a real spray pattern, not nothing
-  // Weeds clear of the crop's leaves are rarely sprayed (≈ 3.6 %); weeds
-  // under a crop's leaves share its spray (issue target 0.5 % not met).
-  EXPECT_LE(m.weed_hit_rate_clear, 0.06);
-  EXPECT_LE(m.weed_hit_rate, 0.3);
+  // Weeds clear of the crop's leaves are rarely sprayed (2.6 %); weeds
+  // under a crop's leaves share its spray (23.6 % of all weeds hit; issue
+  // target 0.5 % not met).
+  EXPECT_LE(m.weed_hit_rate_clear, 0.035);
+  EXPECT_LE(m.weed_hit_rate, 0.26);
+  // Crop pixels labelled crop 85.0 % (merged blobs split among the
+  // predicted crops; 81.2 % without); issue target 95 % not met.
+  EXPECT_GE(m.crop_pixel_rate, 0.83);
+  // Leaf fragments of one grid plant make one record (15818 before).
+  EXPECT_LT(m.plants_recorded, 14500);
   // Never sprayed while the fail-safe holds the bar closed: at most the
   // initialisation frames.
   EXPECT_LT(m.ticks_fail_safe, m.ticks / 50);
@@ -77,9 +85,10 @@ TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
 
 // Crop pixels labelled crop (thesis tables 7.5–7.8: 95.1, 78.9, 81.7, 55.0 %
 // on A–D). Issue target ≥ 95 % on every preset: not met — segmentation alone
-// loses 7–15 % of the crop pixels to soil, and on A touching plants merge
-// into blobs whose centroid misses every association region (README). Now
-// 48 / 79 / 78 / 79 %; bounds 5 points below.
+// loses 7–15 % of the crop pixels to soil (README). Blobs that miss every
+// association region are split among the predicted crops, which lifts A
+// (touching plants merged) from 48 %. Now 80.7 / 79.4 / 84.3 / 79.6 %;
+// bounds about 4 points below.
 struct PixelCase {
   const char* preset;
   double at_least;
@@ -95,8 +104,8 @@ TEST_P(TreatmentPixels, CropPixelsLabelledCrop) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Presets, TreatmentPixels,
-                         ::testing::Values(PixelCase{"A", 0.43}, PixelCase{"B", 0.74},
-                                           PixelCase{"C", 0.73}, PixelCase{"D", 0.74}),
+                         ::testing::Values(PixelCase{"A", 0.77}, PixelCase{"B", 0.75},
+                                           PixelCase{"C", 0.80}, PixelCase{"D", 0.75}),
                          [](const auto& test_param) { return std::string(test_param.param.preset); });
 
 }  // namespace

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include "engine/classify/crop_classifier.h"
@@ -176,6 +178,76 @@ TEST(Mrroc, SweepAucAndOperatingPoints) {
   // At Φ = 3 spraying a weed pixel is dearer: (1/3, 1) → 30 − 200 = −170.
   EXPECT_NEAR(r.OperatingPoint(3.0).tpr, 0.9, 1e-12);
   EXPECT_THROW(r.OperatingPoint(0.0), std::invalid_argument);
+}
+
+// Two touching plants along a row make one blob whose centroid lies between
+// them; split among the predictions, each half is a crop plant again.
+TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
+  ClassifierOptions o;
+  o.min_crop_area_m2 = 0.004;
+  o.assoc_chi2 = 9.21;
+  o.feature_sd_m = 0.01;
+  o.plant_sd_m = 0.0;
+  const CropClassifier classifier(o);
+  const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.0, 1.45),
+                                            CropAt(0.0, 1.9)};
+  std::vector<Eigen::Vector2d> ground;
+  std::vector<double> area;
+  const double cell = 0.005;
+  const auto disk = [&](double cx, double cy, double r) {
+    for (double x = cx - r; x <= cx + r; x += cell) {
+      for (double y = cy - r; y <= cy + r; y += cell) {
+        if (std::hypot(x - cx, y - cy) > r) continue;
+        ground.emplace_back(x, y);
+        area.push_back(cell * cell);
+      }
+    }
+  };
+  disk(0.0, 1.0, 0.1);    // plant 1 (31 cm²)
+  const size_t plant_1_end = ground.size();
+  disk(0.0, 1.33, 0.13);  // plant 2, leaning back 12 cm and touching plant 1
+  const size_t plants_end = ground.size();
+  disk(0.0, 1.72, 0.02);  // a small weed nearer plant 3: its part fails the size filter
+  // (and beyond every prediction's split radius:)
+  disk(0.45, 1.2, 0.03);  // beyond every prediction's split radius
+  // The whole blob: centroid between the plants, outside every region.
+  std::vector<tracking::Feature> whole(1);
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& g : ground) sum += g;
+  whole[0] = FeatureAt(sum.x() / ground.size(), sum.y() / ground.size(), 0.1);
+  std::vector<BlobDecision> d;
+  classifier.Classify(whole, crops, geometry::Matrix5d::Zero(), d);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_FALSE(d[0].crop);
+
+  std::vector<uint8_t> crop;
+  // Split at y = 1.225 (halfway): plant 1's part (its disk and plant 2's
+  // sliver below 1.225) centres within 1 cm of 1.0 and associates; plant 2's
+  // part centres 11 cm short of 1.45, outside a 1 cm region.
+  EXPECT_EQ(classifier.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop),
+            1);
+  ASSERT_EQ(crop.size(), ground.size());
+  for (size_t i = 0; i < plants_end; ++i) {
+    EXPECT_EQ(crop[i], ground[i].y() < 1.225 ? 1 : 0) << i;
+  }
+  EXPECT_GT(plants_end, plant_1_end);
+  for (size_t i = plants_end; i < ground.size(); ++i) EXPECT_EQ(crop[i], 0) << i;
+
+  // With a wide association region plant 2's part is crop too: two parts.
+  o.feature_sd_m = 0.1;
+  const CropClassifier wide(o);
+  EXPECT_EQ(wide.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop), 2);
+  for (size_t i = 0; i < plants_end; ++i) EXPECT_EQ(crop[i], 1) << i;
+  for (size_t i = plants_end; i < ground.size(); ++i) EXPECT_EQ(crop[i], 0) << i;
+
+  // Mismatched inputs are refused, naming both counts.
+  area.pop_back();
+  EXPECT_THROW(classifier.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop),
+               std::invalid_argument);
+  // No predictions: nothing is crop.
+  area.push_back(cell * cell);
+  EXPECT_EQ(classifier.SplitMerged(ground, area, false, {}, geometry::Matrix5d::Zero(), crop), 0);
+  for (uint8_t c : crop) EXPECT_EQ(c, 0);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 #include "engine/classify/crop_classifier.h"
 
 #include <Eigen/Dense>
+#include <stdexcept>
+#include <string>
 
 #include "engine/tracking/observation_model.h"
 
@@ -16,6 +18,7 @@ OptionErrors ClassifierOptions::Validate() const {
   RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
   RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
+  RequirePositive(e, "split_radius_m", split_radius_m);
   return e;
 }
 
@@ -80,6 +83,7 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
         d.distance_m = nu.norm();
         d.m = predictions[i].m;
         d.n = predictions[i].n;
+        d.predicted_ground_m = predictions[i].ground_m;
       }
     }
     d.associated = d.gamma2 <= options_.assoc_chi2;
@@ -88,6 +92,53 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
                     options_.assoc_chi2, options_.sure_crop_area_m2);
     out.push_back(d);
   }
+}
+
+int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
+                                std::span<const double> pixel_area_m2, bool clipped,
+                                std::span<const PredictedCrop> predictions,
+                                const geometry::Matrix5d& covariance,
+                                std::vector<uint8_t>& crop) const {
+  if (pixel_area_m2.size() != ground_m.size()) {
+    throw std::invalid_argument("SplitMerged: " + std::to_string(ground_m.size()) +
+                                " ground points but " + std::to_string(pixel_area_m2.size()) +
+                                " pixel areas");
+  }
+  crop.assign(ground_m.size(), 0);
+  if (predictions.empty() || ground_m.empty()) return 0;
+  // Parts: nearest prediction per pixel (−1: none within the radius).
+  const double r2 = options_.split_radius_m * options_.split_radius_m;
+  std::vector<int> part(ground_m.size(), -1);
+  std::vector<double> area(predictions.size(), 0.0);
+  std::vector<Eigen::Vector2d> moment(predictions.size(), Eigen::Vector2d::Zero());
+  for (size_t i = 0; i < ground_m.size(); ++i) {
+    double best = r2;
+    for (size_t k = 0; k < predictions.size(); ++k) {
+      const double d2 = (ground_m[i] - predictions[k].ground_m).squaredNorm();
+      if (d2 <= best) {
+        best = d2;
+        part[i] = static_cast<int>(k);
+      }
+    }
+    if (part[i] < 0) continue;
+    area[static_cast<size_t>(part[i])] += pixel_area_m2[i];
+    moment[static_cast<size_t>(part[i])] += pixel_area_m2[i] * ground_m[i];
+  }
+  std::vector<uint8_t> part_crop(predictions.size(), 0);
+  int parts = 0;
+  for (size_t k = 0; k < predictions.size(); ++k) {
+    if (!(area[k] > 0.0)) continue;
+    const Eigen::Vector2d nu = moment[k] / area[k] - predictions[k].ground_m;
+    const Eigen::Matrix2d s = AssociationCovariance(predictions[k], covariance, options_);
+    const double g2 = nu.dot(s.ldlt().solve(nu));
+    part_crop[k] = IsCrop(area[k], clipped, g2, options_.min_crop_area_m2, options_.assoc_chi2,
+                          options_.sure_crop_area_m2);
+    parts += part_crop[k];
+  }
+  for (size_t i = 0; i < ground_m.size(); ++i) {
+    if (part[i] >= 0) crop[i] = part_crop[static_cast<size_t>(part[i])];
+  }
+  return parts;
 }
 
 }  // namespace plantscale::classify

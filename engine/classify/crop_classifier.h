@@ -21,6 +21,7 @@
 // a 450 mm region, i.e. by size alone).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <limits>
 #include <span>
 #include <vector>
@@ -44,6 +45,8 @@ struct ClassifierOptions {
   double camera_pitch_sd_rad = 0.005;  // bounce, as the tracker's TrackerOptions
   double camera_roll_sd_rad = 0.0035;
   double camera_height_sd_m = 0.004;
+  // SplitMerged: a pixel belongs to the nearest predicted crop this close.
+  double split_radius_m = 0.3;  // beyond the largest crop's leaves (A: 0.2 m plants) plus spread
 
   OptionErrors Validate() const;
 };
@@ -75,6 +78,7 @@ struct BlobDecision {
   double gamma2 = std::numeric_limits<double>::infinity();  // to the nearest prediction (γ²)
   double distance_m = std::numeric_limits<double>::infinity();  // Euclidean, to that prediction
   int m = 0, n = 0;  // the nearest prediction's grid indices (valid when gamma2 is finite)
+  Eigen::Vector2d predicted_ground_m{0.0, 0.0};  // and its position (vehicle frame)
 };
 
 // The two-parameter rule alone (for sweeps): size filter, then association.
@@ -92,6 +96,19 @@ class CropClassifier {
   void Classify(std::span<const tracking::Feature> features,
                 std::span<const PredictedCrop> predictions, const geometry::Matrix5d& covariance,
                 std::vector<BlobDecision>& out) const;
+
+  // Merged plants (thesis fig. 2.17): a blob whose centroid missed every
+  // association region may be several touching plants, its centroid between
+  // them. Its pixels (ground points on the virtual plane, each standing for
+  // `pixel_area_m2[i]`) are split among the predicted crops, each pixel to
+  // the nearest prediction within `split_radius_m`, and every part is then
+  // classified as a blob of its own (size filter, then its centroid against
+  // its prediction's association region; `clipped` as the whole blob's).
+  // Writes 1 (crop) or 0 (weed) per pixel into `crop`; pixels beyond every
+  // prediction's radius are weed. Returns the number of crop parts.
+  int SplitMerged(std::span<const Eigen::Vector2d> ground_m, std::span<const double> pixel_area_m2,
+                  bool clipped, std::span<const PredictedCrop> predictions,
+                  const geometry::Matrix5d& covariance, std::vector<uint8_t>& crop) const;
 
   const ClassifierOptions& options() const { return options_; }
 

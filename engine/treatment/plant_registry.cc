@@ -16,15 +16,34 @@ PlantRegistry::PlantRegistry(const RegistryOptions& options) : options_(options)
 }
 
 int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecision& d,
-                           const classify::ClassifierOptions& c) {
+                           const classify::ClassifierOptions& c,
+                           const std::optional<Eigen::Vector2d>& predicted_bed) {
   PlantRecord* best = nullptr;
-  double best_d = options_.merge_radius_m;
+  const bool grid = d.associated && predicted_bed.has_value();
   // Records are appended as plants come into view; look back from the newest.
-  for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < 400; ++it) {
-    const double dist = (it->bed_m - bed).norm();
-    if (dist <= best_d) {
-      best_d = dist;
-      best = &*it;
+  constexpr std::ptrdiff_t kLookBack = 400;
+  if (grid) {
+    double best_d = options_.merge_radius_m;
+    for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < kLookBack;
+         ++it) {
+      if (!it->grid_plant) continue;
+      const double dist = (it->grid_bed_m - *predicted_bed).norm();
+      if (dist <= best_d) {
+        best_d = dist;
+        best = &*it;
+      }
+    }
+  }
+  if (!best) {
+    double best_d = options_.merge_radius_m;
+    for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < kLookBack;
+         ++it) {
+      if (grid && it->grid_plant) continue;  // another grid plant's record
+      const double dist = (it->bed_m - bed).norm();
+      if (dist <= best_d) {
+        best_d = dist;
+        best = &*it;
+      }
     }
   }
   if (!best) {
@@ -33,6 +52,13 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
     best->id = static_cast<int>(records_.size()) - 1;
   }
   PlantRecord& r = *best;
+  if (grid) {
+    // The grid plant's predicted position, averaged like the centroid.
+    const int n = r.grid_plant ? r.crop_votes : 0;
+    r.grid_bed_m = r.grid_plant ? Eigen::Vector2d((r.grid_bed_m * n + *predicted_bed) / (n + 1))
+                                : *predicted_bed;
+    r.grid_plant = true;
+  }
   r.bed_m = (r.bed_m * r.observations + bed) / (r.observations + 1);
   ++r.observations;
   (d.crop ? r.crop_votes : r.weed_votes) += 1;

@@ -1,12 +1,16 @@
 #pragma once
 // Per-plant record (issue 6): every classified blob is merged, in the bed
 // frame, into the nearest plant record within `merge_radius_m` (or starts a
-// new one), so each plant carries its votes, size, distance to the predicted
+// new one). A blob associated with a predicted crop joins the record of that
+// grid plant (its predicted bed position within `merge_radius_m`) wherever
+// its centroid lies, so the leaf fragments of one crop plant, whose
+// centroids scatter over its canopy, make one record. Each plant carries its votes, size, distance to the predicted
 // crop position, the map counters under it and whether a nozzle sprayed it —
 // and a sentence saying why, for the map and the station.
 
 #include <Eigen/Core>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +33,8 @@ struct PlantRecord {
   CellCounts counts;   // map counters under its position at the last update
   CellClass map_class = CellClass::kSoil;
   bool sprayed = false;
+  bool grid_plant = false;  // associated with a predicted crop at grid_bed_m
+  Eigen::Vector2d grid_bed_m{0.0, 0.0};
   std::string why;
 
   bool crop() const { return crop_votes >= weed_votes && crop_votes > 0; }
@@ -44,9 +50,11 @@ class PlantRegistry {
  public:
   explicit PlantRegistry(const RegistryOptions& options = {});
 
-  // One classified blob at `bed_m`; returns the record's id.
+  // One classified blob at `bed_m`; `predicted_bed_m`, when the blob is
+  // associated, is its predicted crop's bed position. Returns the record's id.
   int Observe(const Eigen::Vector2d& bed_m, const classify::BlobDecision& decision,
-              const classify::ClassifierOptions& classifier);
+              const classify::ClassifierOptions& classifier,
+              const std::optional<Eigen::Vector2d>& predicted_bed_m = std::nullopt);
   // A nozzle covered this bed strip: records inside it are sprayed. Appends
   // the ids of records that were not sprayed before to `newly` when given.
   void MarkSprayed(const NozzleTarget& strip, std::vector<int>* newly = nullptr);

@@ -1,5 +1,7 @@
 #include "engine/treatment/treatment_system.h"
 
+#include <algorithm>
+
 namespace plantscale::treatment {
 
 OptionErrors TreatmentOptions::Validate() const {
@@ -20,6 +22,27 @@ void FeatureBlobIndices(std::span<const vision::Blob> blobs, std::vector<int>& o
   }
 }
 
+bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
+                                        std::span<const classify::PredictedCrop> crops) const {
+  const std::optional<Quad> q =
+      FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
+                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0);
+  if (!q) return false;
+  for (const classify::PredictedCrop& c : crops) {
+    bool pos = false, neg = false;
+    for (size_t i = 0; i < 4; ++i) {
+      const Eigen::Vector2d& a = (*q)[i];
+      const Eigen::Vector2d& e = (*q)[(i + 1) % 4];
+      const double cross = (e.x() - a.x()) * (c.ground_m.y() - a.y()) -
+                           (e.y() - a.y()) * (c.ground_m.x() - a.x());
+      pos |= cross > 0.0;
+      neg |= cross < 0.0;
+    }
+    if (!(pos && neg)) return true;
+  }
+  return false;
+}
+
 TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
                                  const TreatmentOptions& options, NozzleSink sink)
     : camera_(camera),
@@ -30,10 +53,14 @@ TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
       registry_(options.registry) {}
 
 void TreatmentSystem::AddFootprint(const BedPose& pose, const vision::Blob& b, bool crop) {
+  AddFootprint(pose, b.centroid_px, b.bbox_px, crop);
+}
+
+void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px,
+                                   const cv::Rect& box, bool crop) {
   const double scale = crop ? options_.crop_footprint_scale : options_.weed_footprint_scale;
-  const std::optional<Quad> q =
-      FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
-                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, scale);
+  const std::optional<Quad> q = FootprintOnPlane(camera_, centroid_px, box.x, box.y,
+                                                 box.x + box.width, box.y + box.height, scale);
   if (!q) return;
   Quad bed;
   for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i]);
@@ -63,15 +90,43 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   classifier_.Classify(features, crops, tracker.covariance(), frame_.decisions);
   frame_.classified = true;
   const BedPose pose = BedPoseFromGrid(utime, state, tracker.forward_distance_m(), 0.0);
+  struct PlantFootprint {
+    int m, n;
+    double area_px;
+    Eigen::Vector2d moment_px;
+    cv::Rect box;
+  };
+  std::vector<PlantFootprint> plants;
   for (size_t i = 0; i < features.size(); ++i) {
     const classify::BlobDecision& d = frame_.decisions[i];
-    // Crop by size alone (merged plants): its centroid is no plant's centre,
-    // so it marks no cells; the plants in it are mapped from other frames.
-    if (!d.crop || d.associated) {
-      AddFootprint(pose, blobs[static_cast<size_t>(blob_of_feature[i])], d.crop);
+    const vision::Blob& blob = blobs[static_cast<size_t>(blob_of_feature[i])];
+    if (d.crop && d.associated && options_.crop_footprint_per_plant) {
+      auto it = std::find_if(plants.begin(), plants.end(),
+                             [&](const PlantFootprint& p) { return p.m == d.m && p.n == d.n; });
+      if (it == plants.end()) {
+        plants.push_back({d.m, d.n, 0.0, Eigen::Vector2d::Zero(), blob.bbox_px});
+        it = plants.end() - 1;
+      }
+      it->area_px += blob.area_px;
+      it->moment_px += blob.area_px * blob.centroid_px;
+      it->box |= blob.bbox_px;
+    } else if (options_.abstain_merged && !d.crop && !d.associated &&
+               (d.clipped || d.area_m2 >= options_.classifier.min_crop_area_m2) &&
+               CoversAPrediction(blob, crops)) {
+      // Possibly merged plants: no votes either way.
+    } else if (!d.crop || d.associated) {
+      // Crop by size alone (merged plants): its centroid is no plant's
+      // centre, so it marks no cells; the plants in it are mapped from other
+      // frames.
+      AddFootprint(pose, blob, d.crop);
     }
-    frame_.plant_ids[i] =
-        registry_.Observe(VehicleToBed(pose, features[i].ground_m), d, options_.classifier);
+    frame_.plant_ids[i] = registry_.Observe(
+        VehicleToBed(pose, features[i].ground_m), d, options_.classifier,
+        d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
+                     : std::nullopt);
+  }
+  for (const PlantFootprint& p : plants) {
+    if (p.area_px > 0.0) AddFootprint(pose, p.moment_px / p.area_px, p.box, true);
   }
   return frame_;
 }

@@ -311,5 +311,37 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   EXPECT_NE(b.why.find("not sprayed"), std::string::npos) << b.why;
 }
 
+TEST(PlantRegistry, LeafFragmentsOfOneGridPlantMakeOneRecord) {
+  PlantRegistry reg;  // merge radius 50 mm
+  classify::ClassifierOptions c;
+  classify::BlobDecision leaf;
+  leaf.crop = true;
+  leaf.associated = true;
+  leaf.area_m2 = 0.01;
+  leaf.gamma2 = 2.0;
+  const Eigen::Vector2d plant(0.0, 1.0);
+  // Three leaves 80 mm apart, all associated with the same predicted plant
+  // (whose bed position jitters by a few mm from frame to frame).
+  EXPECT_EQ(reg.Observe({-0.08, 1.0}, leaf, c, plant), 0);
+  EXPECT_EQ(reg.Observe({0.0, 1.08}, leaf, c, Eigen::Vector2d(0.004, 1.003)), 0);
+  EXPECT_EQ(reg.Observe({0.08, 1.0}, leaf, c, Eigen::Vector2d(-0.003, 0.998)), 0);
+  // The next grid plant along the row is another record.
+  EXPECT_EQ(reg.Observe({0.0, 1.45}, leaf, c, Eigen::Vector2d(0.0, 1.45)), 1);
+  // Without a prediction the same fragments split by the merge radius.
+  classify::BlobDecision weed;
+  weed.area_m2 = 0.01;
+  EXPECT_EQ(reg.Observe({-0.08, 2.0}, weed, c), 2);
+  EXPECT_EQ(reg.Observe({0.08, 2.0}, weed, c), 3);
+  // An unassociated blob next to a grid plant's record does not join it
+  // only by the prediction: it joins by its centroid, as before.
+  EXPECT_EQ(reg.Observe({0.0, 1.45}, weed, c), 1);
+  ASSERT_EQ(reg.records().size(), 4u);
+  EXPECT_EQ(reg.records()[0].crop_votes, 3);
+  EXPECT_TRUE(reg.records()[0].grid_plant);
+  EXPECT_NEAR(reg.records()[0].grid_bed_m.x(), (0.0 + 0.004 - 0.003) / 3.0, 1e-12);
+  EXPECT_NEAR(reg.records()[0].grid_bed_m.y(), (1.0 + 1.003 + 0.998) / 3.0, 1e-12);
+  EXPECT_FALSE(reg.records()[2].grid_plant);
+}
+
 }  // namespace
 }  // namespace plantscale::treatment
