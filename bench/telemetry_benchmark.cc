@@ -40,6 +40,20 @@ std::string BenchUrl() {
   return url ? url : LcmTransportOptions{}.url;
 }
 
+// A sending and a receiving LCM instance on the benchmark URL; false (and
+// the benchmark skipped, saying why: most often the missing multicast
+// route) when LCM cannot start.
+bool OpenPair(benchmark::State& state, std::unique_ptr<LcmTransport>& tx, std::unique_ptr<LcmTransport>& rx) {
+  try {
+    tx = std::make_unique<LcmTransport>(BenchUrl());
+    rx = std::make_unique<LcmTransport>(BenchUrl());
+    return true;
+  } catch (const TransportError& e) {
+    state.SkipWithError(e.what());
+    return false;
+  }
+}
+
 plantscale_grid_state_t SomeGrid() {
   GridEstimate e;
   e.lines_in_view = {0, 1, 2, 3, 4};
@@ -51,13 +65,7 @@ plantscale_grid_state_t SomeGrid() {
 // waits for it on a second LCM instance; counters give p50/p99/max in ms.
 void BM_PublishReceiveLatency(benchmark::State& state) {
   std::unique_ptr<LcmTransport> tx, rx;
-  try {
-    tx = std::make_unique<LcmTransport>(BenchUrl());
-    rx = std::make_unique<LcmTransport>(BenchUrl());
-  } catch (const TransportError& e) {
-    state.SkipWithError(e.what());  // says when the multicast route is missing
-    return;
-  }
+  if (!OpenPair(state, tx, rx)) return;
   std::vector<double> latencies_ms;
   std::atomic<int64_t> received{0};
   rx->Subscribe(channels::kGrid, [&](const ReceivedMessage& m) {
@@ -97,13 +105,7 @@ void BM_TenMinuteFastReplayNoLoss(benchmark::State& state) {
   o.length_m = 600.0 * o.speed_m_s;  // 10 minutes
   ui::WriteSyntheticLog(log, o);
   std::unique_ptr<LcmTransport> tx, rx;
-  try {
-    tx = std::make_unique<LcmTransport>(BenchUrl());
-    rx = std::make_unique<LcmTransport>(BenchUrl());
-  } catch (const TransportError& e) {
-    state.SkipWithError(e.what());  // says when the multicast route is missing
-    return;
-  }
+  if (!OpenPair(state, tx, rx)) return;
   int64_t messages = 0, lost = 0;
   for (auto _ : state) {
     Subscriber sub;
