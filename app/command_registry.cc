@@ -29,4 +29,15 @@ int CommandRegistry::Run() const {
   return 2;
 }
 
+void AddRunOptions(CLI::App* cmd, std::string& preset, int& seeds, std::optional<int64_t>& seed,
+                   std::optional<double>* length_m, const std::string& seeds_help) {
+  cmd->add_option("--preset", preset, "preset name or YAML file")->capture_default_str();
+  cmd->add_option("--seeds", seeds, seeds_help)->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--seed", seed, "first seed (default: the preset's)")->check(CLI::NonNegativeNumber);
+  if (length_m != nullptr) {
+    cmd->add_option("--length-m", *length_m, "distance driven per run (default: the preset's)")
+        ->check(CLI::PositiveNumber);
+  }
+}
+
 }  // namespace plantscale::app

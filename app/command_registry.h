@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,5 +53,11 @@ class CommandRegistry {
   std::vector<Entry> entries_;
   std::vector<std::shared_ptr<void>> kept_;
 };
+
+// The simulator-run options every `evaluate` command shares: --preset,
+// --seeds (`seeds_help`), --seed and, when given, --length-m.
+void AddRunOptions(CLI::App* cmd, std::string& preset, int& seeds, std::optional<int64_t>& seed,
+                   std::optional<double>* length_m = nullptr,
+                   const std::string& seeds_help = "number of seeds");
 
 }  // namespace plantscale::app

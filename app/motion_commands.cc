@@ -118,13 +118,9 @@ void AddMotionCommands(CommandRegistry& registry) {
       "motion",
       "Sanchiz & Pla feature correspondence, motion without odometry and mosaic row fit",
       [&a, &global] { return EvaluateMotionCommand(a, global); }, EvaluateCommand(registry));
-  cmd->add_option("--preset", a.preset, "preset name or YAML file")->capture_default_str();
-  cmd->add_option("--seeds", a.seeds, "number of sequences (seeds)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+  AddRunOptions(cmd, a.preset, a.seeds, a.seed, nullptr, "number of sequences (seeds)");
   cmd->add_option("--frames", a.frames, "images per sequence")
       ->check(CLI::Range(2, 100000))->capture_default_str();
-  cmd->add_option("--seed", a.seed, "first seed (default: the preset's)")
-      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--camera", a.camera,
                   "camera name or YAML file instead of the preset's (e.g. sanchiz_pla_90, the "
                   "paper's second set-up)");

@@ -262,13 +262,9 @@ void AddRowsCommands(CommandRegistry& registry) {
   CLI::App* cmd = registry.Add(
       "rows", "crop-row detection (CRDA) on perspective simulator views, or labelled photographs",
       [&args, &global] { return EvaluateRowsCommand(args, global); }, EvaluateCommand(registry));
-  cmd->add_option("--preset", args.preset, "preset name or YAML file")->capture_default_str();
-  cmd->add_option("--seeds", args.seeds, "number of seeds")->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  AddRunOptions(cmd, args.preset, args.seeds, args.seed);
   cmd->add_option("--frames", args.frames, "scored frames per seed")->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--seed", args.seed, "first seed (default: the preset's)")
-      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--tilt-deg", args.tilt_deg, "camera tilt below the horizontal")
       ->check(CLI::Range(1.0, 89.0))->capture_default_str();
   cmd->add_option("--images", args.images,

@@ -182,13 +182,9 @@ void AddSegmentCommands(CommandRegistry& registry) {
       "segmentation", "plant/soil pixel accuracy, ROC and AUC against simulator truth",
       [&ev, &global] { return EvaluateSegmentationCommand(ev, global); },
       EvaluateCommand(registry));
-  cmd->add_option("--preset", ev.preset, "preset name or YAML file")->capture_default_str();
-  cmd->add_option("--seeds", ev.seeds, "number of seeds")->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  AddRunOptions(cmd, ev.preset, ev.seeds, ev.seed);
   cmd->add_option("--frames", ev.frames, "non-overlapping frames per seed")
       ->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--seed", ev.seed, "first seed (default: the preset's)")
-      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--image", ev.image, "nir or rgb (default: the preset's)")
       ->check(CLI::IsMember({"nir", "rgb"}));
   cmd->add_option("--costs-ratio", ev.costs_ratio, "Φ of thesis eq. 2.23 for baselines")

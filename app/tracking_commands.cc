@@ -144,13 +144,7 @@ void AddTrackingCommands(CommandRegistry& registry) {
       "tracking", "crop-grid tracker accuracy, consistency and initialisation against truth",
       [&args, &global] { return EvaluateTrackingCommand(args, global); },
       EvaluateCommand(registry));
-  cmd->add_option("--preset", args.preset, "preset name or YAML file")->capture_default_str();
-  cmd->add_option("--seeds", args.seeds, "number of seeds")->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_option("--seed", args.seed, "first seed (default: the preset's)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--length-m", args.length_m, "distance driven per run (default: the preset's)")
-      ->check(CLI::PositiveNumber);
+  AddRunOptions(cmd, args.preset, args.seeds, args.seed, &args.length_m);
   cmd->add_option("--spacing-offset-mm", args.spacing_offset_mm,
                   "start the estimated spacings this far off the planted ones")
       ->capture_default_str();

@@ -177,13 +177,7 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       "treatment", "crop/weed classification, treatment map and spraying against truth",
       [&args, &global] { return EvaluateTreatmentCommand(args, global); },
       EvaluateCommand(registry));
-  cmd->add_option("--preset", args.preset, "preset name or YAML file")->capture_default_str();
-  cmd->add_option("--seeds", args.seeds, "number of seeds")->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_option("--seed", args.seed, "first seed (default: the preset's)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--length-m", args.length_m, "distance driven per run (default: the preset's)")
-      ->check(CLI::PositiveNumber);
+  AddRunOptions(cmd, args.preset, args.seeds, args.seed, &args.length_m);
   cmd->add_option("--mode", args.mode, "what is sprayed: crop or weed")
       ->check(CLI::IsMember({"crop", "weed"}))->capture_default_str();
   cmd->add_option("--latency-ms", args.latency_ms, "valve latency the scheduler leads by")
