@@ -72,6 +72,29 @@ struct Band {
   int rows = 0;        // work rows in the band
 };
 
+// `n_bands` horizontal bands of `image` (CV_32F, `scale` image pixels per
+// row of it) and, in `profiles` (n_bands × cols), each band's column sums.
+std::vector<Band> SplitIntoBands(const cv::Mat& image, int n_bands, double scale, double v_bottom,
+                                 std::vector<float>& profiles) {
+  const int w = image.cols, h = image.rows;
+  std::vector<Band> bands(static_cast<size_t>(n_bands));
+  profiles.assign(static_cast<size_t>(n_bands) * static_cast<size_t>(w), 0.0F);
+  for (int k = 0; k < n_bands; ++k) {
+    const int r0 = k * h / n_bands;
+    const int r1 = (k + 1) * h / n_bands;
+    Band& b = bands[static_cast<size_t>(k)];
+    b.rows = r1 - r0;
+    b.v_top = r0 * scale;
+    b.dv = v_bottom - 0.5 * (r0 + r1) * scale;
+    float* p = &profiles[static_cast<size_t>(k) * static_cast<size_t>(w)];
+    for (int r = r0; r < r1; ++r) {
+      const float* row = image.ptr<float>(r);
+      for (int x = 0; x < w; ++x) p[x] += row[x];
+    }
+  }
+  return bands;
+}
+
 double MeanOccupancy(const std::vector<DetectedRow>& rows) {
   if (rows.empty()) return 0.0;
   double sum = 0.0;
@@ -137,21 +160,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
 
   // Bands and their column profiles.
   const int n_bands = std::min(o.strips, h);
-  std::vector<Band> bands(static_cast<size_t>(n_bands));
-  profiles_.assign(static_cast<size_t>(n_bands) * w, 0.0F);
-  for (int k = 0; k < n_bands; ++k) {
-    const int r0 = k * h / n_bands;
-    const int r1 = (k + 1) * h / n_bands;
-    Band& b = bands[static_cast<size_t>(k)];
-    b.rows = r1 - r0;
-    b.v_top = r0 * kh;
-    b.dv = v_bottom - 0.5 * (r0 + r1) * kh;
-    float* p = &profiles_[static_cast<size_t>(k) * w];
-    for (int r = r0; r < r1; ++r) {
-      const float* row = work_.ptr<float>(r);
-      for (int x = 0; x < w; ++x) p[x] += row[x];
-    }
-  }
+  const std::vector<Band> bands = SplitIntoBands(work_, n_bands, kh, v_bottom, profiles_);
 
   double total_mass = 0.0;
   for (const float m : profiles_) total_mass += static_cast<double>(m);
@@ -581,21 +590,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   const double kfw = W / fw;
   const double kfh = H / fh;
   const int fit_bands = std::max(4, fh / 4);
-  fit_profiles_.assign(static_cast<size_t>(fit_bands) * fw, 0.0F);
-  std::vector<Band> fbands(static_cast<size_t>(fit_bands));
-  for (int k = 0; k < fit_bands; ++k) {
-    const int r0 = k * fh / fit_bands;
-    const int r1 = (k + 1) * fh / fit_bands;
-    Band& b = fbands[static_cast<size_t>(k)];
-    b.rows = r1 - r0;
-    b.v_top = r0 * kfh;
-    b.dv = v_bottom - 0.5 * (r0 + r1) * kfh;
-    float* p = &fit_profiles_[static_cast<size_t>(k) * fw];
-    for (int r = r0; r < r1; ++r) {
-      const float* row = fit_.ptr<float>(r);
-      for (int x = 0; x < fw; ++x) p[x] += row[x];
-    }
-  }
+  const std::vector<Band> fbands = SplitIntoBands(fit_, fit_bands, kfh, v_bottom, fit_profiles_);
   for (int iteration = 0; iteration < o.fit_iterations; ++iteration) {
     Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
     Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
