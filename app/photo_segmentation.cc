@@ -164,16 +164,17 @@ std::vector<fs::path> CollectImages(const std::vector<fs::path>& inputs,
   return files;
 }
 
-SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log) {
-  SegmentPhotosResult result;
-  const std::vector<fs::path> files = CollectImages(request.inputs, result.errors);
+void ForEachImage(const std::vector<fs::path>& inputs, const fs::path& out, const std::string& label,
+                  bool progress, std::ostream& log, ImageBatchResult& result,
+                  const std::function<void(const fs::path&)>& one) {
+  const std::vector<fs::path> files = CollectImages(inputs, result.errors);
   result.failed = static_cast<int>(result.errors.size());
-  fs::create_directories(request.out);
-  ProgressBar bar(log, "segment", static_cast<int>(files.size()), request.progress);
+  fs::create_directories(out);
+  ProgressBar bar(log, label, static_cast<int>(files.size()), progress);
   int done = 0;
   for (const fs::path& file : files) {
     try {
-      SegmentOne(request, file);
+      one(file);
       ++result.images;
     } catch (const std::exception& e) {
       result.errors.push_back(file.string() + ": " + e.what());
@@ -182,6 +183,12 @@ SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostr
     bar.Update(++done);
   }
   bar.Finish();
+}
+
+SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log) {
+  SegmentPhotosResult result;
+  ForEachImage(request.inputs, request.out, "segment", request.progress, log, result,
+               [&request](const fs::path& file) { SegmentOne(request, file); });
   return result;
 }
 

@@ -4,6 +4,7 @@
 // reads and writes files; the segmentation itself is engine/vision.
 
 #include <filesystem>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <iosfwd>
 #include <string>
@@ -22,17 +23,26 @@ struct SegmentPhotosRequest {
   bool progress = true;
 };
 
-struct SegmentPhotosResult {
+// What a batch of photographs came to (segment, detect-rows).
+struct ImageBatchResult {
   int images = 0;
   int failed = 0;
   std::vector<std::string> errors;  // "FILE: reason"
 };
+using SegmentPhotosResult = ImageBatchResult;
 
 // Images in `inputs` (folders are listed, sorted, non-recursively). A folder
 // with no images and every unreadable file is an error of its own; the
 // others are still processed.
 std::vector<std::filesystem::path> CollectImages(const std::vector<std::filesystem::path>& inputs,
                                                  std::vector<std::string>& errors);
+
+// Runs `one` on every image of `inputs` into `out` (created), with a
+// progress bar labelled `label`: each image done is counted, each that
+// throws is recorded as "FILE: reason" and the batch goes on.
+void ForEachImage(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& out,
+                  const std::string& label, bool progress, std::ostream& log, ImageBatchResult& result,
+                  const std::function<void(const std::filesystem::path&)>& one);
 
 // A PNG/JPEG as 8-bit grey or BGR; throws DataError naming what is wrong
 // (empty, truncated, corrupt, unsupported depth or channels).

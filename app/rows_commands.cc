@@ -220,23 +220,11 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
 
 DetectRowsResult DetectRows(const DetectRowsRequest& request, std::ostream& log) {
   DetectRowsResult result;
-  const std::vector<fs::path> files = CollectImages(request.inputs, result.errors);
-  result.failed = static_cast<int>(result.errors.size());
-  fs::create_directories(request.out);
   rows::RowDetector detector{rows::RowDetectorOptions{}};
-  ProgressBar bar(log, "detect-rows", static_cast<int>(files.size()), request.progress);
-  int done = 0;
-  for (const fs::path& file : files) {
-    try {
-      if (DetectOne(file, request.out, detector)) ++result.with_rows;
-      ++result.images;
-    } catch (const std::exception& e) {
-      result.errors.push_back(file.string() + ": " + e.what());
-      ++result.failed;
-    }
-    bar.Update(++done);
-  }
-  bar.Finish();
+  ForEachImage(request.inputs, request.out, "detect-rows", request.progress, log, result,
+               [&](const fs::path& file) {
+                 if (DetectOne(file, request.out, detector)) ++result.with_rows;
+               });
   return result;
 }
 

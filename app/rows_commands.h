@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/command_registry.h"
+#include "app/photo_segmentation.h"
 
 namespace plantscale::app {
 
@@ -18,11 +19,8 @@ struct DetectRowsRequest {
   bool progress = true;
 };
 
-struct DetectRowsResult {
-  int images = 0;
+struct DetectRowsResult : ImageBatchResult {
   int with_rows = 0;
-  int failed = 0;
-  std::vector<std::string> errors;  // "FILE: reason"
 };
 
 // For each NAME.ext: OUT/NAME_rows.csv (row,v,u), OUT/NAME_rows.png (the
