@@ -11,7 +11,6 @@
 
 #include "app/config_loader.h"
 #include "app/photo_segmentation.h"
-#include "app/progress.h"
 #include "app/rows_eval.h"
 #include "app/segment_commands.h"
 

@@ -186,7 +186,7 @@ TreatmentStage::TreatmentStage(const geometry::CameraModel& camera,
                                const treatment::TreatmentOptions& options,
                                const SegmentationStage& segmentation, const TrackerStage& tracker,
                                treatment::NozzleSink sink)
-    : system_(camera, options, std::move(sink)), camera_(camera), segmentation_(segmentation), tracker_(tracker) {
+    : system_(camera, options, std::move(sink)), segmentation_(segmentation), tracker_(tracker) {
   const auto n = static_cast<size_t>(options.scheduler.bar.nozzles);
   open_since_.assign(n, -1);
   open_sum_.assign(n, Eigen::Vector2d::Zero());
@@ -252,63 +252,10 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
   report.initialised_now = tracker_.initialised_now();
   const treatment::FrameTreatment& t = system_.OnFrame(frame.utime, tracker_.tracker(), report,
                                                        blobs, features_, blob_of_feature_);
-  if (t.map_reset) next_tile_row_ = 0, observed_.clear();
-  if (t.classified) MarkObserved(frame.image.cols, frame.image.rows);
+  if (t.map_reset) next_tile_row_ = 0;
   PublishPlants(frame, t, publisher);
   PublishNozzles(frame.utime, publisher);
   PublishTiles(frame.utime, publisher);
-}
-
-// Cells of the map under the camera's view this frame (their centre inside
-// the ground quad of the image corners): only those are soil when no plant
-// voted for them; the rest of the map is unknown in the tiles.
-void TreatmentStage::MarkObserved(int width_px, int height_px) {
-  const tracking::GridTracker& tracker = tracker_.tracker();
-  const geometry::CameraModel& camera = camera_;
-  const treatment::BedPose pose =
-      treatment::BedPoseFromGrid(tracker.utime(), tracker.state(), tracker.forward_distance_m(), 0.0);
-  treatment::Quad quad;
-  const double w = width_px, h = height_px;
-  const Eigen::Vector2d corners[4] = {{0.0, h}, {w, h}, {w, 0.0}, {0.0, 0.0}};
-  for (int i = 0; i < 4; ++i) {
-    const auto ground = camera.ImageToPlane(corners[i], 0.0);
-    if (!ground) return;  // a view up to the horizon has no ground quad
-    quad[static_cast<size_t>(i)] = treatment::VehicleToBed(pose, *ground);
-  }
-  const treatment::TreatmentMap& map = system_.map();
-  const double cell = map.options().cell_m;
-  Eigen::Vector2d lo = quad[0], hi = quad[0];
-  for (const Eigen::Vector2d& q : quad) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
-  const int c0 = std::max(0, static_cast<int>(std::floor((lo.x() - map.origin_x_m()) / cell)));
-  const int c1 = std::min(map.columns() - 1, static_cast<int>(std::floor((hi.x() - map.origin_x_m()) / cell)));
-  const int r0 = std::max(0, static_cast<int>(std::floor((lo.y() - map.options().start_y_m) / cell)));
-  const int r1 = static_cast<int>(std::floor((hi.y() - map.options().start_y_m) / cell));
-  if (r1 < r0 || c1 < c0 || r1 > 1'000'000) return;
-  const size_t columns = static_cast<size_t>(map.columns());
-  if (observed_.size() < static_cast<size_t>(r1 + 1) * columns) observed_.resize(static_cast<size_t>(r1 + 1) * columns, 0);
-  // Inside a convex quad: on the same side of all four edges.
-  const auto inside = [&quad](const Eigen::Vector2d& p) {
-    int sign = 0;
-    for (size_t i = 0; i < 4; ++i) {
-      const Eigen::Vector2d e = quad[(i + 1) % 4] - quad[i], d = p - quad[i];
-      const double cross = e.x() * d.y() - e.y() * d.x();
-      const int s = cross > 0 ? 1 : (cross < 0 ? -1 : 0);
-      if (s != 0 && sign != 0 && s != sign) return false;
-      if (s != 0) sign = s;
-    }
-    return true;
-  };
-  for (int r = r0; r <= r1; ++r) {
-    for (int c = c0; c <= c1; ++c) {
-      uint8_t& seen = observed_[static_cast<size_t>(r) * columns + static_cast<size_t>(c)];
-      if (!seen && inside(map.CellCentre(c, r))) seen = 1;
-    }
-  }
-}
-
-bool TreatmentStage::Observed(int column, int row) const {
-  const size_t i = static_cast<size_t>(row) * static_cast<size_t>(system_.map().columns()) + static_cast<size_t>(column);
-  return row >= 0 && i < observed_.size() && observed_[i] != 0;
 }
 
 // Plants whose record changed since the last message, every 0.5 s of
@@ -382,7 +329,7 @@ void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher) {
           const treatment::CellClass cls = c < map.columns() ? map.ClassOf(c, r) : treatment::CellClass::kSoil;
           d.cells.push_back(c >= map.columns() ? plantscale_map_tile_t::CELL_UNKNOWN
                             : map.Treated(c, r) ? plantscale_map_tile_t::CELL_TREATED
-                            : cls == treatment::CellClass::kSoil && !Observed(c, r)
+                            : cls == treatment::CellClass::kSoil && !map.Observed(c, r)
                                 ? plantscale_map_tile_t::CELL_UNKNOWN
                                 : TileCell(cls));
         }

@@ -118,11 +118,8 @@ class TreatmentStage : public Stage {
                      Publisher& publisher);
   void PublishNozzles(int64_t utime, Publisher& publisher);
   void PublishTiles(int64_t utime, Publisher& publisher);
-  void MarkObserved(int width_px, int height_px);
-  bool Observed(int column, int row) const;
 
   treatment::TreatmentSystem system_;
-  geometry::CameraModel camera_;
   const SegmentationStage& segmentation_;
   const TrackerStage& tracker_;
   std::vector<tracking::Feature> features_;
@@ -133,7 +130,6 @@ class TreatmentStage : public Stage {
   std::vector<int> open_ticks_;
   std::vector<NozzleShot> shots_;         // finished since the last message
   int next_tile_row_ = 0;
-  std::vector<uint8_t> observed_;  // map layout: 1 where the camera has seen the cell
   int tile_revision_ = 0;
   std::vector<int> changed_plants_;  // record ids since the last plant list
   int64_t last_plants_utime_ = -1;

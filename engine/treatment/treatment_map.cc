@@ -54,13 +54,13 @@ TreatmentMap::TreatmentMap(const TreatmentMapOptions& options) : options_(option
 void TreatmentMap::GrowTo(int row) {
   if (row >= rows()) {
     counts_.resize(static_cast<size_t>(row + 1) * columns_);
-    treated_.resize(counts_.size());
+    flags_.resize(counts_.size());
   }
 }
 
 void TreatmentMap::Clear() {
   counts_.clear();
-  treated_.clear();
+  flags_.clear();
 }
 
 bool TreatmentMap::CellOf(const Eigen::Vector2d& b, int& column, int& row) const {
@@ -94,7 +94,8 @@ CellClass TreatmentMap::ClassAt(const Eigen::Vector2d& b) const {
   return CellOf(b, column, row) ? ClassOf(column, row) : CellClass::kSoil;
 }
 
-int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
+template <typename F>
+int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   double x0 = q[0].x(), x1 = x0, y0 = q[0].y(), y1 = y0;
   for (const Eigen::Vector2d& p : q) {
     if (!p.allFinite()) return 0;
@@ -108,17 +109,26 @@ int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
   const int r1 = std::min(kMaxRows - 1, static_cast<int>(std::floor((y1 - options_.start_y_m) / s)));
   if (c0 > c1 || r0 > r1) return 0;
   GrowTo(r1);
-  int counted = 0;
+  int cells = 0;
   for (int r = r0; r <= r1; ++r) {
     for (int c = c0; c <= c1; ++c) {
       if (!Inside(q, CellCentre(c, r))) continue;
-      CellCounts& cell = counts_[static_cast<size_t>(r) * columns_ + c];
-      uint16_t& n = crop ? cell.crop : cell.weed;
-      if (n < std::numeric_limits<uint16_t>::max()) ++n;
-      ++counted;
+      f(static_cast<size_t>(r) * columns_ + c);
+      ++cells;
     }
   }
-  return counted;
+  return cells;
+}
+
+int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
+  return ForCellsIn(q, [&](size_t i) {
+    uint16_t& n = crop ? counts_[i].crop : counts_[i].weed;
+    if (n < std::numeric_limits<uint16_t>::max()) ++n;
+  });
+}
+
+void TreatmentMap::MarkObserved(const Quad& q) {
+  ForCellsIn(q, [&](size_t i) { flags_[i] |= kObservedFlag; });
 }
 
 TreatmentMap::CellRange TreatmentMap::RangeOf(double x0, double x1, double y0, double y1) const {
@@ -155,13 +165,13 @@ void TreatmentMap::MarkTreated(double x0, double x1, double y0, double y1) {
   if (k.c0 > k.c1 || k.r0 > k.r1) return;
   GrowTo(k.r1);
   for (int r = k.r0; r <= k.r1; ++r) {
-    for (int c = k.c0; c <= k.c1; ++c) treated_[static_cast<size_t>(r) * columns_ + c] = 1;
+    for (int c = k.c0; c <= k.c1; ++c) flags_[static_cast<size_t>(r) * columns_ + c] |= kTreatedFlag;
   }
 }
 
-bool TreatmentMap::Treated(int column, int row) const {
-  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return false;
-  return treated_[static_cast<size_t>(row) * columns_ + column] != 0;
+uint8_t TreatmentMap::Flags(int column, int row) const {
+  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return 0;
+  return flags_[static_cast<size_t>(row) * columns_ + column];
 }
 
 }  // namespace plantscale::treatment

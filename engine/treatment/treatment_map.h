@@ -56,7 +56,11 @@ class TreatmentMap {
   bool AnyIn(double x0, double x1, double y0, double y1, CellClass cls) const;
   // A nozzle sprayed the bed rectangle: its cells (as AnyIn picks them) are treated.
   void MarkTreated(double x0, double x1, double y0, double y1);
-  bool Treated(int column, int row) const;
+  bool Treated(int column, int row) const { return (Flags(column, row) & kTreatedFlag) != 0; }
+  // The camera saw the convex quad (bed frame): cells whose centre lies in
+  // it are observed, so soil there is soil; never-observed cells are unknown.
+  void MarkObserved(const Quad& bed_quad);
+  bool Observed(int column, int row) const { return (Flags(column, row) & kObservedFlag) != 0; }
 
   int columns() const { return columns_; }
   int rows() const { return static_cast<int>(counts_.size()) / columns_; }
@@ -65,6 +69,12 @@ class TreatmentMap {
 
  private:
   void GrowTo(int row);
+  // Calls f(index) for every cell whose centre lies inside the convex quad,
+  // growing the map to it; returns the number of cells.
+  template <typename F>
+  int ForCellsIn(const Quad& q, F&& f);
+  uint8_t Flags(int column, int row) const;
+  static constexpr uint8_t kTreatedFlag = 1, kObservedFlag = 2;
   struct CellRange {
     int c0, c1, r0, r1;  // inclusive; empty when c0 > c1 or r0 > r1
   };
@@ -73,7 +83,7 @@ class TreatmentMap {
   TreatmentMapOptions options_;
   int columns_ = 0;
   std::vector<CellCounts> counts_;  // row-major, row 0 at start_y_m
-  std::vector<uint8_t> treated_;     // same layout: 1 where a nozzle sprayed
+  std::vector<uint8_t> flags_;       // same layout: kTreatedFlag | kObservedFlag
 };
 
 }  // namespace plantscale::treatment

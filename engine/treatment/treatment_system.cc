@@ -90,6 +90,13 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   classifier_.Classify(features, crops, tracker.covariance(), frame_.decisions);
   frame_.classified = true;
   const BedPose pose = BedPoseFromGrid(utime, state, tracker.forward_distance_m(), 0.0);
+  // What the camera saw this frame (the image on the plane): soil there is soil.
+  const double w = camera_.width(), h = camera_.height();
+  if (const std::optional<Quad> view = FootprintOnPlane(camera_, {0.5 * w, 0.5 * h}, 0.0, 0.0, w, h, 1.0)) {
+    Quad bed;
+    for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*view)[i]);
+    map_.MarkObserved(bed);
+  }
   struct PlantFootprint {
     int m, n;
     double area_px;

@@ -99,8 +99,18 @@ TEST(TreatmentMap, SprayedStripsMarkExactlyTheirCellsAsTreated) {
   EXPECT_FALSE(map.Treated(53, 11));
   EXPECT_FALSE(map.Treated(50, 12));
   EXPECT_EQ(map.ClassOf(50, 10), CellClass::kSoil);  // treating does not vote
+  EXPECT_FALSE(map.Observed(50, 10));                 // nor does it observe
+  // The camera's view: cells whose centre is inside are observed, votes untouched.
+  map.MarkObserved(Square(0.0, 0.5, 0.1));  // x, y ∈ [−0.1, 0.1] × [0.4, 0.6]
+  EXPECT_TRUE(map.Observed(50, 50));
+  EXPECT_TRUE(map.Observed(40, 40));   // centre (−0.095, 0.405)
+  EXPECT_FALSE(map.Observed(39, 50));  // centre x −0.105
+  EXPECT_FALSE(map.Observed(50, 61));  // centre y 0.615
+  EXPECT_TRUE(map.Treated(50, 10));
+  EXPECT_EQ(map.Counts(50, 50).crop + map.Counts(50, 50).weed, 0);
   map.Clear();
   EXPECT_FALSE(map.Treated(50, 10));
+  EXPECT_FALSE(map.Observed(50, 50));
 }
 
 TEST(TreatmentMap, BadOptionsAreNamed) {
