@@ -170,10 +170,18 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
       std::cerr << "plantscale evaluate rows: error: " << err << '\n';
     }
     if (a.json) {
+      nlohmann::json per_image = nlohmann::json::array();
+      for (const PhotoRowScore& s : e.per_image) {
+        per_image.push_back({{"image", s.image},
+                             {"crda", s.crda},
+                             {"image_rows_scored", s.image_rows_scored},
+                             {"rows_found", s.rows_found}});
+      }
       std::cout << nlohmann::json{{"images", e.images},
                                   {"images_with_rows", e.images_with_rows},
                                   {"image_rows_scored", e.image_rows_scored},
                                   {"crda_mean", e.crda_mean},
+                                  {"per_image", per_image},
                                   {"source", "labelled photographs"}}
                        .dump(2)
                 << '\n';

@@ -245,6 +245,7 @@ PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path&
       const rows::RowDetection det = DetectRowsInPhoto(image, detector);
       ++e.images;
       if (det.confidence > 0.0) ++e.images_with_rows;
+      PhotoRowScore score{file.filename().string(), 0.0, 0, det.confidence > 0.0};
       const double sx = static_cast<double>(image.cols) / label.cols;
       const double sy = static_cast<double>(image.rows) / label.rows;
       for (int y = 0; y < label.rows; ++y) {
@@ -280,7 +281,11 @@ PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path&
         }
         total += sum / 3.0;
         ++e.image_rows_scored;
+        score.crda += sum / 3.0;
+        ++score.image_rows_scored;
       }
+      if (score.image_rows_scored > 0) score.crda /= score.image_rows_scored;
+      e.per_image.push_back(score);
     } catch (const std::exception& ex) {
       e.errors.push_back(file.string() + ": " + ex.what());
     }

@@ -53,11 +53,18 @@ RowsEvaluation EvaluateRows(const RowsEvalOptions& options);
 
 // Labelled photographs: IMAGES/NAME.ext with LABELS/NAME.* (white lines along
 // the row centres, any scale).
+struct PhotoRowScore {
+  std::string image;  // file name
+  double crda = 0.0;  // mean over its scored image rows
+  int image_rows_scored = 0;
+  bool rows_found = false;
+};
 struct PhotoRowsEvaluation {
   int images = 0;
   int image_rows_scored = 0;
   double crda_mean = 0.0;
   int images_with_rows = 0;
+  std::vector<PhotoRowScore> per_image;  // in file order
   std::vector<std::string> errors;
 };
 PhotoRowsEvaluation EvaluateRowsOnPhotos(const std::filesystem::path& images,
