@@ -48,7 +48,9 @@ RendererState StateOf(vtkRenderer* r) {
   props->InitTraversal(it);
   while (vtkProp* p = props->GetNextProp(it)) {
     ++s.props;
-    s.content = std::max(s.content, p->GetRedrawMTime());
+    // A hidden prop draws nothing: its own MTime covers showing it again (and
+    // skips the pipeline update GetRedrawMTime makes, for the map's culled tiles).
+    s.content = std::max(s.content, p->GetVisibility() ? p->GetRedrawMTime() : p->GetMTime());
     // A context actor (chart) draws a scene whose changes its MTime misses.
     if (p->IsA("vtkContextActor")) s.trackable = false;
   }
