@@ -7,6 +7,7 @@
 #include <vtkNew.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
 
 #include <filesystem>
 #include <opencv2/core.hpp>
@@ -29,6 +30,13 @@ bool DisplayAvailable();
 // Throws DisplayError naming `what` and how to get a display (xvfb-run -a).
 void RequireDisplay(const std::string& what);
 
+// The window redraws only the renderers whose content changed since its last
+// render (camera, background, viewport, props and their data; a renderer
+// holding a prop it cannot track, such as a chart, is always redrawn): VTK
+// renders into a framebuffer of its own that keeps the other viewports'
+// pixels. On screen it copies colour only to the X window (VTK 9.1 also
+// copies depth there, a full-window shader pass under llvmpipe that nothing
+// reads).
 class Canvas {
  public:
   // Throws DisplayError without DISPLAY.
@@ -38,9 +46,11 @@ class Canvas {
   vtkRenderer* AddRenderer(double x0, double y0, double x1, double y1, Rgb background);
   // Renders and reads the colour buffer back: 8-bit BGR, top row first.
   cv::Mat Render();
+  // Off: every renderer is drawn on every render (to compare against).
+  void SetPartialRedraw(bool on);
 
  private:
-  vtkNew<vtkRenderWindow> window_;
+  vtkSmartPointer<vtkRenderWindow> window_;
 };
 
 // Throws std::runtime_error naming the file when it cannot be written.

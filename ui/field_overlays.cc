@@ -59,6 +59,7 @@ void GridOverlay::AddTo(vtkRenderer* renderer) {
 }
 
 void GridOverlay::Update(const RunModel& model) {
+  if (!built_.Changed(model)) return;
   const tm::GridEstimate* grid = GridOf(model);
   const std::optional<tm::Pose> pose = model.pose();
   if (grid == nullptr || !pose) {
@@ -146,6 +147,7 @@ void VehicleMarker::AddTo(vtkRenderer* renderer) {
 }
 
 void VehicleMarker::Update(const RunModel& model) {
+  if (!built_.Changed(model)) return;
   const std::optional<tm::Pose> pose = model.pose();
   if (!pose) return;
   // A 0.3 m arrowhead pointing along the vehicle's forward (y) axis.

@@ -27,6 +27,23 @@ struct BuiltRange {
   }
 };
 
+// The model state a layer was last built from, so that a layer touches its
+// VTK data (and the window redraws its viewport) only when the model changed.
+class ModelStamp {
+ public:
+  // True when `model` differs from the last call's (another model, or new messages).
+  bool Changed(const RunModel& model) {
+    if (&model == model_ && model.messages() == messages_) return false;
+    model_ = &model, messages_ = model.messages();
+    return true;
+  }
+  void Reset() { model_ = nullptr; }
+
+ private:
+  const RunModel* model_ = nullptr;
+  int64_t messages_ = -1;
+};
+
 struct GridOverlayParams {
   int rows_each_side = 1;    // rows n = −k..k drawn
   int lines_behind = 3;      // plant lines drawn behind line 0
@@ -52,6 +69,7 @@ class GridOverlay {
  private:
   GridOverlayParams params_;
   LineLayer rows_, lines_;
+  ModelStamp built_;
 };
 
 struct EllipseParams {
@@ -100,6 +118,7 @@ class VehicleMarker {
 
  private:
   LineLayer body_, path_;
+  ModelStamp built_;
 };
 
 }  // namespace plantscale::ui

@@ -98,32 +98,47 @@ void NozzleBarView::AddTo(vtkRenderer* renderer) {
 
 void NozzleBarView::Update(const RunModel& model, int64_t now_utime) {
   const int n = model.nozzles() ? static_cast<int>(model.nozzles()->open.size()) : 0;
-  std::vector<Polyline> closed, open, fault, recent;
   std::vector<int> counts(static_cast<size_t>(std::max(n, 0)), 0);
   const int64_t since = now_utime - static_cast<int64_t>(params_.recent_s * 1e6);
   for (auto it = model.shots().rbegin(); it != model.shots().rend() && it->open_utime >= since; ++it) {
     if (it->nozzle >= 0 && it->nozzle < n) ++counts[static_cast<size_t>(it->nozzle)];
   }
+  // What the bar shows: per nozzle its state (0 closed, 1 open, 2 fault) and
+  // recent shots, then failsafe; the VTK data is rebuilt only when it changes.
+  std::vector<int> shown;
+  for (int i = 0; i < n; ++i) {
+    const auto& bar = *model.nozzles();
+    const size_t k = static_cast<size_t>(i);
+    shown.push_back(bar.fault[k] != 0 ? 2 : bar.open[k] ? 1 : 0);
+    shown.push_back(std::min(counts[k], params_.full_scale_shots));
+  }
+  shown.push_back(model.nozzles() && model.nozzles()->failsafe ? 1 : 0);
+  const double aspect = renderer_ ? std::max(1e-6, renderer_->GetTiledAspectRatio()) : 1.0;
+  if (shown == shown_ && aspect == aspect_) return;
+  shown_ = shown, aspect_ = aspect;
+  Show(n);
+}
+
+void NozzleBarView::Show(int n) {
+  std::vector<Polyline> closed, open, fault, recent;
   for (int i = 0; i < n; ++i) {
     const double x = i + 0.5;
-    const auto& bar = *model.nozzles();
-    (bar.fault[static_cast<size_t>(i)] != 0 ? fault : bar.open[static_cast<size_t>(i)] ? open : closed)
-        .push_back(Bar(x, 0.1, 0.5));
-    const double h = std::min(1.0, counts[static_cast<size_t>(i)] / double(params_.full_scale_shots));
+    const int state = shown_[static_cast<size_t>(2 * i)];
+    (state == 2 ? fault : state == 1 ? open : closed).push_back(Bar(x, 0.1, 0.5));
+    const double h = shown_[static_cast<size_t>(2 * i + 1)] / double(params_.full_scale_shots);
     if (h > 0) recent.push_back(Bar(x, 0.55, 0.55 + 0.4 * h));
   }
   closed_.Set(closed), open_.Set(open), fault_.Set(fault), recent_.Set(recent);
   std::string label = n == 0 ? "nozzle bar: no messages" : "nozzles";
-  if (model.nozzles() && model.nozzles()->failsafe) label += "  FAILSAFE (closed)";
+  if (shown_.back() != 0) label += "  FAILSAFE (closed)";
   label_->SetInput(label.c_str());
   if (renderer_ == nullptr) return;
   vtkCamera* c = renderer_->GetActiveCamera();
   const double w = std::max(n, 8) + 2.0;  // room for the label on the left
-  const double aspect = std::max(1e-6, renderer_->GetTiledAspectRatio());
   c->SetFocalPoint(0.5 * w - 2.0 + 0.5 * 2.0, 0.5, 0.0);
   c->SetPosition(0.5 * w - 1.0, 0.5, 10.0);
   c->SetViewUp(0, 1, 0);
-  c->SetParallelScale(std::max(0.55, 0.5 * w / aspect));
+  c->SetParallelScale(std::max(0.55, 0.5 * w / aspect_));
   c->SetClippingRange(1.0, 20.0);
 }
 

@@ -11,6 +11,7 @@
 #include <vtkTextActor.h>
 
 #include <string>
+#include <vector>
 
 #include "ui/poly.h"
 #include "ui/run_model.h"
@@ -52,9 +53,13 @@ class NozzleBarView {
   void Update(const RunModel& model, int64_t now_utime);
 
  private:
+  void Show(int nozzles);
+
   NozzleBarParams params_;
   vtkRenderer* renderer_ = nullptr;
   LineLayer closed_, open_, fault_, recent_;
+  std::vector<int> shown_;  // per nozzle state and recent shots, then failsafe (empty: nothing yet)
+  double aspect_ = 0.0;     // of the viewport the camera was fitted to
   vtkNew<vtkTextActor> label_;
 };
 

@@ -65,6 +65,8 @@ void MapLayer::Update(const RunModel& model) {
     slot.actor->GetMapper()->SetInputData(TileImage(tile));
     slot.actor->Modified();
     slot.revision = tile.revision;
+    slot.y0_m = tile.origin_m.y();
+    slot.y1_m = tile.origin_m.y() + tile.height * tile.resolution_m;
   }
 }
 
@@ -76,8 +78,7 @@ void MapLayer::SetVisible(bool visible) {
 void MapLayer::Cull(const FieldWindow& view) {
   const double margin = 0.5 * (view.y1_m - view.y0_m);
   for (auto& [key, tile] : tiles_) {
-    const double* b = tile.actor->GetBounds();
-    const bool near = b[3] >= view.y0_m - margin && b[2] <= view.y1_m + margin;
+    const bool near = tile.y1_m >= view.y0_m - margin && tile.y0_m <= view.y1_m + margin;
     tile.actor->SetVisibility(visible_ && near);
   }
 }

@@ -28,6 +28,7 @@ class MapLayer {
  private:
   struct Tile {
     int revision = -1;
+    double y0_m = 0.0, y1_m = 0.0;  // along-bed extent of the tile's cells
     vtkSmartPointer<vtkImageActor> actor;
   };
   vtkRenderer* renderer_ = nullptr;

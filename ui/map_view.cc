@@ -56,6 +56,9 @@ FieldWindow MapView::PlaceCamera(const RunModel& model) {
   if (renderer_ == nullptr) return w;
   // Parallel scale is half the view height; the height holds length / aspect.
   const double aspect = std::max(1e-6, renderer_->GetTiledAspectRatio());
+  const std::array<double, 4> placed = {w.y0_m, w.y1_m, w.x_centre_m, aspect};
+  if (placed == placed_) return w;  // the camera is where it was: leave it unmodified
+  placed_ = placed;
   const double cy = 0.5 * (w.y0_m + w.y1_m);
   vtkCamera* camera = renderer_->GetActiveCamera();
   camera->SetFocalPoint(w.x_centre_m, cy, 0.0);

@@ -6,6 +6,7 @@
 
 #include <vtkRenderer.h>
 
+#include <array>
 #include <optional>
 
 #include "ui/field_overlays.h"
@@ -51,6 +52,7 @@ class MapView {
   CovarianceEllipses ellipses_;
   VehicleMarker vehicle_;
   std::optional<FieldWindow> window_;
+  std::array<double, 4> placed_{};  // y0, y1, x centre and aspect the camera was placed for
   bool visible_[5] = {true, true, true, true, true};
 };
 

@@ -105,6 +105,7 @@ void OffsetTrace::AddTo(vtkRenderer* renderer) {
   chart_renderer->SetBackground(1, 1, 1);
   chart_renderer->AddActor(actor_);
   cache_window_->AddRenderer(chart_renderer);
+  cache_actor_->InterpolateOff();  // shown texel for pixel: filtering would change nothing but the cost
   renderer->AddActor(cache_actor_);
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->ParallelProjectionOn();

@@ -86,7 +86,14 @@ void StationScene::Update(const RunModel& model, int64_t now_utime, double fract
   trace_.Update(model);
   const double aspect = std::max(1e-6, timeline_renderer_->GetTiledAspectRatio());
   timeline_renderer_->GetActiveCamera()->SetParallelScale(0.5 / aspect);
-  if (fraction >= 0) timeline_.Set({{{0.0, 0.5}, {std::clamp(fraction, 0.0, 1.0), 0.5}}});
+  if (fraction < 0) return;
+  // The bar ends on a whole pixel, so that it changes (and its viewport is
+  // redrawn) only when it grows by one.
+  const double pixels = std::max(1, timeline_renderer_->GetSize()[0]);
+  const double end = std::round(std::clamp(fraction, 0.0, 1.0) * pixels) / pixels;
+  if (end == timeline_end_) return;
+  timeline_end_ = end;
+  timeline_.Set({{{0.0, 0.5}, {end, 0.5}}});
 }
 
 namespace {

@@ -58,6 +58,7 @@ class StationScene {
   CameraView camera_;
   OffsetTrace trace_;
   LineLayer timeline_;
+  double timeline_end_ = -1.0;  // fraction the timeline bar was drawn to
   vtkRenderer* map_renderer_ = nullptr;
   vtkRenderer* timeline_renderer_ = nullptr;
 };

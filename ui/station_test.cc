@@ -31,6 +31,36 @@ TEST(Station, ComposedWindowGolden) {
   EXPECT_NEAR(hud[1], 255 * palette::kHudOk.g, 2);
 }
 
+// Redrawing only the viewports that changed gives the pixels of a full
+// redraw: frames of the log (map, camera, HUD and timeline change at their
+// own rates, most frames bring nothing new) and then a lost link, where only
+// the HUD changes (to red).
+TEST(Station, PartialRedrawMatchesFullRedraw) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions run;
+  run.length_m = 6.0;
+  StationOptions o;
+  o.width_px = 640, o.height_px = 360;
+  LogTimeline partial_run = testing::RunUpTo(run, 5.0), full_run = testing::RunUpTo(run, 5.0);
+  Canvas partial(o.width_px, o.height_px), full(o.width_px, o.height_px);
+  full.SetPartialRedraw(false);
+  StationScene partial_scene(partial, o), full_scene(full, o);
+  cv::Mat last;
+  for (int frame = 0; frame < 16; ++frame) {
+    const bool lost = frame == 15;  // 5 s after the last message: the heartbeat is lost
+    for (LogTimeline* t : {&partial_run, &full_run}) t->Advance(1.0 / 60.0);
+    const int64_t now = partial_run.now_utime() + (lost ? 5'000'000 : 0);
+    const double fraction = partial_run.position_s() / partial_run.duration_s();
+    partial_scene.Update(partial_run.model(), now, fraction);
+    full_scene.Update(full_run.model(), now, fraction);
+    last = partial.Render();
+    EXPECT_EQ(cv::norm(last, full.Render(), cv::NORM_INF), 0.0) << "frame " << frame;
+  }
+  const cv::Vec3b hud = last.at<cv::Vec3b>(5, 636);  // BGR
+  EXPECT_NEAR(hud[2], 255 * palette::kHudLost.r, 2);
+  EXPECT_NEAR(hud[1], 255 * palette::kHudLost.g, 2);
+}
+
 StationResult RunOn(const fs::path& log) {
   StationOptions o;
   o.log = log;
