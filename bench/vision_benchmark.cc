@@ -81,6 +81,56 @@ BENCHMARK(BM_SegmentNirAdaptive);
 void BM_SegmentRgbExgDefault(benchmark::State& s) { Segment(s, {}, sim::ImageKind::kRgb); }
 BENCHMARK(BM_SegmentRgbExgDefault);
 
+// Stages of the default NIR path, each on its own input.
+const cv::Mat& SmoothedNir() {
+  static cv::Mat smoothed;
+  if (smoothed.empty()) {
+    Segmenter segmenter({});
+    smoothed = segmenter.Process(Frame(sim::ImageKind::kNir).image).plant_image.clone();
+  }
+  return smoothed;
+}
+void BM_StageCvGaussianBlurSigma2(benchmark::State& state) {
+  SetUp();
+  const cv::Mat& grey = Frame(sim::ImageKind::kNir).image;
+  cv::Mat out;
+  for (auto _ : state) {
+    cv::GaussianBlur(grey, out, cv::Size(0, 0), 2.0);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_StageCvGaussianBlurSigma2);
+void BM_StageSmoothSigma2(benchmark::State& state) {
+  SetUp();
+  const cv::Mat& grey = Frame(sim::ImageKind::kNir).image;
+  Smoother smoother(2.0);
+  cv::Mat out;
+  for (auto _ : state) {
+    smoother.Apply(grey, out);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_StageSmoothSigma2);
+void BM_StageLocalThreshold(benchmark::State& state) {
+  SetUp();
+  const cv::Mat& grey = SmoothedNir();
+  LocalThreshold local;
+  cv::Mat mask;
+  for (auto _ : state) {
+    local.Apply(grey, mask);
+    benchmark::DoNotOptimize(mask.data);
+  }
+}
+BENCHMARK(BM_StageLocalThreshold);
+void BM_StageBlobsOfDefaultMask(benchmark::State& state) {
+  SetUp();
+  Segmenter segmenter({});
+  const cv::Mat mask = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
+  BlobExtractor blobs;
+  for (auto _ : state) benchmark::DoNotOptimize(blobs.Extract(mask).size());
+}
+BENCHMARK(BM_StageBlobsOfDefaultMask);
+
 void BM_BlobsOnly(benchmark::State& state) {
   SetUp();
   cv::Mat mask;
