@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "engine/common/check.h"
+#include "engine/vision/vectorise.h"
 
 namespace plantscale::vision {
 
@@ -20,21 +21,59 @@ OptionErrors LocalThresholdOptions::Validate() const {
 
 LocalThreshold::LocalThreshold(const LocalThresholdOptions& options) : options_(options) {
   ThrowIfInvalid("local threshold options", options_.Validate());
-  kernel_ = cv::getStructuringElement(cv::MORPH_RECT,
-                                      cv::Size(options_.opening_cells, options_.opening_cells));
-}
-
-void LocalThreshold::Estimate(const cv::Mat& grey) {
-  PLANTSCALE_CHECK(grey.type() == CV_8UC1 && !grey.empty(), "local threshold needs CV_8UC1");
-  const cv::Size small(std::max(1, grey.cols / options_.cell_px),
-                       std::max(1, grey.rows / options_.cell_px));
-  cv::resize(grey, cells_, small, 0.0, 0.0, cv::INTER_AREA);
-  cv::morphologyEx(cells_, opened_, cv::MORPH_OPEN, kernel_, cv::Point(-1, -1), 1,
-                   cv::BORDER_REPLICATE);
-  cv::max(opened_, options_.min_level, opened_);
+  // α·max(B, min_level) for every byte B, by the same OpenCV calls
+  // (cv::max, convertTo) the cell image would take.
+  cv::Mat ramp(1, 256, CV_8UC1), lut;
+  for (int b = 0; b < 256; ++b) ramp.at<uint8_t>(0, b) = static_cast<uint8_t>(b);
+  cv::max(ramp, options_.min_level, lut);
+  lut.convertTo(gain_lut_, CV_8U, options_.gain);
 }
 
 namespace {
+
+// sums[u] += row[u] over one row (a cell row's column sums, 16 bits hold
+// up to 257 rows of 255).
+PLANTSCALE_VECTOR_CLONES
+void AccumulateRow(const uint8_t* __restrict row, int width, uint16_t* __restrict sums) {
+  for (int u = 0; u < width; ++u) sums[u] = static_cast<uint16_t>(sums[u] + row[u]);
+}
+
+// out[c] = min (or max) of in[c − r..c + r], the row replicated past its ends;
+// `padded` holds width + 2r entries.
+template <bool kMin>
+void RowExtremum(const uint8_t* in, int width, int r, uint8_t* padded, uint8_t* out) {
+  std::fill(padded, padded + r, in[0]);
+  std::copy(in, in + width, padded + r);
+  std::fill(padded + r + width, padded + 2 * r + width, in[width - 1]);
+  std::copy(padded, padded + width, out);
+  for (int k = 1; k <= 2 * r; ++k) {
+    for (int c = 0; c < width; ++c) {
+      out[c] = kMin ? std::min(out[c], padded[c + k]) : std::max(out[c], padded[c + k]);
+    }
+  }
+}
+
+// Rectangular erosion (kMin) or dilation of `in` into `out` (both CV_8UC1,
+// the same size), separable, borders replicated as cv::BORDER_REPLICATE.
+template <bool kMin>
+void Extremum(const cv::Mat& in, int r, std::vector<uint8_t>& padded, cv::Mat& rows,
+              cv::Mat& out) {
+  const int w = in.cols, h = in.rows;
+  padded.resize(static_cast<size_t>(std::max(w, h) + 2 * r));
+  rows.create(in.size(), CV_8UC1);
+  out.create(in.size(), CV_8UC1);
+  for (int v = 0; v < h; ++v) {
+    RowExtremum<kMin>(in.ptr<uint8_t>(v), w, r, padded.data(), rows.ptr<uint8_t>(v));
+  }
+  for (int v = 0; v < h; ++v) {
+    auto* o = out.ptr<uint8_t>(v);
+    std::copy(rows.ptr<uint8_t>(std::max(v - r, 0)), rows.ptr<uint8_t>(std::max(v - r, 0)) + w, o);
+    for (int k = v - r + 1; k <= v + r; ++k) {
+      const auto* s = rows.ptr<uint8_t>(std::clamp(k, 0, h - 1));
+      for (int c = 0; c < w; ++c) o[c] = kMin ? std::min(o[c], s[c]) : std::max(o[c], s[c]);
+    }
+  }
+}
 
 // Fractional position of pixel centre i among cell centres of `cell` pixels.
 void CellCoordinate(int i, int cell, int cells, int& c0, int& c1, int& w256) {
@@ -46,21 +85,62 @@ void CellCoordinate(int i, int cell, int cells, int& c0, int& c1, int& w256) {
 }
 
 // out = 255 where in >= the threshold interpolated between rows a and b with
-// weight w/256 (vectorised by GCC: this file is compiled with -O3).
-void CompareRow(const uint8_t* in, const uint8_t* a, const uint8_t* b, int w, uint8_t* out,
-                int width) {
+// weight w/256. 16-bit arithmetic: a·(256 − w) + b·w + 128 ≤ 65408.
+PLANTSCALE_VECTOR_CLONES
+void CompareRow(const uint8_t* __restrict in, const uint8_t* __restrict a,
+                const uint8_t* __restrict b, int w, uint8_t* __restrict out, int width) {
   const auto wb = static_cast<uint16_t>(w), wa = static_cast<uint16_t>(256 - w);
   for (int u = 0; u < width; ++u) {
-    const auto t = static_cast<uint16_t>((a[u] * wa + b[u] * wb + 128) >> 8);
+    const auto sum = static_cast<uint16_t>(static_cast<uint16_t>(a[u] * wa) +
+                                           static_cast<uint16_t>(b[u] * wb) + 128);
+    const auto t = static_cast<uint8_t>(sum >> 8);
     out[u] = in[u] >= t ? 255 : 0;
   }
 }
 
 }  // namespace
 
+// Block means of `grey` on the cell grid: whole cells rounded as INTER_AREA
+// rounds them for an integer factor (the same bytes), INTER_AREA itself
+// otherwise.
+void LocalThreshold::CellMeans(const cv::Mat& grey) {
+  const int cell = options_.cell_px;
+  const cv::Size small(std::max(1, grey.cols / cell), std::max(1, grey.rows / cell));
+  if (grey.cols % cell != 0 || grey.rows % cell != 0 || cell > 16) {
+    cv::resize(grey, cells_, small, 0.0, 0.0, cv::INTER_AREA);
+    return;
+  }
+  cells_.create(small, CV_8UC1);
+  column_sums_.resize(static_cast<size_t>(grey.cols));
+  const float inv_area = 1.0f / static_cast<float>(cell * cell);  // INTER_AREA's own rounding
+  for (int r = 0; r < small.height; ++r) {
+    std::fill(column_sums_.begin(), column_sums_.end(), uint16_t{0});
+    for (int k = 0; k < cell; ++k) {
+      AccumulateRow(grey.ptr<uint8_t>(r * cell + k), grey.cols, column_sums_.data());
+    }
+    auto* out = cells_.ptr<uint8_t>(r);
+    const uint16_t* s = column_sums_.data();
+    for (int c = 0; c < small.width; ++c, s += cell) {
+      int sum = 0;
+      for (int k = 0; k < cell; ++k) sum += s[k];
+      out[c] = cv::saturate_cast<uint8_t>(static_cast<float>(sum) * inv_area);
+    }
+  }
+}
+
+void LocalThreshold::Estimate(const cv::Mat& grey) {
+  PLANTSCALE_CHECK(grey.type() == CV_8UC1 && !grey.empty(), "local threshold needs CV_8UC1");
+  CellMeans(grey);
+  // Opening (erosion, then dilation) with the square structuring element.
+  const int r = options_.opening_cells / 2;
+  Extremum<true>(cells_, r, extremum_row_, extremum_rows_, eroded_);
+  Extremum<false>(eroded_, r, extremum_row_, extremum_rows_, opened_);
+  cv::max(opened_, options_.min_level, opened_);
+}
+
 // α·B of every cell row, linearly interpolated along u to full width.
 void LocalThreshold::ExpandThresholdRows(int width) {
-  opened_.convertTo(threshold_cells_, CV_8U, options_.gain);
+  cv::LUT(opened_, gain_lut_, threshold_cells_);
   const int cells = threshold_cells_.cols;
   if (columns_.size() != static_cast<size_t>(width) || columns_cells_ != cells) {
     columns_.resize(static_cast<size_t>(width));

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include "engine/vision/colour_index.h"
 #include "engine/vision/local_threshold.h"
 
@@ -81,6 +83,41 @@ TEST(LocalThreshold, ShadowedAndSunlitPlantsBothFound) {
   AdaptiveInterpolatingThreshold(grey, 1.6, adaptive);
   // Hague's threshold misses the shadowed plants (8 × 144 pixels).
   EXPECT_GE(cv::countNonZero(adaptive != truth), 8 * 144);
+}
+
+// The soil level is the grey-level opening of the block means; our own
+// block means and separable min/max give OpenCV's INTER_AREA and
+// morphologyEx (square element, replicated borders) cell for cell, also on
+// a grid whose size is not a multiple of the cell (INTER_AREA itself).
+TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
+  cv::RNG rng(5);
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(100, 60), cv::Size(203, 157)}) {
+    cv::Mat grey(size, CV_8UC1);
+    rng.fill(grey, cv::RNG::NORMAL, 70, 25);
+    for (int k = 0; k < 30; ++k) {
+      cv::circle(grey, {rng.uniform(0, size.width), rng.uniform(0, size.height)},
+                 rng.uniform(2, 20), rng.uniform(120, 255), cv::FILLED);
+    }
+    LocalThresholdOptions o;
+    o.opening_cells = 5;
+    for (const int cell : {8, 4}) {
+      o.cell_px = cell;
+      LocalThreshold local(o);
+      cv::Mat mask;
+      local.Apply(grey, mask);
+      cv::Mat cells, opened, expected;
+      cv::resize(grey, cells, cv::Size(size.width / cell, size.height / cell), 0.0, 0.0,
+                 cv::INTER_AREA);
+      cv::morphologyEx(cells, opened, cv::MORPH_OPEN,
+                       cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)),
+                       cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+      cv::max(opened, o.min_level, opened);
+      opened.convertTo(expected, CV_8U, o.gain);
+      ASSERT_EQ(local.cell_thresholds().size(), expected.size());
+      EXPECT_EQ(cv::norm(local.cell_thresholds(), expected, cv::NORM_INF), 0.0)
+          << size << ", cell " << cell;
+    }
+  }
 }
 
 TEST(ColourIndex, GreenIsBrightSoilIsDarkGreyIsNeutral) {
