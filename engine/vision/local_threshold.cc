@@ -98,6 +98,29 @@ void CompareRow(const uint8_t* __restrict in, const uint8_t* __restrict a,
   }
 }
 
+// One cell row of thresholds interpolated along u when the row is a whole
+// number of cells of even size K: the K pixels between two cell centres take
+// the same weights (w = (2j + 1)·128/K, as CellCoordinate gives), and the
+// half cells at either end the end cells' values.
+template <int K>
+void ExpandRow(const uint8_t* __restrict t, int cells, uint8_t* __restrict out) {
+  static_assert(K % 2 == 0);
+  uint16_t wb[K], wa[K];
+  for (int j = 0; j < K; ++j) {
+    wb[j] = static_cast<uint16_t>(((2 * j + 1) * 256 + K) / (2 * K));
+    wa[j] = static_cast<uint16_t>(256 - wb[j]);
+  }
+  std::fill(out, out + K / 2, t[0]);
+  for (int c = 0; c + 1 < cells; ++c) {
+    uint8_t* o = out + c * K + K / 2;
+    const uint16_t a = t[c], b = t[c + 1];
+    for (int j = 0; j < K; ++j) {
+      o[j] = static_cast<uint8_t>(static_cast<uint16_t>(a * wa[j] + b * wb[j] + 128) >> 8);
+    }
+  }
+  std::fill(out + (cells - 1) * K + K / 2, out + cells * K, t[cells - 1]);
+}
+
 }  // namespace
 
 // Block means of `grey` on the cell grid: whole cells rounded as INTER_AREA
@@ -154,6 +177,14 @@ void LocalThreshold::ExpandThresholdRows(int width) {
   for (int r = 0; r < threshold_cells_.rows; ++r) {
     const auto* t = threshold_cells_.ptr<uint8_t>(r);
     auto* out = expanded_.ptr<uint8_t>(r);
+    if (width == cells * options_.cell_px) {
+      switch (options_.cell_px) {
+        case 4: ExpandRow<4>(t, cells, out); continue;
+        case 8: ExpandRow<8>(t, cells, out); continue;
+        case 16: ExpandRow<16>(t, cells, out); continue;
+        default: break;
+      }
+    }
     for (int u = 0; u < width; ++u) {
       const Column& c = columns_[static_cast<size_t>(u)];
       out[u] = static_cast<uint8_t>((t[c.c0] * (256 - c.w) + t[c.c1] * c.w + 128) >> 8);

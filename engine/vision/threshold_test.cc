@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
 
 #include "engine/vision/colour_index.h"
@@ -116,6 +117,30 @@ TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
       ASSERT_EQ(local.cell_thresholds().size(), expected.size());
       EXPECT_EQ(cv::norm(local.cell_thresholds(), expected, cv::NORM_INF), 0.0)
           << size << ", cell " << cell;
+      // The mask: α·B interpolated between cell centres (in 1/256ths, along
+      // u first, then v), compared pixel by pixel.
+      const auto at = [&](int i, int n, int& c0, int& c1) {
+        const double c = std::clamp((i + 0.5) / cell - 0.5, 0.0, n - 1.0);
+        c0 = static_cast<int>(c);
+        c1 = std::min(c0 + 1, n - 1);
+        return static_cast<int>((c - c0) * 256.0 + 0.5);
+      };
+      const cv::Mat& t = expected;
+      int wrong = 0;
+      for (int v = 0; v < size.height; ++v) {
+        int r0, r1;
+        const int wv = at(v, t.rows, r0, r1);
+        for (int u = 0; u < size.width; ++u) {
+          int c0, c1;
+          const int wu = at(u, t.cols, c0, c1);
+          const auto row = [&](int r) {
+            return (t.at<uint8_t>(r, c0) * (256 - wu) + t.at<uint8_t>(r, c1) * wu + 128) >> 8;
+          };
+          const int threshold = (row(r0) * (256 - wv) + row(r1) * wv + 128) >> 8;
+          wrong += (grey.at<uint8_t>(v, u) >= threshold) != (mask.at<uint8_t>(v, u) == 255);
+        }
+      }
+      EXPECT_EQ(wrong, 0) << size << ", cell " << cell;
     }
   }
 }
