@@ -38,40 +38,60 @@ void AccumulateRow(const uint8_t* __restrict row, int width, uint16_t* __restric
   for (int u = 0; u < width; ++u) sums[u] = static_cast<uint16_t>(sums[u] + row[u]);
 }
 
-// out[c] = min (or max) of in[c − r..c + r], the row replicated past its ends;
-// `padded` holds width + 2r entries.
 template <bool kMin>
-void RowExtremum(const uint8_t* in, int width, int r, uint8_t* padded, uint8_t* out) {
-  std::fill(padded, padded + r, in[0]);
-  std::copy(in, in + width, padded + r);
-  std::fill(padded + r + width, padded + 2 * r + width, in[width - 1]);
-  std::copy(padded, padded + width, out);
-  for (int k = 1; k <= 2 * r; ++k) {
-    for (int c = 0; c < width; ++c) {
-      out[c] = kMin ? std::min(out[c], padded[c + k]) : std::max(out[c], padded[c + k]);
-    }
+uint8_t Extreme(uint8_t a, uint8_t b) {
+  return kMin ? std::min(a, b) : std::max(a, b);
+}
+
+// data[i] = min (kMin) or max of data[i + j·step] over j < window, for
+// i < count; `data` holds count + (window − 1)·step entries and is
+// overwritten. Sparse-table doubling: ⌊log2 window⌋ + 1 passes, each one
+// vectorised loop over the whole buffer.
+template <bool kMin>
+void WindowExtremum(uint8_t* data, size_t count, size_t window, size_t step) {
+  size_t span = 1, valid = count + (window - 1) * step;
+  while (2 * span <= window) {
+    valid -= span * step;
+    const size_t offset = span * step;
+    for (size_t i = 0; i < valid; ++i) data[i] = Extreme<kMin>(data[i], data[i + offset]);
+    span *= 2;
   }
+  // data[i] covers `span` entries; two overlapping spans cover the window.
+  const size_t rest = (window - span) * step;
+  if (rest == 0) return;
+  for (size_t i = 0; i < count; ++i) data[i] = Extreme<kMin>(data[i], data[i + rest]);
 }
 
 // Rectangular erosion (kMin) or dilation of `in` into `out` (both CV_8UC1,
 // the same size), separable, borders replicated as cv::BORDER_REPLICATE.
 template <bool kMin>
-void Extremum(const cv::Mat& in, int r, std::vector<uint8_t>& padded, cv::Mat& rows,
-              cv::Mat& out) {
-  const int w = in.cols, h = in.rows;
-  padded.resize(static_cast<size_t>(std::max(w, h) + 2 * r));
-  rows.create(in.size(), CV_8UC1);
+void Extremum(const cv::Mat& in, int r, std::vector<uint8_t>& buffer, cv::Mat& out) {
+  const int w = in.cols, h = in.rows, stride = w + 2 * r;
+  const auto window = static_cast<size_t>(2 * r + 1);
+  buffer.resize(static_cast<size_t>(std::max(h * stride, (h + 2 * r) * w)));
   out.create(in.size(), CV_8UC1);
+  // Along u: rows padded by r replicated pixels at each end, one after the other.
   for (int v = 0; v < h; ++v) {
-    RowExtremum<kMin>(in.ptr<uint8_t>(v), w, r, padded.data(), rows.ptr<uint8_t>(v));
+    const auto* row = in.ptr<uint8_t>(v);
+    uint8_t* p = buffer.data() + static_cast<size_t>(v) * static_cast<size_t>(stride);
+    std::fill(p, p + r, row[0]);
+    std::copy(row, row + w, p + r);
+    std::fill(p + r + w, p + stride, row[w - 1]);
   }
+  WindowExtremum<kMin>(buffer.data(), static_cast<size_t>((h - 1) * stride + w), window, 1);
   for (int v = 0; v < h; ++v) {
-    auto* o = out.ptr<uint8_t>(v);
-    std::copy(rows.ptr<uint8_t>(std::max(v - r, 0)), rows.ptr<uint8_t>(std::max(v - r, 0)) + w, o);
-    for (int k = v - r + 1; k <= v + r; ++k) {
-      const auto* s = rows.ptr<uint8_t>(std::clamp(k, 0, h - 1));
-      for (int c = 0; c < w; ++c) o[c] = kMin ? std::min(o[c], s[c]) : std::max(o[c], s[c]);
-    }
+    const uint8_t* p = buffer.data() + static_cast<size_t>(v) * static_cast<size_t>(stride);
+    std::copy(p, p + w, out.ptr<uint8_t>(v));
+  }
+  // Along v: r replicated rows above and below.
+  for (int j = 0; j < h + 2 * r; ++j) {
+    const auto* row = out.ptr<uint8_t>(std::clamp(j - r, 0, h - 1));
+    std::copy(row, row + w, buffer.data() + static_cast<size_t>(j) * static_cast<size_t>(w));
+  }
+  WindowExtremum<kMin>(buffer.data(), static_cast<size_t>(h * w), window, static_cast<size_t>(w));
+  for (int v = 0; v < h; ++v) {
+    const uint8_t* p = buffer.data() + static_cast<size_t>(v) * static_cast<size_t>(w);
+    std::copy(p, p + w, out.ptr<uint8_t>(v));
   }
 }
 
@@ -141,11 +161,17 @@ void LocalThreshold::CellMeans(const cv::Mat& grey) {
     for (int k = 0; k < cell; ++k) {
       AccumulateRow(grey.ptr<uint8_t>(r * cell + k), grey.cols, column_sums_.data());
     }
+    // Sums of `cell` neighbours by doubling when the cell is a power of two
+    // (vectorised; ≤ 16² · 255 fits 16 bits), else one cell at a time.
+    uint16_t* s = column_sums_.data();
+    int summed = 1;
+    for (int span = 1; 2 * span <= cell && cell % (2 * span) == 0; span *= 2, summed *= 2) {
+      for (int u = 0; u + span < grey.cols; ++u) s[u] = static_cast<uint16_t>(s[u] + s[u + span]);
+    }
     auto* out = cells_.ptr<uint8_t>(r);
-    const uint16_t* s = column_sums_.data();
-    for (int c = 0; c < small.width; ++c, s += cell) {
+    for (int c = 0; c < small.width; ++c) {
       int sum = 0;
-      for (int k = 0; k < cell; ++k) sum += s[k];
+      for (int k = 0; k < cell; k += summed) sum += s[c * cell + k];
       out[c] = cv::saturate_cast<uint8_t>(static_cast<float>(sum) * inv_area);
     }
   }
@@ -156,8 +182,8 @@ void LocalThreshold::Estimate(const cv::Mat& grey) {
   CellMeans(grey);
   // Opening (erosion, then dilation) with the square structuring element.
   const int r = options_.opening_cells / 2;
-  Extremum<true>(cells_, r, extremum_row_, extremum_rows_, eroded_);
-  Extremum<false>(eroded_, r, extremum_row_, extremum_rows_, opened_);
+  Extremum<true>(cells_, r, extremum_buffer_, eroded_);
+  Extremum<false>(eroded_, r, extremum_buffer_, opened_);
   cv::max(opened_, options_.min_level, opened_);
 }
 

@@ -56,8 +56,7 @@ class LocalThreshold {
   cv::Mat cells_, eroded_, opened_, level_, threshold_cells_;
   cv::Mat gain_lut_;  // 1×256: α·max(B, min_level) as a byte
   std::vector<uint16_t> column_sums_;
-  std::vector<uint8_t> extremum_row_;
-  cv::Mat extremum_rows_;
+  std::vector<uint8_t> extremum_buffer_;
   cv::Mat expanded_;  // CV_8UC1: α·B per cell row, interpolated along u
   struct Column {
     int c0, c1, w;  // neighbouring cell columns and the weight of c1 (/256)

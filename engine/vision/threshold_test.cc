@@ -89,6 +89,7 @@ TEST(LocalThreshold, ShadowedAndSunlitPlantsBothFound) {
 // The soil level is the grey-level opening of the block means; our own
 // block means and separable min/max give OpenCV's INTER_AREA and
 // morphologyEx (square element, replicated borders) cell for cell, also on
+// grids narrower than the element and
 // a grid whose size is not a multiple of the cell (INTER_AREA itself).
 TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
   cv::RNG rng(5);
@@ -100,9 +101,9 @@ TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
                  rng.uniform(2, 20), rng.uniform(120, 255), cv::FILLED);
     }
     LocalThresholdOptions o;
-    o.opening_cells = 5;
-    for (const int cell : {8, 4}) {
+    for (const auto& [cell, opening] : {std::pair{8, 5}, std::pair{4, 5}, std::pair{8, 21}}) {
       o.cell_px = cell;
+      o.opening_cells = opening;
       LocalThreshold local(o);
       cv::Mat mask;
       local.Apply(grey, mask);
@@ -110,13 +111,13 @@ TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
       cv::resize(grey, cells, cv::Size(size.width / cell, size.height / cell), 0.0, 0.0,
                  cv::INTER_AREA);
       cv::morphologyEx(cells, opened, cv::MORPH_OPEN,
-                       cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)),
+                       cv::getStructuringElement(cv::MORPH_RECT, cv::Size(opening, opening)),
                        cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
       cv::max(opened, o.min_level, opened);
       opened.convertTo(expected, CV_8U, o.gain);
       ASSERT_EQ(local.cell_thresholds().size(), expected.size());
       EXPECT_EQ(cv::norm(local.cell_thresholds(), expected, cv::NORM_INF), 0.0)
-          << size << ", cell " << cell;
+          << size << ", cell " << cell << ", opening " << opening;
       // The mask: α·B interpolated between cell centres (in 1/256ths, along
       // u first, then v), compared pixel by pixel.
       const auto at = [&](int i, int n, int& c0, int& c1) {
