@@ -166,5 +166,34 @@ TEST(ColourIndex, GreenIsBrightSoilIsDarkGreyIsNeutral) {
   EXPECT_FALSE(ParseColourIndex("ndvi").has_value());
 }
 
+// Every pixel of a random image (including black ones) against the
+// formulas of colour_index.h in double precision.
+TEST(ColourIndex, EveryPixelFollowsItsFormula) {
+  cv::Mat bgr(37, 203, CV_8UC3);
+  cv::RNG(9).fill(bgr, cv::RNG::UNIFORM, 0, 256);
+  bgr(cv::Rect(0, 0, 5, 3)).setTo(cv::Scalar(0, 0, 0));
+  for (ColourIndex index : {ColourIndex::kExG, ColourIndex::kExGR, ColourIndex::kCIVE}) {
+    cv::Mat out;
+    ComputeColourIndex(bgr, index, out);
+    int wrong = 0;
+    for (int v = 0; v < bgr.rows; ++v) {
+      for (int u = 0; u < bgr.cols; ++u) {
+        const cv::Vec3b p = bgr.at<cv::Vec3b>(v, u);
+        const double b = p[0], g = p[1], r = p[2], sum = r + g + b;
+        double expected = 127.0;
+        if (index == ColourIndex::kCIVE) {
+          expected = 127.5 - (0.441 * r - 0.811 * g + 0.385 * b + 18.78745);
+        } else if (sum > 0.0) {
+          const double exg = (2.0 * g - r - b) / sum, exr = (1.4 * r - g) / sum;
+          expected = index == ColourIndex::kExG ? 127.5 + 127.5 * exg : 127.5 + 85.0 * (exg - exr);
+        }
+        expected = std::clamp(expected, 0.0, 255.0);
+        wrong += std::abs(out.at<uint8_t>(v, u) - expected) > 0.5 + 1e-4;
+      }
+    }
+    EXPECT_EQ(wrong, 0) << Name(index);
+  }
+}
+
 }  // namespace
 }  // namespace plantscale::vision
