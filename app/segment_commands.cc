@@ -23,6 +23,7 @@ struct EvaluateArgs {
   std::string baseline;
   double costs_ratio = 3.644;
   std::string method = "local";
+  std::string index;  // colour index for rgb frames (default: the segmenter's)
   double gain = 0.0;
   double smoothing_px = -1.0;
 };
@@ -49,6 +50,7 @@ nlohmann::json EvaluationJson(const SegmentationEvaluation& e) {
                    {"plant_pixel_recall", e.ours.rates.recall},
                    {"plant_pixel_precision", e.ours.rates.precision},
                    {"soil_pixel_accuracy", e.ours.rates.soil_accuracy}};
+  if (e.image_kind == "rgb") j["colour_index"] = e.colour_index;
   j["baseline_thesis"] = {{"fixed", MethodJson(e.thesis_fixed)},
                           {"adaptive", MethodJson(e.thesis_adaptive)}};
   return j;
@@ -56,7 +58,8 @@ nlohmann::json EvaluationJson(const SegmentationEvaluation& e) {
 
 void PrintTable(const SegmentationEvaluation& e, std::ostream& out) {
   out << std::fixed << std::setprecision(4) << "segmentation on preset " << e.preset << " ("
-      << e.image_kind << ", " << e.seeds << " seeds, " << e.frames << " frames, plant pixels "
+      << e.image_kind << (e.image_kind == "rgb" ? std::string(" ") + e.colour_index : "")
+      << ", " << e.seeds << " seeds, " << e.frames << " frames, plant pixels "
       << 100.0 * e.plant_fraction << " %)\n"
       << "  method              AUC     recall  precision  soil acc  parameter\n";
   for (const MethodEvaluation* m : {&e.ours, &e.thesis_fixed, &e.thesis_adaptive}) {
@@ -117,6 +120,7 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
     o.segmenter.fixed_threshold = a.gain;
   }
   if (a.smoothing_px >= 0) o.segmenter.smoothing_px = a.smoothing_px;
+  if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
   if (a.json) {
@@ -193,6 +197,8 @@ void AddSegmentCommands(CommandRegistry& registry) {
   cmd->add_option("--method", ev.method, "the method evaluated as ours")
       ->check(CLI::IsMember({"fixed", "otsu", "adaptive", "local"}))
       ->capture_default_str();
+  cmd->add_option("--index", ev.index, "colour index of rgb frames (default: exg)")
+      ->check(CLI::IsMember({"exg", "exgr", "cive"}));
   cmd->add_option("--gain", ev.gain, "its operating parameter (α, or τ for fixed)");
   cmd->add_option("--smoothing-px", ev.smoothing_px, "its smoothing sigma, pixels");
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");

@@ -138,6 +138,7 @@ SegmentationEvaluation EvaluateSegmentation(const SegmentationEvalOptions& optio
   }
   result.preset = options.sim.preset;
   result.image_kind = options.sim.render.kind == sim::ImageKind::kRgb ? "rgb" : "nir";
+  result.colour_index = vision::Name(options.segmenter.colour_index);
   result.seeds = options.seeds;
   result.thesis_fixed = Baseline("fixed", "tau", acc.fixed, options.costs_ratio);
   result.thesis_adaptive = Baseline("adaptive", "alpha", acc.adaptive, options.costs_ratio);

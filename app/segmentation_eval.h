@@ -48,6 +48,7 @@ struct MethodEvaluation {
 struct SegmentationEvaluation {
   std::string preset;
   std::string image_kind;  // "nir" or "rgb"
+  std::string colour_index;  // the index rgb frames were turned into ("exg", ...)
   int seeds = 0, frames = 0;
   double plant_fraction = 0.0;  // P_P over the evaluated pixels
   MethodEvaluation ours;        // the product's segmenter at its own parameters

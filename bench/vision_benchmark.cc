@@ -3,6 +3,7 @@
 // same frame; both in this one run. Run: build/bench/vision_benchmark
 #include <benchmark/benchmark.h>
 
+#include <ctime>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -80,6 +81,92 @@ void BM_SegmentNirAdaptive(benchmark::State& s) {
 BENCHMARK(BM_SegmentNirAdaptive);
 void BM_SegmentRgbExgDefault(benchmark::State& s) { Segment(s, {}, sim::ImageKind::kRgb); }
 BENCHMARK(BM_SegmentRgbExgDefault);
+
+// The two targets in one measurement: the default segmentation +
+// blobs and a cv::threshold pass over the same frame, alternated so that
+// both see the same machine load, each timed in thread CPU time. Counters:
+// segment_us and threshold_us per frame, and their ratio (target ≤ 5).
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+void BM_DefaultOverThreshold(benchmark::State& state, sim::ImageKind kind) {
+  SetUp();
+  const cv::Mat& image = Frame(kind).image;  // BGR for rgb: the threshold pass is over 3 channels
+  Segmenter segmenter({});
+  cv::Mat mask;
+  constexpr int kThresholds = 16;  // cv::threshold is short: time a batch
+  double segment_s = 0.0, threshold_s = 0.0;
+  for (auto _ : state) {
+    const double t0 = ThreadCpuSeconds();
+    benchmark::DoNotOptimize(segmenter.Process(image).blobs.size());
+    const double t1 = ThreadCpuSeconds();
+    for (int k = 0; k < kThresholds; ++k) {
+      cv::threshold(image, mask, 127, 255, cv::THRESH_BINARY);
+      benchmark::DoNotOptimize(mask.data);
+    }
+    const double t2 = ThreadCpuSeconds();
+    segment_s += t1 - t0;
+    threshold_s += (t2 - t1) / kThresholds;
+  }
+  const auto n = static_cast<double>(state.iterations());
+  state.counters["segment_us"] = 1e6 * segment_s / n;
+  state.counters["threshold_us"] = 1e6 * threshold_s / n;
+  state.counters["ratio"] = segment_s / threshold_s;
+}
+BENCHMARK_CAPTURE(BM_DefaultOverThreshold, nir, sim::ImageKind::kNir);
+BENCHMARK_CAPTURE(BM_DefaultOverThreshold, rgb, sim::ImageKind::kRgb);
+
+// Stages of the default NIR path, each on its own input.
+const cv::Mat& SmoothedNir() {
+  static cv::Mat smoothed;
+  if (smoothed.empty()) {
+    Segmenter segmenter({});
+    smoothed = segmenter.Process(Frame(sim::ImageKind::kNir).image).plant_image.clone();
+  }
+  return smoothed;
+}
+void BM_StageCvGaussianBlurSigma2(benchmark::State& state) {
+  SetUp();
+  const cv::Mat& grey = Frame(sim::ImageKind::kNir).image;
+  cv::Mat out;
+  for (auto _ : state) {
+    cv::GaussianBlur(grey, out, cv::Size(0, 0), 2.0);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_StageCvGaussianBlurSigma2);
+void BM_StageSmoothSigma2(benchmark::State& state) {
+  SetUp();
+  const cv::Mat& grey = Frame(sim::ImageKind::kNir).image;
+  Smoother smoother(2.0);
+  cv::Mat out;
+  for (auto _ : state) {
+    smoother.Apply(grey, out);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_StageSmoothSigma2);
+void BM_StageLocalThreshold(benchmark::State& state) {
+  SetUp();
+  const cv::Mat& grey = SmoothedNir();
+  LocalThreshold local;
+  cv::Mat mask;
+  for (auto _ : state) {
+    local.Apply(grey, mask);
+    benchmark::DoNotOptimize(mask.data);
+  }
+}
+BENCHMARK(BM_StageLocalThreshold);
+void BM_StageBlobsOfDefaultMask(benchmark::State& state) {
+  SetUp();
+  Segmenter segmenter({});
+  const cv::Mat mask = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
+  BlobExtractor blobs;
+  for (auto _ : state) benchmark::DoNotOptimize(blobs.Extract(mask).size());
+}
+BENCHMARK(BM_StageBlobsOfDefaultMask);
 
 void BM_BlobsOnly(benchmark::State& state) {
   SetUp();

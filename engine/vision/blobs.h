@@ -66,6 +66,7 @@ class BlobExtractor {
 
   BlobOptions options_;
   std::vector<Run> runs_;
+  std::vector<uint64_t> row_bits_;  // one mask row, a bit a pixel
   std::vector<int> parent_;
   std::vector<int> run_blob_;     // blob slot per root run, -1 before assignment
   std::vector<double> moments_;   // per blob: n, Σu, Σv, Σu², Σv², Σuv (6 each)

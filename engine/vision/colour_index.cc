@@ -3,33 +3,40 @@
 #include <algorithm>
 
 #include "engine/common/check.h"
+#include "engine/vision/vectorise.h"
 
 namespace plantscale::vision {
 namespace {
 
-uint8_t ToByte(float x) { return static_cast<uint8_t>(std::clamp(x, 0.0f, 255.0f) + 0.5f); }
+// Rounded and clamped to 0..255 (through int, which vectorises).
+uint8_t ToByte(float x) {
+  return static_cast<uint8_t>(static_cast<int>(std::min(std::max(x, 0.0f), 255.0f) + 0.5f));
+}
 
 // Chromatic excess green and excess green minus excess red, scaled to bytes.
-void ChromaticRow(const uint8_t* bgr, uint8_t* out, int width, ColourIndex index) {
+// Branch-free so that GCC vectorises it: a black pixel (sum 0) divides by 1
+// and is then replaced by 127 (≈ index 0: no evidence either way).
+template <ColourIndex kIndex>
+PLANTSCALE_VECTOR_CLONES void ChromaticRow(const uint8_t* __restrict bgr,
+                                           uint8_t* __restrict out, int width) {
   for (int u = 0; u < width; ++u) {
     const float b = bgr[3 * u], g = bgr[3 * u + 1], r = bgr[3 * u + 2];
     const float sum = r + g + b;
-    if (sum <= 0.0f) {
-      out[u] = 127;  // black: no evidence either way (≈ index 0)
-      continue;
-    }
-    const float inv = 1.0f / sum;
+    const float inv = 1.0f / std::max(sum, 1.0f);
     const float exg = (2.0f * g - r - b) * inv;
-    if (index == ColourIndex::kExG) {
-      out[u] = ToByte(127.5f + 127.5f * exg);
+    uint8_t value;
+    if constexpr (kIndex == ColourIndex::kExG) {
+      value = ToByte(127.5f + 127.5f * exg);
     } else {
       const float exr = (1.4f * r - g) * inv;
-      out[u] = ToByte(127.5f + 85.0f * (exg - exr));
+      value = ToByte(127.5f + 85.0f * (exg - exr));
     }
+    out[u] = sum > 0.0f ? value : uint8_t{127};
   }
 }
 
-void CiveRow(const uint8_t* bgr, uint8_t* out, int width) {
+PLANTSCALE_VECTOR_CLONES
+void CiveRow(const uint8_t* __restrict bgr, uint8_t* __restrict out, int width) {
   for (int u = 0; u < width; ++u) {
     const float b = bgr[3 * u], g = bgr[3 * u + 1], r = bgr[3 * u + 2];
     const float cive = 0.441f * r - 0.811f * g + 0.385f * b + 18.78745f;
@@ -59,10 +66,12 @@ void ComputeColourIndex(const cv::Mat& bgr, ColourIndex index, cv::Mat& out) {
   PLANTSCALE_CHECK(bgr.type() == CV_8UC3, "colour index input must be CV_8UC3 (BGR)");
   out.create(bgr.size(), CV_8UC1);
   for (int v = 0; v < bgr.rows; ++v) {
-    if (index == ColourIndex::kCIVE) {
-      CiveRow(bgr.ptr<uint8_t>(v), out.ptr<uint8_t>(v), bgr.cols);
-    } else {
-      ChromaticRow(bgr.ptr<uint8_t>(v), out.ptr<uint8_t>(v), bgr.cols, index);
+    const auto* in = bgr.ptr<uint8_t>(v);
+    auto* o = out.ptr<uint8_t>(v);
+    switch (index) {
+      case ColourIndex::kExG: ChromaticRow<ColourIndex::kExG>(in, o, bgr.cols); break;
+      case ColourIndex::kExGR: ChromaticRow<ColourIndex::kExGR>(in, o, bgr.cols); break;
+      case ColourIndex::kCIVE: CiveRow(in, o, bgr.cols); break;
     }
   }
 }

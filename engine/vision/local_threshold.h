@@ -50,9 +50,13 @@ class LocalThreshold {
 
  private:
   LocalThresholdOptions options_;
+  void CellMeans(const cv::Mat& grey);
   void ExpandThresholdRows(int width);
 
-  cv::Mat cells_, opened_, kernel_, level_, threshold_cells_;
+  cv::Mat cells_, eroded_, opened_, level_, threshold_cells_;
+  cv::Mat gain_lut_;  // 1×256: α·max(B, min_level) as a byte
+  std::vector<uint16_t> column_sums_;
+  std::vector<uint8_t> extremum_buffer_;
   cv::Mat expanded_;  // CV_8UC1: α·B per cell row, interpolated along u
   struct Column {
     int c0, c1, w;  // neighbouring cell columns and the weight of c1 (/256)

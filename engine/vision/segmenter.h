@@ -13,6 +13,7 @@
 #include "engine/vision/blobs.h"
 #include "engine/vision/colour_index.h"
 #include "engine/vision/local_threshold.h"
+#include "engine/vision/smoothing.h"
 
 namespace plantscale::vision {
 
@@ -35,7 +36,7 @@ struct SegmenterOptions {
   double adaptive_gain = 1.64;     // α (kAdaptive); the thesis's hand-tuned value (§2.3.6)
   LocalThresholdOptions local;     // kLocal
   // Gaussian smoothing of the plant image before thresholding (sigma,
-  // pixels; 0: none). Lifts shaded leaf patches that bright leaf surrounds
+  // pixels; 0: none; σ = 2 runs as the equal-variance tent, smoothing.h). Lifts shaded leaf patches that bright leaf surrounds
   // and averages sensor noise away.
   double smoothing_px = 2.0;
   // Colour input (CV_8UC3, BGR) is turned into this index first; grey
@@ -81,6 +82,7 @@ class Segmenter {
   SegmenterOptions options_;
   BlobExtractor blobs_;
   LocalThreshold local_;
+  std::optional<Smoother> smoother_;  // when smoothing_px > 0
   cv::Mat index_;
   ThresholdMethod used_ = ThresholdMethod::kLocal;  // by the last frame
   Segmentation result_;

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <opencv2/imgproc.hpp>
+
 #include "engine/vision/colour_index.h"
 #include "engine/vision/local_threshold.h"
 
@@ -83,6 +86,66 @@ TEST(LocalThreshold, ShadowedAndSunlitPlantsBothFound) {
   EXPECT_GE(cv::countNonZero(adaptive != truth), 8 * 144);
 }
 
+// The soil level is the grey-level opening of the block means; our own
+// block means and separable min/max give OpenCV's INTER_AREA and
+// morphologyEx (square element, replicated borders) cell for cell, also on
+// grids narrower than the element and
+// a grid whose size is not a multiple of the cell (INTER_AREA itself).
+TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
+  cv::RNG rng(5);
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(100, 60), cv::Size(203, 157)}) {
+    cv::Mat grey(size, CV_8UC1);
+    rng.fill(grey, cv::RNG::NORMAL, 70, 25);
+    for (int k = 0; k < 30; ++k) {
+      cv::circle(grey, {rng.uniform(0, size.width), rng.uniform(0, size.height)},
+                 rng.uniform(2, 20), rng.uniform(120, 255), cv::FILLED);
+    }
+    LocalThresholdOptions o;
+    for (const auto& [cell, opening] : {std::pair{8, 5}, std::pair{4, 5}, std::pair{8, 21}}) {
+      o.cell_px = cell;
+      o.opening_cells = opening;
+      LocalThreshold local(o);
+      cv::Mat mask;
+      local.Apply(grey, mask);
+      cv::Mat cells, opened, expected;
+      cv::resize(grey, cells, cv::Size(size.width / cell, size.height / cell), 0.0, 0.0,
+                 cv::INTER_AREA);
+      cv::morphologyEx(cells, opened, cv::MORPH_OPEN,
+                       cv::getStructuringElement(cv::MORPH_RECT, cv::Size(opening, opening)),
+                       cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+      cv::max(opened, o.min_level, opened);
+      opened.convertTo(expected, CV_8U, o.gain);
+      ASSERT_EQ(local.cell_thresholds().size(), expected.size());
+      EXPECT_EQ(cv::norm(local.cell_thresholds(), expected, cv::NORM_INF), 0.0)
+          << size << ", cell " << cell << ", opening " << opening;
+      // The mask: α·B interpolated between cell centres (in 1/256ths, along
+      // u first, then v), compared pixel by pixel.
+      const auto at = [&](int i, int n, int& c0, int& c1) {
+        const double c = std::clamp((i + 0.5) / cell - 0.5, 0.0, n - 1.0);
+        c0 = static_cast<int>(c);
+        c1 = std::min(c0 + 1, n - 1);
+        return static_cast<int>((c - c0) * 256.0 + 0.5);
+      };
+      const cv::Mat& t = expected;
+      int wrong = 0;
+      for (int v = 0; v < size.height; ++v) {
+        int r0, r1;
+        const int wv = at(v, t.rows, r0, r1);
+        for (int u = 0; u < size.width; ++u) {
+          int c0, c1;
+          const int wu = at(u, t.cols, c0, c1);
+          const auto row = [&](int r) {
+            return (t.at<uint8_t>(r, c0) * (256 - wu) + t.at<uint8_t>(r, c1) * wu + 128) >> 8;
+          };
+          const int threshold = (row(r0) * (256 - wv) + row(r1) * wv + 128) >> 8;
+          wrong += (grey.at<uint8_t>(v, u) >= threshold) != (mask.at<uint8_t>(v, u) == 255);
+        }
+      }
+      EXPECT_EQ(wrong, 0) << size << ", cell " << cell;
+    }
+  }
+}
+
 TEST(ColourIndex, GreenIsBrightSoilIsDarkGreyIsNeutral) {
   // BGR: green leaf, brown soil, grey.
   cv::Mat bgr(1, 3, CV_8UC3);
@@ -101,6 +164,35 @@ TEST(ColourIndex, GreenIsBrightSoilIsDarkGreyIsNeutral) {
   EXPECT_NEAR(exg.at<uint8_t>(0, 2), 127.5, 0.6);  // grey: ExG = 0
   EXPECT_EQ(ParseColourIndex("exgr"), ColourIndex::kExGR);
   EXPECT_FALSE(ParseColourIndex("ndvi").has_value());
+}
+
+// Every pixel of a random image (including black ones) against the
+// formulas of colour_index.h in double precision.
+TEST(ColourIndex, EveryPixelFollowsItsFormula) {
+  cv::Mat bgr(37, 203, CV_8UC3);
+  cv::RNG(9).fill(bgr, cv::RNG::UNIFORM, 0, 256);
+  bgr(cv::Rect(0, 0, 5, 3)).setTo(cv::Scalar(0, 0, 0));
+  for (ColourIndex index : {ColourIndex::kExG, ColourIndex::kExGR, ColourIndex::kCIVE}) {
+    cv::Mat out;
+    ComputeColourIndex(bgr, index, out);
+    int wrong = 0;
+    for (int v = 0; v < bgr.rows; ++v) {
+      for (int u = 0; u < bgr.cols; ++u) {
+        const cv::Vec3b p = bgr.at<cv::Vec3b>(v, u);
+        const double b = p[0], g = p[1], r = p[2], sum = r + g + b;
+        double expected = 127.0;
+        if (index == ColourIndex::kCIVE) {
+          expected = 127.5 - (0.441 * r - 0.811 * g + 0.385 * b + 18.78745);
+        } else if (sum > 0.0) {
+          const double exg = (2.0 * g - r - b) / sum, exr = (1.4 * r - g) / sum;
+          expected = index == ColourIndex::kExG ? 127.5 + 127.5 * exg : 127.5 + 85.0 * (exg - exr);
+        }
+        expected = std::clamp(expected, 0.0, 255.0);
+        wrong += std::abs(out.at<uint8_t>(v, u) - expected) > 0.5 + 1e-4;
+      }
+    }
+    EXPECT_EQ(wrong, 0) << Name(index);
+  }
 }
 
 }  // namespace
