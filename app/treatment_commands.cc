@@ -139,7 +139,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
-  o.split_merged = !a.no_split_merged;
+  if (a.no_split_merged) o.treatment.split_merged = false;
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
   if (a.abstain_merged) o.treatment.abstain_merged = true;
   o.costs_ratio = a.costs_ratio;
@@ -208,7 +208,7 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_flag("--abstain-merged", args.abstain_merged,
                 "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--no-split-merged", args.no_split_merged,
-                "label merged blobs' pixels whole (no split among predicted crops)");
+                "map and label merged blobs whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");
   cmd->add_option("--costs-ratio", args.costs_ratio, "cost ratio for the MRROC operating point")
       ->check(CLI::PositiveNumber)->capture_default_str();

@@ -25,9 +25,6 @@ struct TreatmentEvalOptions {
   double true_valve_latency_s = -1.0;  // the simulated valves' latency; < 0: as scheduled
   bool baseline_thesis = false;
   bool mrroc = false;
-  // Split blobs that miss every association region among the predicted
-  // crops before labelling their pixels (CropClassifier::SplitMerged).
-  bool split_merged = true;
   double costs_ratio = 1.0;  // Φ for the MRROC operating point
 
   OptionErrors Validate() const;

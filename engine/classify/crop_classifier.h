@@ -105,10 +105,13 @@ class CropClassifier {
   // classified as a blob of its own (size filter, then its centroid against
   // its prediction's association region; `clipped` as the whole blob's).
   // Writes 1 (crop) or 0 (weed) per pixel into `crop`; pixels beyond every
-  // prediction's radius are weed. Returns the number of crop parts.
+  // prediction's radius are weed. Returns the number of crop parts. With
+  // `part`, also writes each pixel's part: the index of its prediction in
+  // `predictions`, −1 beyond every radius.
   int SplitMerged(std::span<const Eigen::Vector2d> ground_m, std::span<const double> pixel_area_m2,
                   bool clipped, std::span<const PredictedCrop> predictions,
-                  const geometry::Matrix5d& covariance, std::vector<uint8_t>& crop) const;
+                  const geometry::Matrix5d& covariance, std::vector<uint8_t>& crop,
+                  std::vector<int>* part = nullptr) const;
 
   const ClassifierOptions& options() const { return options_; }
 
