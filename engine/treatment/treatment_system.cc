@@ -199,15 +199,15 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
         area[k] += 1.0;
         moment[k] += Eigen::Vector2d(p.x + 0.5, p.y + 0.5);
       }
-      for (size_t k = 0; k < box.size(); ++k) {
-        if (!(area[k] > 0.0)) continue;
-        const bool crop = k > 0 && split_part_crop_[k - 1];
-        if (crop && options_.crop_footprint_per_plant) {
+      for (size_t k = 1; k < box.size(); ++k) {
+        if (!(area[k] > 0.0) || !split_part_crop_[k - 1]) continue;
+        if (options_.crop_footprint_per_plant) {
           add_to_plant(crops[k - 1].m, crops[k - 1].n, area[k], moment[k], box[k]);
         } else {
-          AddFootprint(pose, moment[k] / area[k], box[k], crop);
+          AddFootprint(pose, moment[k] / area[k], box[k], true);
         }
       }
+      AddFootprint(pose, blob, false);
     } else if (options_.abstain_merged && maybe_merged && CoversAPrediction(blob, crops)) {
       // Possibly merged plants: no votes either way.
     } else if (!d.crop || d.associated) {
