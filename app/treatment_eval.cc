@@ -188,6 +188,8 @@ TreatmentMetrics Finish(const Sums& s) {
   m.weed_as_crop = Ratio(c[2][1], weed);
   m.weed_as_weed = Ratio(c[2][2], weed);
   m.crop_pixel_rate = m.crop_as_crop;
+  m.crop_pixel_rate_of_plant = Ratio(c[1][1], c[1][1] + c[1][2]);
+  m.weed_pixel_fpr_of_plant = Ratio(c[2][1], c[2][1] + c[2][2]);
   m.frames_classified = s.frames_classified;
   m.ticks = s.ticks;
   m.ticks_fail_safe = s.ticks_fail_safe;
@@ -308,7 +310,8 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     const double last_y = track.empty() ? 0.0 : track.back().y_m;
     const auto score = [&](Chain& c, const treatment::TreatmentOptions& t, Sums& sums) {
       const std::vector<treatment::Shot> shots = c.bar.Shots(track);
-      const SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
+      SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
+      for (MissedCrop& m : s.missed) m.seed_index = k;
       Accumulate(c, s, static_cast<int>(shots.size()), sums);
     };
     score(ours, options.treatment, ours_sums);
@@ -327,6 +330,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     }
   }
   result.ours = Finish(ours_sums);
+  result.missed_crops = ours_sums.spray.missed;
   if (thesis_sums.ticks > 0) result.thesis = Finish(thesis_sums);
   if (options.mrroc) {
     const std::vector<double> areas = {0.0,   0.0005, 0.001, 0.002, 0.003, 0.004, 0.005,

@@ -19,6 +19,7 @@ OptionErrors ClassifierOptions::Validate() const {
   RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   RequirePositive(e, "split_radius_m", split_radius_m);
+  RequirePositive(e, "split_assoc_chi2", split_assoc_chi2);
   return e;
 }
 
@@ -133,8 +134,8 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
     const Eigen::Vector2d nu = moment[k] / area[k] - predictions[k].ground_m;
     const Eigen::Matrix2d s = AssociationCovariance(predictions[k], covariance, options_);
     const double g2 = nu.dot(s.ldlt().solve(nu));
-    part_crop[k] = IsCrop(area[k], clipped, g2, options_.min_crop_area_m2, options_.assoc_chi2,
-                          options_.sure_crop_area_m2);
+    part_crop[k] = IsCrop(area[k], clipped, g2, options_.min_crop_area_m2,
+                          options_.split_assoc_chi2, options_.sure_crop_area_m2);
     parts += part_crop[k];
   }
   for (size_t i = 0; i < ground_m.size(); ++i) {
