@@ -34,7 +34,6 @@ struct Chain {
   Confusion confusion{};
   std::vector<classify::ClassifierSample> samples;
   bool collect_samples = false;
-  bool split_merged = true;
   int frames_classified = 0, ticks = 0, ticks_fail_safe = 0;
   double first_classified_y = std::nan("");
   // Scratch.
@@ -65,69 +64,18 @@ struct Chain {
     const tracking::FrameReport report = tracker.ProcessFrame(
         frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
     const treatment::FrameTreatment& t =
-        system.OnFrame(frame.truth.utime, tracker, report, seg.blobs, features, blob_of_feature);
+        system.OnFrame(frame.truth.utime, tracker, report, seg.blobs, features, blob_of_feature,
+                       seg.mask);
     if (!t.classified) return;
     if (std::isnan(first_classified_y)) first_classified_y = frame.truth.pose.y_m;
     ++frames_classified;
-    ScorePixels(seg, t, camera, frame.rendered.labels, roi);
-  }
-
-  void SplitMerged(const treatment::FrameTreatment& t,
-                   const geometry::CameraModel& camera, int n, const std::vector<int>& feature_of,
-                   cv::Mat& label_px) {
-    const classify::ClassifierOptions& o = system.options().classifier;
-    std::vector<int> split_of(static_cast<size_t>(n), -1);
-    std::vector<std::vector<cv::Point>> pixels;
-    for (int k = 1; k < n; ++k) {
-      const int i = feature_of[static_cast<size_t>(k)];
-      if (i < 0) continue;
-      const classify::BlobDecision& d = t.decisions[static_cast<size_t>(i)];
-      if (d.crop || d.associated || (!d.clipped && d.area_m2 < o.min_crop_area_m2)) continue;
-      split_of[static_cast<size_t>(k)] = static_cast<int>(pixels.size());
-      pixels.emplace_back();
-    }
-    if (pixels.empty()) return;
-    for (int v = 0; v < components.rows; ++v) {
-      const int* comp = components.ptr<int>(v);
-      for (int u = 0; u < components.cols; ++u) {
-        const int j = split_of[static_cast<size_t>(comp[u])];
-        if (j >= 0) pixels[static_cast<size_t>(j)].emplace_back(u, v);
-      }
-    }
-    const std::vector<classify::PredictedCrop> crops =
-        classify::PredictCrops(tracker.model(), tracker.state());
-    const double h = camera.options().virtual_plane_height_m;
-    std::vector<Eigen::Vector2d> ground;
-    std::vector<double> area;
-    std::vector<cv::Point> kept;
-    std::vector<uint8_t> crop;
-    for (int k = 1; k < n; ++k) {
-      const int j = split_of[static_cast<size_t>(k)];
-      if (j < 0) continue;
-      const int i = feature_of[static_cast<size_t>(k)];
-      const classify::BlobDecision& d = t.decisions[static_cast<size_t>(i)];
-      const std::vector<cv::Point>& px = pixels[static_cast<size_t>(j)];
-      const double pixel_m2 = d.area_m2 / static_cast<double>(std::max<size_t>(1, px.size()));
-      ground.clear(), area.clear(), kept.clear();
-      for (const cv::Point& p : px) {
-        const auto g = camera.ImageToPlane({p.x + 0.5, p.y + 0.5}, h);
-        if (!g) continue;
-        ground.push_back(*g);
-        area.push_back(pixel_m2);
-        kept.push_back(p);
-      }
-      system.classifier().SplitMerged(ground, area, d.clipped, crops, tracker.covariance(), crop);
-      for (size_t q = 0; q < kept.size(); ++q) {
-        label_px.at<uint8_t>(kept[q]) = crop[q] ? 1 : 2;
-      }
-    }
+    ScorePixels(seg, t, frame.rendered.labels, roi);
   }
 
   // Labels every blob's pixels C or W by its decision, and counts them
   // against the label image (thesis tables 7.5–7.8).
   void ScorePixels(const vision::Segmentation& seg, const treatment::FrameTreatment& t,
-                   const geometry::CameraModel& camera, const cv::Mat& labels,
-                   const cv::Mat& roi) {
+                   const cv::Mat& labels, const cv::Mat& roi) {
     const int n = cv::connectedComponentsWithStats(seg.mask, components, stats, centroids, 8,
                                                    CV_32S);
     // Component ↔ blob by bounding box and area (both label 8-connected runs).
@@ -148,16 +96,19 @@ struct Chain {
       label_of[static_cast<size_t>(it->second)] = t.decisions[i].crop ? 1 : 2;
       feature_of[static_cast<size_t>(it->second)] = static_cast<int>(i);
     }
-    // Blobs that passed the size filter but missed every association region
-    // may be touching plants merged: their pixels are split among the
-    // predicted crops (CropClassifier::SplitMerged) and labelled part by part.
     cv::Mat label_px(components.size(), CV_8UC1);
     for (int v = 0; v < components.rows; ++v) {
       const int* comp = components.ptr<int>(v);
       uint8_t* out = label_px.ptr<uint8_t>(v);
       for (int u = 0; u < components.cols; ++u) out[u] = label_of[static_cast<size_t>(comp[u])];
     }
-    if (split_merged) SplitMerged(t, camera, n, feature_of, label_px);
+    // Blobs the treatment system split among the predicted crops (merged
+    // plants): labelled pixel by pixel as it mapped them.
+    for (const treatment::SplitBlob& b : t.split) {
+      for (size_t q = 0; q < b.pixels.size(); ++q) {
+        label_px.at<uint8_t>(b.pixels[q]) = b.crop[q] ? 1 : 2;
+      }
+    }
     cv::Mat valid;
     vision::EvaluationMask(labels, roi, 1, valid);
     std::vector<std::array<double, 3>> per_component(static_cast<size_t>(n), {0, 0, 0});
@@ -237,6 +188,8 @@ TreatmentMetrics Finish(const Sums& s) {
   m.weed_as_crop = Ratio(c[2][1], weed);
   m.weed_as_weed = Ratio(c[2][2], weed);
   m.crop_pixel_rate = m.crop_as_crop;
+  m.crop_pixel_rate_of_plant = Ratio(c[1][1], c[1][1] + c[1][2]);
+  m.weed_pixel_fpr_of_plant = Ratio(c[2][1], c[2][1] + c[2][2]);
   m.frames_classified = s.frames_classified;
   m.ticks = s.ticks;
   m.ticks_fail_safe = s.ticks_fail_safe;
@@ -283,6 +236,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
   o.crop_footprint_per_plant = false;  // each feature's own box
   o.abstain_merged = false;
+  o.split_merged = false;  // whole blobs, labelled and mapped
   // Table 7.2's operating points: size ς in pixels and clustering radius r
   // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).
   double size_px = 80.0, radius_m = 0.1;
@@ -327,13 +281,11 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     Chain ours(simulator, vision::SegmenterOptions{}, ProductTrackerOptions(so), options.treatment,
                latency);
     ours.collect_samples = options.mrroc;
-    ours.split_merged = options.split_merged;
     std::optional<Chain> thesis;
     treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so);
     thesis_options.scheduler = options.treatment.scheduler;
     if (options.baseline_thesis) {
       thesis.emplace(simulator, thesis_seg, ThesisTrackerOptions(so), thesis_options, latency);
-      thesis->split_merged = false;  // the thesis labelled whole blobs
     }
     std::vector<treatment::FieldPose> track;
     sim::SimFrame frame;
@@ -358,7 +310,8 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     const double last_y = track.empty() ? 0.0 : track.back().y_m;
     const auto score = [&](Chain& c, const treatment::TreatmentOptions& t, Sums& sums) {
       const std::vector<treatment::Shot> shots = c.bar.Shots(track);
-      const SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
+      SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
+      for (MissedCrop& m : s.missed) m.seed_index = k;
       Accumulate(c, s, static_cast<int>(shots.size()), sums);
     };
     score(ours, options.treatment, ours_sums);
@@ -377,6 +330,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     }
   }
   result.ours = Finish(ours_sums);
+  result.missed_crops = ours_sums.spray.missed;
   if (thesis_sums.ticks > 0) result.thesis = Finish(thesis_sums);
   if (options.mrroc) {
     const std::vector<double> areas = {0.0,   0.0005, 0.001, 0.002, 0.003, 0.004, 0.005,

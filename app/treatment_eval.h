@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "app/treatment_score.h"
 #include "engine/classify/mrroc.h"
 #include "engine/sim/simulator.h"
 #include "engine/treatment/treatment_system.h"
@@ -25,9 +26,6 @@ struct TreatmentEvalOptions {
   double true_valve_latency_s = -1.0;  // the simulated valves' latency; < 0: as scheduled
   bool baseline_thesis = false;
   bool mrroc = false;
-  // Split blobs that miss every association region among the predicted
-  // crops before labelling their pixels (CropClassifier::SplitMerged).
-  bool split_merged = true;
   double costs_ratio = 1.0;  // Φ for the MRROC operating point
 
   OptionErrors Validate() const;
@@ -56,6 +54,10 @@ struct TreatmentMetrics {
   double crop_as_crop = 0.0, crop_as_weed = 0.0, crop_as_soil = 0.0;
   double weed_as_crop = 0.0, weed_as_weed = 0.0, weed_as_soil = 0.0;
   double crop_pixel_rate = 0.0;  // = crop_as_crop
+  // Of the true crop / weed pixels segmented as plant (C or W), the fraction
+  // labelled C: thesis table 7.9's TPR and FPR, which leave out what
+  // segmentation lost to soil.
+  double crop_pixel_rate_of_plant = 0.0, weed_pixel_fpr_of_plant = 0.0;
   int frames_classified = 0;
   int ticks = 0, ticks_fail_safe = 0, shots = 0, map_resets = 0, plants_recorded = 0;
 };
@@ -71,6 +73,7 @@ struct TreatmentEvaluation {
   classify::MrrocPoint operating_point;  // for costs_ratio
   classify::MrrocPoint nearest_corner;   // thesis table 7.2
   std::vector<std::string> example_why;  // a few plant records' `why`
+  std::vector<MissedCrop> missed_crops;  // ours, every seed (seed_index: 0-based run)
 };
 
 TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options);

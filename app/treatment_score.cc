@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 #include <cmath>
+#include <limits>
 
 namespace plantscale::app {
 
@@ -64,6 +65,22 @@ Eigen::Vector2d PatchCentre(const Raster& r, int col, int row, double half_size_
           r.y0 + (top + 0.5 * stats.at<int>(k, cv::CC_STAT_HEIGHT)) * r.cell};
 }
 
+// Distance from p to the centre of the nearest sprayed cell within ± half_size_m.
+double NearestSpray(const Raster& r, const Eigen::Vector2d& p, double half_size_m) {
+  const int h = std::max(1, static_cast<int>(std::lround(half_size_m / r.cell)));
+  const int col = static_cast<int>(std::floor((p.x() - r.x0) / r.cell));
+  const int row = static_cast<int>(std::floor((p.y() - r.y0) / r.cell));
+  double best = std::numeric_limits<double>::infinity();
+  for (int v = std::max(0, row - h); v <= std::min(r.mask.rows - 1, row + h); ++v) {
+    for (int u = std::max(0, col - h); u <= std::min(r.mask.cols - 1, col + h); ++u) {
+      if (r.mask.at<uint8_t>(v, u) == 0) continue;
+      const Eigen::Vector2d c(r.x0 + (u + 0.5) * r.cell, r.y0 + (v + 0.5) * r.cell);
+      best = std::min(best, (c - p).norm());
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 void SprayScore::Merge(const SprayScore& o) {
@@ -79,6 +96,7 @@ void SprayScore::Merge(const SprayScore& o) {
   centre_error2_sum += o.centre_error2_sum;
   sprayed_bed_m2 += o.sprayed_bed_m2;
   bed_m2 += o.bed_m2;
+  missed.insert(missed.end(), o.missed.begin(), o.missed.end());
 }
 
 SprayScore ScoreSpray(const sim::Field& field, std::span<const treatment::Shot> shots,
@@ -118,7 +136,11 @@ SprayScore ScoreSpray(const sim::Field& field, std::span<const treatment::Shot> 
       continue;
     }
     ++score.crop_plants;
-    if (!sprayed) continue;
+    if (!sprayed) {
+      score.missed.push_back({0, p.id, p.position_m, p.radius_m,
+                              NearestSpray(r, p.position_m, region.patch_half_size_m)});
+      continue;
+    }
     ++score.crop_hits;
     const Eigen::Vector2d centre = PatchCentre(r, col, row, region.patch_half_size_m);
     const Eigen::Vector2d e = centre - p.position_m;

@@ -9,6 +9,7 @@
 // camera can see; the treated area is the sprayed fraction of the bed.
 
 #include <span>
+#include <vector>
 
 #include "engine/sim/field.h"
 #include "engine/treatment/simulated_bar.h"
@@ -23,6 +24,17 @@ struct SprayScoreRegion {
   double patch_half_size_m = 0.15;  // a plant's sprayed patch is looked for this far around its root
 };
 
+// A crop plant the spray missed, and how near the spray came to its root.
+struct MissedCrop {
+  int seed_index = 0;  // which run (set by the caller merging runs)
+  int plant_id = 0;
+  Eigen::Vector2d root_m{0.0, 0.0};  // field frame
+  double radius_m = 0.0;
+  // Root to the nearest sprayed raster cell within the patch window
+  // (SprayScoreRegion::patch_half_size_m); ∞ when none: nothing sprayed near.
+  double nearest_spray_m = 0.0;
+};
+
 struct SprayScore {
   int crop_plants = 0, crop_hits = 0;
   int weeds = 0, weed_hits = 0;
@@ -34,6 +46,7 @@ struct SprayScore {
   Eigen::Vector2d centre_error2_sum = Eigen::Vector2d::Zero();
   double sprayed_bed_m2 = 0.0;
   double bed_m2 = 0.0;
+  std::vector<MissedCrop> missed;
 
   void Merge(const SprayScore& other);
 };

@@ -45,10 +45,13 @@ SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options,
 
 void SegmentationStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher&) {
   blobs_ = {};
+  mask_ = cv::Mat();
   if (frame.image.empty()) return;
   try {
-    blobs_ = camera_ ? segmenter_.Process(frame.image, *camera_).blobs
-                     : segmenter_.Process(frame.image).blobs;
+    const vision::Segmentation& seg =
+        camera_ ? segmenter_.Process(frame.image, *camera_) : segmenter_.Process(frame.image);
+    blobs_ = seg.blobs;
+    mask_ = seg.mask;
   } catch (const DataError& e) {
     status.faults.push_back(std::string("segmentation: ") + e.what());
   }
@@ -251,7 +254,8 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
   report.mode = tracker_.tracker().mode();
   report.initialised_now = tracker_.initialised_now();
   const treatment::FrameTreatment& t = system_.OnFrame(frame.utime, tracker_.tracker(), report,
-                                                       blobs, features_, blob_of_feature_);
+                                                       blobs, features_, blob_of_feature_,
+                                                       segmentation_.mask());
   if (t.map_reset) next_tile_row_ = 0;
   PublishPlants(frame, t, publisher);
   PublishNozzles(frame.utime, publisher);

@@ -43,11 +43,13 @@ class SegmentationStage : public Stage {
   std::string name() const override { return "segmentation"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
   std::span<const vision::Blob> blobs() const { return blobs_; }
+  const cv::Mat& mask() const { return mask_; }  // the blobs' plant mask (empty: none)
 
  private:
   vision::Segmenter segmenter_;
   const geometry::CameraModel* camera_;
   std::span<const vision::Blob> blobs_;
+  cv::Mat mask_;
 };
 
 // The crop-grid tracker (engine/tracking) on the segmentation's blobs and

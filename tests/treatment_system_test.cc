@@ -29,9 +29,12 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   const TreatmentMetrics& m = e.ours;
   ASSERT_GE(m.crop_plants, 1000);  // issue: ≥ 1000 crop plants over the seeds
   EXPECT_EQ(e.mode, "crop");
-  // Issue target 99.5 %; reached 99.27 % (8 of 1103 missed: merged blobs'
-  // weed votes outvote their crop cells; --abstain-merged hits all, README).
-  EXPECT_GE(m.crop_hit_rate, 0.99);
+  // Issue target 99.5 %: met, 99.91 % (1102 of 1103; 99.27 % before merged
+  // blobs were split for the map). The one miss (seed 2, plant 369, outer
+  // row) is a placement miss: sprayed 5 mm from its root.
+  EXPECT_GE(m.crop_hit_rate, 0.995);
+  EXPECT_LE(e.missed_crops.size(), 5u);
+  for (const MissedCrop& c : e.missed_crops) EXPECT_GE(c.nearest_spray_m, 0.0);
   // Issue: |bias| ≤ 3 mm on both axes (thesis 9.7 / −23.1 mm): met.
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
@@ -42,17 +45,24 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(m.placement_rms_along_m, 0.031);
   EXPECT_LE(m.placement_rms_across_m, 0.014);
   EXPECT_LE(m.centre_rms_across_m, 0.0105);
-  // Issue target ≤ 15 % of the bed: met, 14.6 % (thesis 33 %).
+  // Issue target ≤ 15 % of the bed: met, 14.2 % (thesis 33 %).
   EXPECT_LE(m.treated_area_fraction, 0.15);
   EXPECT_GE(m.treated_area_fraction, 0.08);  // a real spray pattern, not nothing
-  // Weeds clear of the crop's leaves are rarely sprayed (2.6 %); weeds
-  // under a crop's leaves share its spray (23.6 % of all weeds hit; issue
-  // target 0.5 % not met).
-  EXPECT_LE(m.weed_hit_rate_clear, 0.035);
+  // Weeds clear of the crop's leaves are rarely sprayed (2.2 %: the
+  // thesis's count, which saw weeds on photographs); weeds under a crop's
+  // leaves share its spray (23.5 % of all weeds hit; issue target 0.5 %
+  // not met).
+  EXPECT_LE(m.weed_hit_rate_clear, 0.03);
   EXPECT_LE(m.weed_hit_rate, 0.26);
   // Crop pixels labelled crop 85.0 % (merged blobs split among the
-  // predicted crops; 81.2 % without); issue target 95 % not met.
+  // predicted crops; 81.2 % without); issue target 95 % not met: 11.5 %
+  // of the crop pixels are lost to soil by segmentation. Of the crop
+  // pixels segmented as plant 96.0 % are labelled crop (thesis table 7.9:
+  // 93.1–96.4 %).
   EXPECT_GE(m.crop_pixel_rate, 0.83);
+  EXPECT_GE(m.crop_pixel_rate_of_plant, 0.95);
+  EXPECT_NEAR(m.crop_pixel_rate_of_plant, m.crop_as_crop / (m.crop_as_crop + m.crop_as_weed),
+              1e-12);
   // Leaf fragments of one grid plant make one record (15818 before).
   EXPECT_LT(m.plants_recorded, 14500);
   // Never sprayed while the fail-safe holds the bar closed: at most the

@@ -233,6 +233,20 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   EXPECT_GT(plants_end, plant_1_end);
   for (size_t i = plants_end; i < ground.size(); ++i) EXPECT_EQ(crop[i], 0) << i;
 
+  // A wider gate for parts alone (plant 2's part: centroid 11 cm off with
+  // σ 1 cm, γ² about 11²) makes it crop too; the whole blob is still weed.
+  o.split_assoc_chi2 = 150.0;
+  const CropClassifier lenient(o);
+  EXPECT_EQ(lenient.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop), 2);
+  for (size_t i = 0; i < plants_end; ++i) EXPECT_EQ(crop[i], 1) << i;
+  lenient.Classify(whole, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_FALSE(d[0].crop);
+  o.split_assoc_chi2 = 100.0;  // below its γ²: still weed
+  EXPECT_EQ(CropClassifier(o).SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(),
+                                          crop),
+            1);
+  o.split_assoc_chi2 = 9.21;
+
   // With a wide association region plant 2's part is crop too: two parts.
   o.feature_sd_m = 0.1;
   const CropClassifier wide(o);

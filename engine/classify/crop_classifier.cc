@@ -19,6 +19,7 @@ OptionErrors ClassifierOptions::Validate() const {
   RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   RequirePositive(e, "split_radius_m", split_radius_m);
+  RequirePositive(e, "split_assoc_chi2", split_assoc_chi2);
   return e;
 }
 
@@ -97,18 +98,20 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
 int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
                                 std::span<const double> pixel_area_m2, bool clipped,
                                 std::span<const PredictedCrop> predictions,
-                                const geometry::Matrix5d& covariance,
-                                std::vector<uint8_t>& crop) const {
+                                const geometry::Matrix5d& covariance, std::vector<uint8_t>& crop,
+                                std::vector<int>* part_out) const {
   if (pixel_area_m2.size() != ground_m.size()) {
     throw std::invalid_argument("SplitMerged: " + std::to_string(ground_m.size()) +
                                 " ground points but " + std::to_string(pixel_area_m2.size()) +
                                 " pixel areas");
   }
   crop.assign(ground_m.size(), 0);
+  std::vector<int> local;
+  std::vector<int>& part = part_out ? *part_out : local;
+  part.assign(ground_m.size(), -1);
   if (predictions.empty() || ground_m.empty()) return 0;
   // Parts: nearest prediction per pixel (−1: none within the radius).
   const double r2 = options_.split_radius_m * options_.split_radius_m;
-  std::vector<int> part(ground_m.size(), -1);
   std::vector<double> area(predictions.size(), 0.0);
   std::vector<Eigen::Vector2d> moment(predictions.size(), Eigen::Vector2d::Zero());
   for (size_t i = 0; i < ground_m.size(); ++i) {
@@ -131,8 +134,8 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
     const Eigen::Vector2d nu = moment[k] / area[k] - predictions[k].ground_m;
     const Eigen::Matrix2d s = AssociationCovariance(predictions[k], covariance, options_);
     const double g2 = nu.dot(s.ldlt().solve(nu));
-    part_crop[k] = IsCrop(area[k], clipped, g2, options_.min_crop_area_m2, options_.assoc_chi2,
-                          options_.sure_crop_area_m2);
+    part_crop[k] = IsCrop(area[k], clipped, g2, options_.min_crop_area_m2,
+                          options_.split_assoc_chi2, options_.sure_crop_area_m2);
     parts += part_crop[k];
   }
   for (size_t i = 0; i < ground_m.size(); ++i) {

@@ -47,6 +47,11 @@ struct ClassifierOptions {
   double camera_height_sd_m = 0.004;
   // SplitMerged: a pixel belongs to the nearest predicted crop this close.
   double split_radius_m = 0.3;  // beyond the largest crop's leaves (A: 0.2 m plants) plus spread
+  // SplitMerged: a part's association gate (γ² of its centroid to its own
+  // prediction). A part is the pixels nearest one prediction: where a
+  // neighbour's leaves reach past the halfway line the cut moves its centroid
+  // off the plant's by more than a blob's would be.
+  double split_assoc_chi2 = 9.21;
 
   OptionErrors Validate() const;
 };
@@ -103,12 +108,16 @@ class CropClassifier {
   // `pixel_area_m2[i]`) are split among the predicted crops, each pixel to
   // the nearest prediction within `split_radius_m`, and every part is then
   // classified as a blob of its own (size filter, then its centroid against
-  // its prediction's association region; `clipped` as the whole blob's).
+  // its prediction's association region with `split_assoc_chi2`; `clipped`
+  // as the whole blob's).
   // Writes 1 (crop) or 0 (weed) per pixel into `crop`; pixels beyond every
-  // prediction's radius are weed. Returns the number of crop parts.
+  // prediction's radius are weed. Returns the number of crop parts. With
+  // `part`, also writes each pixel's part: the index of its prediction in
+  // `predictions`, −1 beyond every radius.
   int SplitMerged(std::span<const Eigen::Vector2d> ground_m, std::span<const double> pixel_area_m2,
                   bool clipped, std::span<const PredictedCrop> predictions,
-                  const geometry::Matrix5d& covariance, std::vector<uint8_t>& crop) const;
+                  const geometry::Matrix5d& covariance, std::vector<uint8_t>& crop,
+                  std::vector<int>* part = nullptr) const;
 
   const ClassifierOptions& options() const { return options_; }
 

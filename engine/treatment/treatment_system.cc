@@ -1,5 +1,6 @@
 #include "engine/treatment/treatment_system.h"
 
+#include <opencv2/imgproc.hpp>
 #include <algorithm>
 
 namespace plantscale::treatment {
@@ -67,15 +68,74 @@ void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& c
   map_.AddFootprint(bed, crop);
 }
 
+bool TreatmentSystem::BlobPixels(const cv::Mat& mask, const vision::Blob& blob,
+                                 std::vector<cv::Point>& out) {
+  out.clear();
+  const cv::Rect box = blob.bbox_px & cv::Rect(0, 0, mask.cols, mask.rows);
+  if (box != blob.bbox_px || box.empty()) return false;
+  // The blob is the component spanning its whole box with its area.
+  const int n = cv::connectedComponentsWithStats(mask(box), components_, stats_, centroids_, 8,
+                                                 CV_32S);
+  int label = -1;
+  for (int k = 1; k < n && label < 0; ++k) {
+    if (stats_.at<int>(k, cv::CC_STAT_LEFT) == 0 && stats_.at<int>(k, cv::CC_STAT_TOP) == 0 &&
+        stats_.at<int>(k, cv::CC_STAT_WIDTH) == box.width &&
+        stats_.at<int>(k, cv::CC_STAT_HEIGHT) == box.height &&
+        stats_.at<int>(k, cv::CC_STAT_AREA) == blob.area_px) {
+      label = k;
+    }
+  }
+  if (label < 0) return false;
+  out.reserve(static_cast<size_t>(blob.area_px));
+  for (int v = 0; v < components_.rows; ++v) {
+    const int* c = components_.ptr<int>(v);
+    for (int u = 0; u < components_.cols; ++u) {
+      if (c[u] == label) out.emplace_back(box.x + u, box.y + v);
+    }
+  }
+  return true;
+}
+
+bool TreatmentSystem::SplitMergedBlob(int feature, const vision::Blob& blob,
+                                      const classify::BlobDecision& d,
+                                      std::span<const classify::PredictedCrop> crops,
+                                      const geometry::Matrix5d& covariance, const cv::Mat& mask) {
+  if (crops.empty() || !BlobPixels(mask, blob, split_pixels_)) return false;
+  SplitBlob split;
+  split.feature = feature;
+  split_ground_.clear();
+  const double h = camera_.options().virtual_plane_height_m;
+  for (const cv::Point& p : split_pixels_) {
+    const auto g = camera_.ImageToPlane({p.x + 0.5, p.y + 0.5}, h);
+    if (!g) continue;
+    split_ground_.push_back(*g);
+    split.pixels.push_back(p);
+  }
+  if (split.pixels.empty()) return false;
+  // Each pixel stands for an equal share of the blob's ground area.
+  split_area_.assign(split.pixels.size(), d.area_m2 / static_cast<double>(split.pixels.size()));
+  classifier_.SplitMerged(split_ground_, split_area_, d.clipped, crops, covariance, split.crop,
+                          &split_part_);
+  // A part's class: that of its pixels (SplitMerged labels a part as a whole).
+  split_part_crop_.assign(crops.size(), 0);
+  for (size_t q = 0; q < split.crop.size(); ++q) {
+    if (split_part_[q] >= 0 && split.crop[q]) split_part_crop_[static_cast<size_t>(split_part_[q])] = 1;
+  }
+  frame_.split.push_back(std::move(split));
+  return true;
+}
+
 const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::GridTracker& tracker,
                                                const tracking::FrameReport& report,
                                                std::span<const vision::Blob> blobs,
                                                std::span<const tracking::Feature> features,
-                                               std::span<const int> blob_of_feature) {
+                                               std::span<const int> blob_of_feature,
+                                               const cv::Mat& mask) {
   last_frame_utime_ = utime;
   frame_.classified = false;
   frame_.map_reset = false;
   frame_.decisions.clear();
+  frame_.split.clear();
   frame_.plant_ids.assign(features.size(), -1);
   if (report.initialised_now) {
     // A new bed frame: what was mapped before cannot be placed in it.
@@ -104,22 +164,51 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     cv::Rect box;
   };
   std::vector<PlantFootprint> plants;
+  // Pixels of plant (m, n): one footprint per plant and frame.
+  const auto add_to_plant = [&](int m, int n, double area_px, const Eigen::Vector2d& moment_px,
+                                const cv::Rect& box) {
+    auto it = std::find_if(plants.begin(), plants.end(),
+                           [&](const PlantFootprint& p) { return p.m == m && p.n == n; });
+    if (it == plants.end()) {
+      plants.push_back({m, n, 0.0, Eigen::Vector2d::Zero(), box});
+      it = plants.end() - 1;
+    }
+    it->area_px += area_px;
+    it->moment_px += moment_px;
+    it->box |= box;
+  };
   for (size_t i = 0; i < features.size(); ++i) {
     const classify::BlobDecision& d = frame_.decisions[i];
     const vision::Blob& blob = blobs[static_cast<size_t>(blob_of_feature[i])];
+    const bool maybe_merged = !d.crop && !d.associated &&
+                              (d.clipped || d.area_m2 >= options_.classifier.min_crop_area_m2);
     if (d.crop && d.associated && options_.crop_footprint_per_plant) {
-      auto it = std::find_if(plants.begin(), plants.end(),
-                             [&](const PlantFootprint& p) { return p.m == d.m && p.n == d.n; });
-      if (it == plants.end()) {
-        plants.push_back({d.m, d.n, 0.0, Eigen::Vector2d::Zero(), blob.bbox_px});
-        it = plants.end() - 1;
+      add_to_plant(d.m, d.n, blob.area_px, blob.area_px * blob.centroid_px, blob.bbox_px);
+    } else if (maybe_merged && options_.split_merged && !mask.empty() &&
+               SplitMergedBlob(static_cast<int>(i), blob, d, crops, tracker.covariance(), mask)) {
+      // Parts: crop ones join their plant's footprint, weed ones vote weed.
+      const SplitBlob& split = frame_.split.back();
+      const std::vector<int>& part = split_part_;
+      std::vector<cv::Rect> box(crops.size() + 1);
+      std::vector<double> area(crops.size() + 1, 0.0);
+      std::vector<Eigen::Vector2d> moment(crops.size() + 1, Eigen::Vector2d::Zero());
+      for (size_t q = 0; q < split.pixels.size(); ++q) {
+        const size_t k = static_cast<size_t>(part[q] + 1);  // 0: beyond every radius
+        const cv::Point& p = split.pixels[q];
+        box[k] |= cv::Rect(p.x, p.y, 1, 1);
+        area[k] += 1.0;
+        moment[k] += Eigen::Vector2d(p.x + 0.5, p.y + 0.5);
       }
-      it->area_px += blob.area_px;
-      it->moment_px += blob.area_px * blob.centroid_px;
-      it->box |= blob.bbox_px;
-    } else if (options_.abstain_merged && !d.crop && !d.associated &&
-               (d.clipped || d.area_m2 >= options_.classifier.min_crop_area_m2) &&
-               CoversAPrediction(blob, crops)) {
+      for (size_t k = 1; k < box.size(); ++k) {
+        if (!(area[k] > 0.0) || !split_part_crop_[k - 1]) continue;
+        if (options_.crop_footprint_per_plant) {
+          add_to_plant(crops[k - 1].m, crops[k - 1].n, area[k], moment[k], box[k]);
+        } else {
+          AddFootprint(pose, moment[k] / area[k], box[k], true);
+        }
+      }
+      AddFootprint(pose, blob, false);
+    } else if (options_.abstain_merged && maybe_merged && CoversAPrediction(blob, crops)) {
       // Possibly merged plants: no votes either way.
     } else if (!d.crop || d.associated) {
       // Crop by size alone (merged plants): its centroid is no plant's
