@@ -7,6 +7,16 @@ set -euo pipefail
 bin="$1"; work="$2"
 rm -rf "$work"; mkdir -p "$work/in" "$work/empty"
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# A dependency-free RGB PNG writer for the Python snippets below.
+cat > "$work/pngw.py" <<'PY'
+import struct, zlib
+def png(path, w, h, pixel):
+    raw = b"".join(b"\0" + b"".join(bytes(pixel(x, y)) for x in range(w)) for y in range(h))
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+PY
 
 # Photographs made by the simulator (a clone has no photographs): a low,
 # perspective view of preset C (horizon in view) and a colour view.
@@ -22,14 +32,9 @@ cp "$work/sim/frames/000000.png" "$work/in/low.png"
 cp "$work/simrgb/frames/000000.png" "$work/in/colour.png"
 
 # No rows: bare soil (brown noise) and a clear sky, written as PNG by Python.
-python3 - "$work/in" <<'PY'
-import random, struct, sys, zlib
-def png(path, w, h, pixel):
-    raw = b"".join(b"\0" + b"".join(bytes(pixel(x, y)) for x in range(w)) for y in range(h))
-    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+python3 - "$work/in" "$work" <<'PY'
+import random, sys
+sys.path.insert(0, sys.argv[-1]); from pngw import png
 random.seed(3)
 def soil(x, y):
     g = random.randint(-25, 25)
@@ -112,14 +117,9 @@ PY
 # line along each row's centre, as the real datasets draw them. A second
 # photograph has no label: an error naming it, and the score goes on.
 mkdir -p "$work/photos" "$work/labels"
-python3 - "$work/photos" "$work/labels" <<'PY'
-import random, struct, sys, zlib
-def png(path, w, h, pixel):
-    raw = b"".join(b"\0" + b"".join(bytes(pixel(x, y)) for x in range(w)) for y in range(h))
-    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+python3 - "$work/photos" "$work/labels" "$work" <<'PY'
+import random, sys
+sys.path.insert(0, sys.argv[-1]); from pngw import png
 random.seed(5)
 W, H, VP = 320, 240, -60.0
 def centre(n, v):  # u of row n at continuous image height v
