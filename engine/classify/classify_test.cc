@@ -21,6 +21,17 @@ PredictedCrop CropAt(double x, double y) {
   return c;
 }
 
+// A 40 cm² size filter and the 99 % gate with 1 cm centroid noise and no
+// plant offset.
+ClassifierOptions SizeAndGate() {
+  ClassifierOptions o;
+  o.min_crop_area_m2 = 0.004;
+  o.assoc_chi2 = 9.21;
+  o.feature_sd_m = 0.01;
+  o.plant_sd_m = 0.0;
+  return o;
+}
+
 tracking::Feature FeatureAt(double x, double y, double area_m2, bool clipped = false) {
   tracking::Feature f;
   f.ground_m = {x, y};
@@ -43,11 +54,7 @@ TEST(CropClassifier, AssociationCovarianceIsHPHtPlusGroundNoise) {
 }
 
 TEST(CropClassifier, SizeFilterThenAssociation) {
-  ClassifierOptions o;
-  o.min_crop_area_m2 = 0.004;
-  o.assoc_chi2 = 9.21;
-  o.feature_sd_m = 0.01;
-  o.plant_sd_m = 0.0;
+  ClassifierOptions o = SizeAndGate();
   o.sure_crop_area_m2 = 0.03;
   const CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.475, 1.0)};
@@ -183,11 +190,7 @@ TEST(Mrroc, SweepAucAndOperatingPoints) {
 // Two touching plants along a row make one blob whose centroid lies between
 // them; split among the predictions, each half is a crop plant again.
 TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
-  ClassifierOptions o;
-  o.min_crop_area_m2 = 0.004;
-  o.assoc_chi2 = 9.21;
-  o.feature_sd_m = 0.01;
-  o.plant_sd_m = 0.0;
+  ClassifierOptions o = SizeAndGate();
   const CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.0, 1.45),
                                             CropAt(0.0, 1.9)};
@@ -208,8 +211,7 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   disk(0.0, 1.33, 0.13);  // plant 2, leaning back 12 cm and touching plant 1
   const size_t plants_end = ground.size();
   disk(0.0, 1.72, 0.02);  // a small weed nearer plant 3: its part fails the size filter
-  // (and beyond every prediction's split radius:)
-  disk(0.45, 1.2, 0.03);  // beyond every prediction's split radius
+  disk(0.45, 1.2, 0.03);  // a weed beyond every prediction's split radius
   // The whole blob: centroid between the plants, outside every region.
   std::vector<tracking::Feature> whole(1);
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();

@@ -30,6 +30,18 @@ Eigen::Vector2d BedToVehicle(const BedPose& pose, const Eigen::Vector2d& b) {
   return {c * gx + s * gy + pose.offset_m, -s * gx + c * gy};
 }
 
+bool InsideQuad(const Quad& q, const Eigen::Vector2d& p) {
+  bool any_pos = false, any_neg = false;
+  for (size_t i = 0; i < 4; ++i) {
+    const Eigen::Vector2d& a = q[i];
+    const Eigen::Vector2d& b = q[(i + 1) % 4];
+    const double c = (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+    any_pos |= c > 0.0;
+    any_neg |= c < 0.0;
+  }
+  return !(any_pos && any_neg);
+}
+
 std::optional<Quad> FootprintOnPlane(const geometry::CameraModel& camera,
                                      const Eigen::Vector2d& centroid_px, double u0, double v0,
                                      double u1, double v1, double scale) {

@@ -37,6 +37,9 @@ Eigen::Vector2d BedToVehicle(const BedPose& pose, const Eigen::Vector2d& bed_m);
 
 using Quad = std::array<Eigen::Vector2d, 4>;
 
+// p inside a convex quad of either winding (the boundary counts).
+bool InsideQuad(const Quad& q, const Eigen::Vector2d& p);
+
 // A blob's footprint on the virtual ground plane (vehicle frame): its image
 // bounding box scaled by `scale` about the centroid, corners projected
 // (thesis §8.2: "the bounding box of each feature is projected from the image

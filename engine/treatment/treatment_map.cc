@@ -11,21 +11,6 @@ namespace {
 // Row index of the last cell the map will grow to (≈ 1.3 km at 13 mm).
 constexpr int kMaxRows = 100000;
 
-double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& p) {
-  return (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
-}
-
-// Inside a convex quad of either winding (boundary counts).
-bool Inside(const Quad& q, const Eigen::Vector2d& p) {
-  bool any_pos = false, any_neg = false;
-  for (size_t i = 0; i < 4; ++i) {
-    const double c = Cross(q[i], q[(i + 1) % 4], p);
-    any_pos |= c > 0.0;
-    any_neg |= c < 0.0;
-  }
-  return !(any_pos && any_neg);
-}
-
 }  // namespace
 
 const char* ToString(CellClass c) {
@@ -112,7 +97,7 @@ int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   int cells = 0;
   for (int r = r0; r <= r1; ++r) {
     for (int c = c0; c <= c1; ++c) {
-      if (!Inside(q, CellCentre(c, r))) continue;
+      if (!InsideQuad(q, CellCentre(c, r))) continue;
       f(static_cast<size_t>(r) * columns_ + c);
       ++cells;
     }

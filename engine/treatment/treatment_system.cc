@@ -29,19 +29,9 @@ bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
       FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
                        b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0);
   if (!q) return false;
-  for (const classify::PredictedCrop& c : crops) {
-    bool pos = false, neg = false;
-    for (size_t i = 0; i < 4; ++i) {
-      const Eigen::Vector2d& a = (*q)[i];
-      const Eigen::Vector2d& e = (*q)[(i + 1) % 4];
-      const double cross = (e.x() - a.x()) * (c.ground_m.y() - a.y()) -
-                           (e.y() - a.y()) * (c.ground_m.x() - a.x());
-      pos |= cross > 0.0;
-      neg |= cross < 0.0;
-    }
-    if (!(pos && neg)) return true;
-  }
-  return false;
+  return std::any_of(crops.begin(), crops.end(), [&](const classify::PredictedCrop& c) {
+    return InsideQuad(*q, c.ground_m);
+  });
 }
 
 TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
