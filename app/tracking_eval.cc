@@ -45,7 +45,8 @@ struct Scorer {
 
   void Frame(const sim::SimFrame& frame, int index, const geometry::CameraModel& camera) {
     const auto& seg = segmenter.Process(frame.rendered.image, camera);
-    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features);
+    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features,
+                                tracker.centroid_heights());
     const bool was_tracking = tracker.mode() == tracking::TrackerMode::kTracking;
     const tracking::FrameReport r = tracker.ProcessFrame(
         frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
@@ -177,6 +178,9 @@ tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, doubl
   o.row_spacing_m = s.field.row_spacing_m + offset;
   o.plant_spacing_m = s.field.plant_spacing_m + offset;
   o.track_width_m = s.vehicle.track_width_m;
+  // The crop's size as a grower measures it: mean leaf-tip radius and height.
+  o.crop_radius_m = s.field.crop_radius_m;
+  o.crop_height_m = s.field.crop_height_ratio * s.field.crop_radius_m;
   return o;
 }
 

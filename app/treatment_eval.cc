@@ -59,7 +59,8 @@ struct Chain {
 
   void Frame(const sim::SimFrame& frame, const geometry::CameraModel& camera, const cv::Mat& roi) {
     const vision::Segmentation& seg = segmenter.Process(frame.rendered.image, camera);
-    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features);
+    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features,
+                                tracker.centroid_heights());
     treatment::FeatureBlobIndices(seg.blobs, blob_of_feature);
     const tracking::FrameReport report = tracker.ProcessFrame(
         frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);

@@ -131,7 +131,7 @@ void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publish
   }
   if (frame.image.empty()) return;
   tracking::FeaturesFromBlobs(segmentation_.blobs(), frame.image.cols, frame.image.rows,
-                              features_);
+                              features_, tracker_.centroid_heights());
   const tracking::FrameReport r =
       tracker_.ProcessFrame(frame.utime, frame.image.cols, frame.image.rows, features_);
   if (!r.input.accepted) status.faults.push_back("tracker: " + r.input.reason);
@@ -248,7 +248,8 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
   for (const sim::OdometrySample& o : frame.odometry) Tick(o, status);
   if (frame.image.empty()) return;
   const std::span<const vision::Blob> blobs = segmentation_.blobs();
-  tracking::FeaturesFromBlobs(blobs, frame.image.cols, frame.image.rows, features_);
+  tracking::FeaturesFromBlobs(blobs, frame.image.cols, frame.image.rows, features_,
+                              tracker_.tracker().centroid_heights());
   treatment::FeatureBlobIndices(blobs, blob_of_feature_);
   tracking::FrameReport report;
   report.mode = tracker_.tracker().mode();

@@ -3,12 +3,16 @@
 namespace plantscale::tracking {
 
 void FeaturesFromBlobs(std::span<const vision::Blob> blobs, int width, int height,
-                       std::vector<Feature>& out) {
+                       std::vector<Feature>& out, const geometry::CentroidHeights* heights) {
   out.clear();
   for (const vision::Blob& b : blobs) {
     if (!b.on_ground) continue;
     Feature f;
     f.ground_m = b.ground_m;
+    if (heights) {
+      const auto located = heights->Locate(b.centroid_px);
+      if (located) f.ground_m = *located;
+    }
     f.image_px = b.centroid_px;
     f.area_m2 = b.ground_area_m2;
     f.clipped = b.bbox_px.x <= 0 || b.bbox_px.y <= 0 || b.bbox_px.x + b.bbox_px.width >= width ||

@@ -31,6 +31,11 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "spacing_step_sd_m", spacing_step_sd_m);
   RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
   RequirePositive(e, "feature_sd_m", feature_sd_m);
+  RequireNonNegative(e, "crop_radius_m", crop_radius_m);
+  RequireNonNegative(e, "crop_height_m", crop_height_m);
+  if ((crop_radius_m > 0.0) != (crop_height_m > 0.0)) {
+    e.push_back({"crop_height_m", "crop_radius_m and crop_height_m are set together (or both 0)"});
+  }
   RequireNonNegative(e, "pixel_sd_px", pixel_sd_px);
   RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
   RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
@@ -63,6 +68,14 @@ geometry::GridModelOptions ModelOptions(const TrackerOptions& o) {
   return m;
 }
 
+std::optional<geometry::CentroidHeights> MakeHeights(const geometry::CameraModel& camera,
+                                                     const TrackerOptions& o) {
+  if (o.crop_radius_m <= 0.0 || o.crop_height_m <= 0.0) return std::nullopt;
+  geometry::CentroidHeightOptions h;
+  h.shape = {o.crop_radius_m, o.crop_height_m};
+  return geometry::CentroidHeights(camera, h);
+}
+
 bool Finite(const Feature& f) {
   return std::isfinite(f.ground_m.x()) && std::isfinite(f.ground_m.y()) &&
          std::isfinite(f.image_px.x()) && std::isfinite(f.image_px.y()) &&
@@ -82,9 +95,9 @@ GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptio
     : camera_(camera),
       options_(options),
       model_(camera, ModelOptions(options)),
+      heights_((ThrowIfInvalid("grid tracker", options.Validate()), MakeHeights(camera, options))),
       initialiser_(options.init, options.row_spacing_m, options.plant_spacing_m,
                    options.rows_each_side, options.track_width_m) {
-  ThrowIfInvalid("grid tracker", options.Validate());
   Reset();
 }
 
@@ -364,6 +377,10 @@ FrameReport GridTracker::ProcessFrame(int64_t utime, int width, int height,
   for (const Feature& f : features) {
     if (Finite(f)) {
       valid.push_back(f);
+      if (heights_) {
+        const auto located = heights_->Locate(f.image_px);
+        if (located) valid.back().ground_m = *located;
+      }
     } else {
       ++invalid;
     }
@@ -428,7 +445,7 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   }
   DropOffsetsOutOfView(in_view);
 
-  ObservationModel h(camera_, options_);
+  ObservationModel h(camera_, options_, centroid_heights());
   const Eigen::Vector3d bounce_prior(options_.camera_pitch_sd_rad * options_.camera_pitch_sd_rad,
                                      options_.camera_roll_sd_rad * options_.camera_roll_sd_rad,
                                      options_.camera_height_sd_m * options_.camera_height_sd_m);

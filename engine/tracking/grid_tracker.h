@@ -24,6 +24,7 @@
 
 #include "engine/common/options.h"
 #include "engine/geometry/camera_model.h"
+#include "engine/geometry/centroid_height.h"
 #include "engine/geometry/grid_model.h"
 #include "engine/tracking/feature.h"
 #include "engine/tracking/initialiser.h"
@@ -54,6 +55,15 @@ struct TrackerOptions {
   double spacing_step_sd_m = 0.002;  // process noise on r̄, l̄ per line entering or leaving (§4.1.2)
   double plant_offset_sd_m = 0.015;  // σ of a plant's persistent offset from its grid position
   double feature_sd_m = 0.008;       // R_w: centroid noise on the ground, per axis (eq. 4.28)
+  // The crop's mean leaf-tip radius and height (a ruler, or the growth
+  // stage). When both are set, a blob's centroid is located at the height
+  // where the ray through the image centroid of such a plant crosses its
+  // axis (geometry/centroid_height.h, thesis §2.3.8's inverted hemisphere),
+  // which varies over the view, instead of on the one virtual plane set by
+  // eye: that plane's error scales every position and reads as a wrong
+  // plant spacing, a forward drift.
+  double crop_radius_m = 0.0;
+  double crop_height_m = 0.0;
   double pixel_sd_px = 0.5;          // centroid quantisation
   // Dead reckoning (process noise of eq. 4.3).
   double track_width_m = 1.5;
@@ -144,6 +154,12 @@ class GridTracker {
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
   const TrackerOptions& options() const { return options_; }
   const geometry::GridModel& model() const { return model_; }
+  // Where blob centroids are located (TrackerOptions::crop_radius_m); null
+  // when they stay on the virtual plane. Classifiers comparing blobs with
+  // this tracker's predictions locate them the same way (FeaturesFromBlobs).
+  const geometry::CentroidHeights* centroid_heights() const {
+    return heights_ ? &*heights_ : nullptr;
+  }
 
  private:
   struct PlantOffset {
@@ -168,6 +184,7 @@ class GridTracker {
   geometry::CameraModel camera_;
   TrackerOptions options_;
   geometry::GridModel model_;
+  std::optional<geometry::CentroidHeights> heights_;
   GridInitialiser initialiser_;
   TrackerMode mode_ = TrackerMode::kInitialising;
   Eigen::VectorXd x_;  // core state, then (δx, δy) per plant offset

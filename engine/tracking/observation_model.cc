@@ -42,8 +42,9 @@ Eigen::Matrix<double, 2, 3> BounceJacobian(const Eigen::Vector2d& p, double hc) 
 }
 
 ObservationModel::ObservationModel(const geometry::CameraModel& camera,
-                                   const TrackerOptions& options)
-    : camera_(camera), options_(options) {}
+                                   const TrackerOptions& options,
+                                   const geometry::CentroidHeights* heights)
+    : camera_(camera), options_(options), heights_(heights) {}
 
 Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& s, int m, int n,
                                      int offset_index) const {
@@ -84,7 +85,8 @@ Measurement ObservationModel::Measure(const Feature& f) const {
     z.value = f.image_px;
     z.covariance = rw * fw * fw.transpose() + rp * Eigen::Matrix2d::Identity();
   } else {
-    const Eigen::Matrix2d jp = camera_.ImageToPlaneJacobian(f.image_px, plane);
+    const Eigen::Matrix2d jp = heights_ ? heights_->LocateJacobian(f.image_px)
+                                        : camera_.ImageToPlaneJacobian(f.image_px, plane);
     z.value = f.ground_m;
     z.covariance = rw * Eigen::Matrix2d::Identity() + rp * jp * jp.transpose();
   }

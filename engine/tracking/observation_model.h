@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include "engine/geometry/camera_model.h"
+#include "engine/geometry/centroid_height.h"
 #include "engine/geometry/grid_model.h"
 #include "engine/tracking/feature.h"
 
@@ -41,7 +42,9 @@ struct Measurement {
 
 class ObservationModel {
  public:
-  ObservationModel(const geometry::CameraModel& camera, const TrackerOptions& options);
+  // heights: where centroids are located (null: on the virtual plane).
+  ObservationModel(const geometry::CameraModel& camera, const TrackerOptions& options,
+                   const geometry::CentroidHeights* heights = nullptr);
 
   // x: the filter state (core, then δ pairs); offset_index: where this
   // plant's δ sits in x, or −1 when it has none.
@@ -52,6 +55,7 @@ class ObservationModel {
  private:
   const geometry::CameraModel& camera_;
   const TrackerOptions& options_;
+  const geometry::CentroidHeights* heights_;
 };
 
 }  // namespace plantscale::tracking
