@@ -20,6 +20,7 @@ struct TrackingArgs {
   std::optional<double> length_m;
   double spacing_offset_mm = 25.0;
   std::string baseline;
+  bool virtual_plane = false;
   bool json = false;
 };
 
@@ -27,6 +28,9 @@ nlohmann::json MetricsJson(const TrackingMetrics& m) {
   return {
       {"lateral_rmse_m", m.lateral_rmse_m},
       {"lateral_mean_m", m.lateral_mean_m},
+      {"forward_mean_m", m.forward_mean_m},
+      {"row_spacing_mean_error_m", m.row_spacing_mean_error_m},
+      {"plant_spacing_mean_error_m", m.plant_spacing_mean_error_m},
       {"bearing_rmse_deg", m.bearing_rmse_deg},
       {"forward_drift_cm_per_m", m.forward_drift_cm_per_m},
       {"forward_drift_abs_max_cm_per_m", m.forward_drift_abs_max_cm_per_m},
@@ -120,6 +124,7 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
   o.seeds = a.seeds;
   o.spacing_offset_m = a.spacing_offset_mm / 1000.0;
   o.baseline_thesis = a.baseline == "thesis";
+  o.centroids_on_virtual_plane = a.virtual_plane;
   const TrackingEvaluation e = EvaluateTracking(o);
   if (a.json) {
     nlohmann::json j = MetricsJson(e.ours);
@@ -150,6 +155,9 @@ void AddTrackingCommands(CommandRegistry& registry) {
       ->capture_default_str();
   cmd->add_option("--baseline", args.baseline, "also run the thesis's tracker")
       ->check(CLI::IsMember({"thesis"}));
+  cmd->add_flag("--virtual-plane", args.virtual_plane,
+                "locate our blob centroids on the preset's virtual plane (thesis §2.3.8) instead of "
+                "at the crop's centroid heights");
   cmd->add_flag("--json", args.json, "print one JSON object");
 }
 

@@ -32,7 +32,7 @@ struct Scorer {
   double lat2 = 0.0, lat = 0.0, bear2 = 0.0, sd = 0.0, nees = 0.0;
   Eigen::Vector3d normalised2 = Eigen::Vector3d::Zero();
   int scored = 0, nees_in = 0;
-  double row2 = 0.0, plant2 = 0.0;
+  double row2 = 0.0, plant2 = 0.0, row1 = 0.0, plant1 = 0.0, fwd = 0.0;
   int spacing_scored = 0;
   int tracking_frames = 0, updates = 0, losses = 0;
   double matched = 0.0;
@@ -70,6 +70,7 @@ struct Scorer {
     const double e_bear = est.bearing_rad - truth.bearing_rad;
     const double e_fwd = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
     lat += e_lat;
+    fwd += e_fwd;
     lat2 += e_lat * e_lat;
     bear2 += e_bear * e_bear;
     const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
@@ -82,6 +83,8 @@ struct Scorer {
     ++scored;
     if (past >= options.spacing_settle_m) {
       row2 += std::pow(est.row_spacing_m - truth.row_spacing_m, 2);
+      row1 += est.row_spacing_m - truth.row_spacing_m;
+      plant1 += est.plant_spacing_m - truth.plant_spacing_m;
       plant2 += std::pow(est.plant_spacing_m - truth.plant_spacing_m, 2);
       ++spacing_scored;
     }
@@ -115,6 +118,9 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   m.losses += s.losses;
   m.lateral_rmse_m += s.lat2;  // sums until Finish
   m.lateral_mean_m += s.lat;
+  m.forward_mean_m += s.fwd;
+  m.row_spacing_mean_error_m += s.row1;
+  m.plant_spacing_mean_error_m += s.plant1;
   m.bearing_rmse_deg += s.bear2;
   m.lateral_sd_mean_m += s.sd;
   m.nees_mean += s.nees;
@@ -136,6 +142,9 @@ void Finish(TrackingMetrics& m, int spacing_frames, const std::vector<double>& i
   const double n = std::max(1, m.frames);
   m.lateral_rmse_m = std::sqrt(m.lateral_rmse_m / n);
   m.lateral_mean_m /= n;
+  m.forward_mean_m /= n;
+  m.row_spacing_mean_error_m /= std::max(1, spacing_frames);
+  m.plant_spacing_mean_error_m /= std::max(1, spacing_frames);
   m.bearing_rmse_deg = std::sqrt(m.bearing_rmse_deg / n) * kDeg;
   m.lateral_sd_mean_m /= n;
   m.nees_mean /= n;
@@ -194,6 +203,7 @@ tracking::TrackerOptions ProductTrackerOptions(const sim::SimulatorOptions& s) {
 tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
   tracking::TrackerOptions o;
   o.estimate_spacing = false;
+  o.estimate_odometry_scale = false;
   o.plant_offsets = false;
   o.model_bounce = false;
   o.space = tracking::ObservationSpace::kImage;
@@ -230,7 +240,8 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     sim::SimulatorOptions so = options.sim;
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
     sim::Simulator simulator(so);
-    const tracking::TrackerOptions ours_options = OurTrackerOptions(so, options.spacing_offset_m);
+    tracking::TrackerOptions ours_options = OurTrackerOptions(so, options.spacing_offset_m);
+    if (options.centroids_on_virtual_plane) ours_options.crop_radius_m = ours_options.crop_height_m = 0.0;
     Scorer ours(simulator, ours_options, ours_seg, options);
     std::optional<Scorer> thesis;
     if (options.baseline_thesis) thesis.emplace(simulator, ThesisTrackerOptions(so), thesis_seg, options);

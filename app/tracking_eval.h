@@ -21,6 +21,9 @@ struct TrackingEvalOptions {
   int seeds = 10;                  // sim.seed, sim.seed + 1, ...
   double spacing_offset_m = 0.025; // ours starts with both spacings this far off the planted ones
   bool baseline_thesis = false;
+  // Ours locates centroids on the virtual plane, not at the crop's
+  // centroid heights (to measure what the height model is worth).
+  bool centroids_on_virtual_plane = false;
   double settle_m = 1.0;           // errors count from this far past initialisation
   double spacing_settle_m = 5.0;   // spacing errors count from this far
   double init_probe_interval_m = 5.0;  // a fresh initialisation is tried this often
@@ -45,11 +48,14 @@ struct TrackingMetrics {
   int losses = 0;
   double lateral_rmse_m = 0.0;
   double lateral_mean_m = 0.0;
+  double forward_mean_m = 0.0;  // signed mean error of Y (modulo l̄)
   double bearing_rmse_deg = 0.0;
   double forward_drift_cm_per_m = 0.0;      // mean over runs, signed
   double forward_drift_abs_max_cm_per_m = 0.0;
   double row_spacing_error_m = 0.0;    // RMS past spacing_settle_m
   double plant_spacing_error_m = 0.0;
+  double row_spacing_mean_error_m = 0.0;  // signed: the bias within the RMS
+  double plant_spacing_mean_error_m = 0.0;
   double nees_in_bounds_fraction = 0.0;  // (t_x, Y, Ψ) inside the two-sided 95 % χ²₃ interval
   double nees_mean = 0.0;
   Eigen::Vector3d normalised_error2 = Eigen::Vector3d::Zero();  // mean e²/σ² of t_x, Y, Ψ (1 ideal)

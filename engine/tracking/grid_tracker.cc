@@ -45,6 +45,8 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "forward_sd_per_sqrt_m", forward_sd_per_sqrt_m);
   RequireNonNegative(e, "lateral_sd_per_sqrt_m", lateral_sd_per_sqrt_m);
   RequireNonNegative(e, "bearing_sd_per_sqrt_m", bearing_sd_per_sqrt_m);
+  RequirePositive(e, "odometry_scale_sd", odometry_scale_sd);
+  RequireNonNegative(e, "odometry_scale_step_sd_per_sqrt_m", odometry_scale_step_sd_per_sqrt_m);
   RequireNonNegative(e, "frame_offset_sd_m", frame_offset_sd_m);
   RequireNonNegative(e, "frame_forward_sd_m", frame_forward_sd_m);
   RequireNonNegative(e, "frame_bearing_sd_rad", frame_bearing_sd_rad);
@@ -103,13 +105,16 @@ GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptio
 
 void GridTracker::Reset() {
   mode_ = TrackerMode::kInitialising;
-  x_ = Eigen::VectorXd::Zero(core());
+  x_ = Eigen::VectorXd::Zero(head());
   x_(GridState::kForward) = options_.plant_spacing_m;
   if (options_.estimate_spacing) {
     x_(GridState::kRowSpacing) = options_.row_spacing_m;
     x_(GridState::kPlantSpacing) = options_.plant_spacing_m;
   }
-  p_ = Eigen::MatrixXd::Zero(core(), core());
+  p_ = Eigen::MatrixXd::Zero(head(), head());
+  if (options_.estimate_odometry_scale) {
+    p_(core(), core()) = options_.odometry_scale_sd * options_.odometry_scale_sd;
+  }
   offsets_.clear();
   initialiser_.Reset();
   since_frame_ = {};
@@ -142,7 +147,10 @@ Matrix5d GridTracker::covariance() const {
 void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& covariance) {
   const double distance_before = was_lost_ ? distance_at_loss_m_ + dr_since_loss_m_ : 0.0;
   offsets_.clear();
-  x_ = Eigen::VectorXd::Zero(core());
+  // What was learnt of the wheels' scale outlives a loss of the grid.
+  const double scale_k = options_.estimate_odometry_scale ? x_(core()) : 0.0;
+  const double scale_var = options_.estimate_odometry_scale ? p_(core(), core()) : 0.0;
+  x_ = Eigen::VectorXd::Zero(head());
   x_(GridState::kOffset) = s.offset_m;
   x_(GridState::kForward) = s.forward_m;
   x_(GridState::kBearing) = s.bearing_rad;
@@ -150,7 +158,12 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
     x_(GridState::kRowSpacing) = s.row_spacing_m;
     x_(GridState::kPlantSpacing) = s.plant_spacing_m;
   }
-  p_ = covariance.topLeftCorner(core(), core());
+  p_ = Eigen::MatrixXd::Zero(head(), head());
+  p_.topLeftCorner(core(), core()) = covariance.topLeftCorner(core(), core());
+  if (options_.estimate_odometry_scale) {
+    x_(core()) = scale_k;
+    p_(core(), core()) = scale_var;
+  }
   mode_ = TrackerMode::kTracking;
   if (utime_ < 0 || utime > utime_) utime_ = utime;
   last_update_utime_ = utime;
@@ -237,41 +250,55 @@ void GridTracker::PredictTo(int64_t utime) {
   utime_ = utime;
 }
 
-void GridTracker::Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m) {
-  since_frame_.left_m += u.left_m;
-  since_frame_.right_m += u.right_m;
-  const double distance = std::abs(0.5 * (u.left_m + u.right_m));
+void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, double right_sd_m) {
+  since_frame_.left_m += measured.left_m;
+  since_frame_.right_m += measured.right_m;
+  const double distance = std::abs(0.5 * (measured.left_m + measured.right_m));
   if (mode_ != TrackerMode::kTracking) {
-    dr_since_loss_m_ += 0.5 * (u.left_m + u.right_m);
+    dr_since_loss_m_ += 0.5 * (measured.left_m + measured.right_m);
     return;
   }
+  // Eq. 4.3 driven by the wheel increments corrected by the scale state:
+  // u = (1 + k)·u_measured, so ∂f/∂k = ∂f/∂u · u_measured.
   const int c = core();
+  const int h = head();
+  const double scale = OdometryScale();
+  const WheelIncrement u{scale * measured.left_m, scale * measured.right_m};
   const MotionPrediction f = PredictGridMotion(state(), u, options_.track_width_m);
-  const Eigen::MatrixXd a = f.d_state.topLeftCorner(c, c);
+  Eigen::MatrixXd a = Eigen::MatrixXd::Identity(h, h);
+  a.topLeftCorner(c, c) = f.d_state.topLeftCorner(c, c);
   const Eigen::MatrixXd g = f.d_wheels.topRows(c);
-  Eigen::MatrixXd q = g * Eigen::Vector2d(left_sd_m * left_sd_m, right_sd_m * right_sd_m)
-                              .asDiagonal() * g.transpose();
+  if (h > c) a.block(0, c, c, 1) = g * Eigen::Vector2d(measured.left_m, measured.right_m);
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(h, h);
+  q.topLeftCorner(c, c) = g * Eigen::Vector2d(left_sd_m * left_sd_m, right_sd_m * right_sd_m)
+                                  .asDiagonal() * g.transpose() * (scale * scale);
   q(GridState::kOffset, GridState::kOffset) +=
       options_.lateral_sd_per_sqrt_m * options_.lateral_sd_per_sqrt_m * distance;
   q(GridState::kForward, GridState::kForward) +=
       options_.forward_sd_per_sqrt_m * options_.forward_sd_per_sqrt_m * distance;
   q(GridState::kBearing, GridState::kBearing) +=
       options_.bearing_sd_per_sqrt_m * options_.bearing_sd_per_sqrt_m * distance;
+  if (h > c) {
+    q(c, c) = options_.odometry_scale_step_sd_per_sqrt_m *
+              options_.odometry_scale_step_sd_per_sqrt_m * distance;
+  }
 
   x_(GridState::kOffset) = f.state.offset_m;
   x_(GridState::kForward) = f.state.forward_m;
   x_(GridState::kBearing) = f.state.bearing_rad;
   const int n = static_cast<int>(x_.size());
-  const Eigen::MatrixXd pcc = p_.topLeftCorner(c, c);
-  p_.topLeftCorner(c, c) = a * pcc * a.transpose() + q;
-  if (n > c) {
-    const Eigen::MatrixXd pcl = a * p_.topRightCorner(c, n - c);
-    p_.topRightCorner(c, n - c) = pcl;
-    p_.bottomLeftCorner(n - c, c) = pcl.transpose();
+  const Eigen::MatrixXd phh = p_.topLeftCorner(h, h);
+  p_.topLeftCorner(h, h) = a * phh * a.transpose() + q;
+  if (n > h) {
+    const Eigen::MatrixXd phl = a * p_.topRightCorner(h, n - h);
+    p_.topRightCorner(h, n - h) = phl;
+    p_.bottomLeftCorner(n - h, h) = phl.transpose();
   }
 }
 
-void GridTracker::MoveMean(const WheelIncrement& u) {
+void GridTracker::MoveMean(const WheelIncrement& measured) {
+  const double scale = OdometryScale();
+  const WheelIncrement u{scale * measured.left_m, scale * measured.right_m};
   const MotionPrediction f = PredictGridMotion(state(), u, options_.track_width_m);
   x_(GridState::kOffset) = f.state.offset_m;
   x_(GridState::kForward) = f.state.forward_m;
@@ -327,7 +354,7 @@ int GridTracker::AddOffset(int m, int n) {
 
 void GridTracker::DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& in_view) {
   std::vector<int> keep;
-  for (int i = 0; i < core(); ++i) keep.push_back(i);
+  for (int i = 0; i < head(); ++i) keep.push_back(i);
   std::vector<PlantOffset> kept;
   for (const PlantOffset& o : offsets_) {
     const bool visible = std::any_of(in_view.begin(), in_view.end(), [&](const auto& g) {
@@ -616,11 +643,14 @@ void GridTracker::CheckLost(int64_t utime, FrameReport& report) {
   was_lost_ = true;
   mode_ = TrackerMode::kLost;
   offsets_.clear();
-  x_.conservativeResize(core());
-  p_.conservativeResize(core(), core());
+  x_.conservativeResize(head());
+  p_.conservativeResize(head(), head());
   if (!x_.allFinite() || !p_.allFinite()) {
     x_.setZero();
     p_.setZero();
+    if (options_.estimate_odometry_scale) {
+      p_(core(), core()) = options_.odometry_scale_sd * options_.odometry_scale_sd;
+    }
   }
   initialiser_.Reset();
   report.skipped_reason = "grid lost: " + reason;

@@ -71,6 +71,16 @@ struct TrackerOptions {
   double forward_sd_per_sqrt_m = 0.01;  // slip and scale error, m per √m driven
   double lateral_sd_per_sqrt_m = 0.002;
   double bearing_sd_per_sqrt_m = 0.003;  // rad per √m
+  // The wheels' scale error k (ground distance = (1 + k) × measured) as a
+  // state: a tyre's rolling radius is a few per cent off and changes with
+  // load and soil, and an unmodelled scale biases every prediction the same
+  // way, so the grid lags behind the plants by several millimetres. With
+  // the plants located at their true heights the vision measures distance
+  // driven, which makes k observable (not so with a virtual plane at the
+  // wrong height, whose scale error is the same as k's).
+  bool estimate_odometry_scale = true;
+  double odometry_scale_sd = 0.05;                 // prior σ of k
+  double odometry_scale_step_sd_per_sqrt_m = 0.002;  // random walk of k per √m driven
   // Constant process noise per vision frame (thesis eq. 4.2); zero for ours.
   double frame_offset_sd_m = 0.0;
   double frame_forward_sd_m = 0.0;
@@ -152,6 +162,8 @@ class GridTracker {
   double forward_distance_m() const { return passed_m_ + initial_forward_m_ - x_(1); }
   int lines_passed() const { return lines_passed_; }
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
+  // Ground distance per measured wheel distance (1 + k); 1 when not estimated.
+  double odometry_scale() const { return OdometryScale(); }
   const TrackerOptions& options() const { return options_; }
   const geometry::GridModel& model() const { return model_; }
   // Where blob centroids are located (TrackerOptions::crop_radius_m); null
@@ -169,6 +181,9 @@ class GridTracker {
   };
 
   int core() const { return options_.estimate_spacing ? 5 : 3; }
+  // The core grid state, then k when the odometry scale is estimated.
+  int head() const { return core() + (options_.estimate_odometry_scale ? 1 : 0); }
+  double OdometryScale() const { return options_.estimate_odometry_scale ? 1.0 + x_(core()) : 1.0; }
   void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m);
   void PredictTo(int64_t utime);
   void MoveMean(const WheelIncrement& u);  // the mean only (out-of-sequence frames)
