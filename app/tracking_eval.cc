@@ -187,9 +187,13 @@ tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, doubl
   o.row_spacing_m = s.field.row_spacing_m + offset;
   o.plant_spacing_m = s.field.plant_spacing_m + offset;
   o.track_width_m = s.vehicle.track_width_m;
-  // The crop's size as a grower measures it: mean leaf-tip radius and height.
+  // The crop as a grower knows it: mean leaf-tip radius and height, how
+  // much plants vary in size (their centroid heights scale with them), and
+  // how precisely the planter places them (plus their lean).
   o.crop_radius_m = s.field.crop_radius_m;
   o.crop_height_m = s.field.crop_height_ratio * s.field.crop_radius_m;
+  o.plant_height_sd_m = std::max(0.002, s.field.crop_radius_sd_fraction * o.crop_height_m);
+  o.plant_offset_sd_m = std::max(0.002, std::hypot(s.field.planting_jitter_m, s.field.crop_lean_sd_m));
   return o;
 }
 

@@ -30,6 +30,8 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "plant_spacing_sd_m", plant_spacing_sd_m);
   RequireNonNegative(e, "spacing_step_sd_m", spacing_step_sd_m);
   RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
+  RequirePositive(e, "plant_height_sd_m", plant_height_sd_m);
+
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "crop_radius_m", crop_radius_m);
   RequireNonNegative(e, "crop_height_m", crop_height_m);
@@ -341,12 +343,12 @@ int GridTracker::OffsetIndex(int m, int n) const {
 
 int GridTracker::AddOffset(int m, int n) {
   const int old = static_cast<int>(x_.size());
-  x_.conservativeResize(old + 2);
-  x_.tail<2>().setZero();
-  Eigen::MatrixXd p = Eigen::MatrixXd::Zero(old + 2, old + 2);
+  const int k = PlantStates();
+  x_.conservativeResize(old + k);
+  x_.tail(k).setZero();
+  Eigen::MatrixXd p = Eigen::MatrixXd::Zero(old + k, old + k);
   p.topLeftCorner(old, old) = p_;
-  p.bottomRightCorner<2, 2>() =
-      options_.plant_offset_sd_m * options_.plant_offset_sd_m * Eigen::Matrix2d::Identity();
+  p.bottomRightCorner(k, k) = ObservationModel::PlantPrior(options_).asDiagonal();
   p_ = std::move(p);
   offsets_.push_back({m, n, old});
   return old;
@@ -362,8 +364,7 @@ void GridTracker::DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& i
     });
     if (!visible) continue;  // marginalised: its rows and columns go
     kept.push_back({o.m, o.n, static_cast<int>(keep.size())});
-    keep.push_back(o.index);
-    keep.push_back(o.index + 1);
+    for (int i = 0; i < PlantStates(); ++i) keep.push_back(o.index + i);
   }
   if (kept.size() == offsets_.size()) return;
   x_ = Eigen::VectorXd(x_(keep));
@@ -490,21 +491,22 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     // plant's offset. H touches only the grid states and this plant's own
     // offset, so only that block of P is needed.
     const int c = core();
-    const int used = offset >= 0 ? c + 2 : c;
-    Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, 7> hs(2, used);
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 7, 7> ps(used, used);
+    const int k = PlantStates();
+    const int used = offset >= 0 ? c + k : c;
+    Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, 8> hs(2, used);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 8, 8> ps(used, used);
     hs.leftCols(c) = pred.jacobian.leftCols(c);
     ps.topLeftCorner(c, c) = p_.topLeftCorner(c, c);
     if (offset >= 0) {
-      hs.rightCols<2>() = pred.jacobian.middleCols<2>(offset);
-      ps.topRightCorner(c, 2) = p_.block(0, offset, c, 2);
-      ps.bottomLeftCorner(2, c) = p_.block(offset, 0, 2, c);
-      ps.bottomRightCorner<2, 2>() = p_.block<2, 2>(offset, offset);
+      hs.rightCols(k) = pred.jacobian.middleCols(offset, k);
+      ps.topRightCorner(c, k) = p_.block(0, offset, c, k);
+      ps.bottomLeftCorner(k, c) = p_.block(offset, 0, k, c);
+      ps.bottomRightCorner(k, k) = p_.block(offset, offset, k, k);
     }
     Eigen::Matrix2d hph = hs * ps * hs.transpose();
     if (offset < 0 && options_.plant_offsets) {
-      hph += pred.offset_jacobian * pred.offset_jacobian.transpose() *
-             (options_.plant_offset_sd_m * options_.plant_offset_sd_m);
+      hph += pred.offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
+             pred.offset_jacobian.transpose();
     }
     if (options_.model_bounce) {
       hph += pred.bounce_jacobian * bounce_prior.asDiagonal() * pred.bounce_jacobian.transpose();

@@ -54,6 +54,15 @@ struct TrackerOptions {
   double plant_spacing_sd_m = 0.03;
   double spacing_step_sd_m = 0.002;  // process noise on r̄, l̄ per line entering or leaving (§4.1.2)
   double plant_offset_sd_m = 0.015;  // σ of a plant's persistent offset from its grid position
+  // A plant's own centroid height differs from the crop's (size, lean,
+  // leaves): as the plant crosses the view that error moves its located
+  // centroid radially from the nadir by p·δh/(H − h), a shift that grows
+  // with distance and so is neither white nor a constant offset. With
+  // plant_heights each plant's δh is a state beside its offset (only with
+  // plant_offsets); the parallax over the frames that see it estimates it.
+  bool plant_heights = true;
+  double plant_height_sd_m = 0.02;  // measured on the field preset: sd 0.020 m about the mean
+  bool PlantHeightStates() const { return plant_offsets && plant_heights; }
   double feature_sd_m = 0.008;       // R_w: centroid noise on the ground, per axis (eq. 4.28)
   // The crop's mean leaf-tip radius and height (a ruler, or the growth
   // stage). When both are set, a blob's centroid is located at the height
@@ -177,8 +186,9 @@ class GridTracker {
   struct PlantOffset {
     int m = 0;
     int n = 0;
-    int index = 0;  // of δx in the state; δy follows
+    int index = 0;  // of δx in the state; δy, then δh (plant_heights), follow
   };
+  int PlantStates() const { return options_.PlantHeightStates() ? 3 : 2; }
 
   int core() const { return options_.estimate_spacing ? 5 : 3; }
   // The core grid state, then k when the odometry scale is estimated.

@@ -46,19 +46,45 @@ ObservationModel::ObservationModel(const geometry::CameraModel& camera,
                                    const geometry::CentroidHeights* heights)
     : camera_(camera), options_(options), heights_(heights) {}
 
+Eigen::VectorXd ObservationModel::PlantPrior(const TrackerOptions& o) {
+  const double offset = o.plant_offset_sd_m * o.plant_offset_sd_m;
+  if (!o.PlantHeightStates()) return Eigen::Vector2d(offset, offset);
+  return Eigen::Vector3d(offset, offset, o.plant_height_sd_m * o.plant_height_sd_m);
+}
+
+double ObservationModel::LocatedHeight(const Eigen::Vector2d& point) const {
+  const double plane = camera_.options().virtual_plane_height_m;
+  if (!heights_) return plane;
+  const auto uv = camera_.Project({point.x(), point.y(), plane});
+  return uv ? heights_->HeightAt(*uv) : plane;
+}
+
 Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& s, int m, int n,
                                      int offset_index) const {
   const int core = options_.estimate_spacing ? 5 : 3;
+  const int own = options_.PlantHeightStates() ? 3 : 2;
   const Eigen::Vector2d delta =
       offset_index >= 0 ? Eigen::Vector2d(x.segment<2>(offset_index)) : Eigen::Vector2d::Zero();
   const Eigen::Vector2d g = PlantWithOffset(s, m, n, delta);
   const Eigen::Matrix<double, 2, 7> jg = PlantWithOffsetJacobian(s, m, n, delta);
+  // The plant's centroid stands δh above the height it is located at, h_l:
+  // its ray meets h_l at g·(H − h_l)/(H − h_l − δh), radially from the nadir.
+  double scale = 1.0;
+  Eigen::Vector2d d_height = Eigen::Vector2d::Zero();
+  if (options_.PlantHeightStates()) {
+    const double above = camera_.options().height_m - LocatedHeight(g);
+    const double dh = offset_index >= 0 ? x(offset_index + 2) : 0.0;
+    scale = above / (above - dh);
+    d_height = g * (above / ((above - dh) * (above - dh)));
+  }
   Prediction p;
   p.jacobian = Eigen::MatrixXd::Zero(2, x.size());
-  p.jacobian.leftCols(core) = jg.leftCols(core);
-  p.offset_jacobian = jg.rightCols<2>();
-  if (offset_index >= 0) p.jacobian.middleCols<2>(offset_index) = p.offset_jacobian;
-  p.value = g;
+  p.jacobian.leftCols(core) = scale * jg.leftCols(core);
+  p.offset_jacobian = Eigen::MatrixXd(2, own);
+  p.offset_jacobian.leftCols<2>() = scale * jg.rightCols<2>();
+  if (options_.PlantHeightStates()) p.offset_jacobian.col(2) = d_height;
+  if (offset_index >= 0) p.jacobian.middleCols(offset_index, own) = p.offset_jacobian;
+  p.value = scale * g;
   const double hc = camera_.options().height_m - camera_.options().virtual_plane_height_m;
   p.bounce_jacobian = BounceJacobian(p.value, hc);
   if (options_.space == ObservationSpace::kImage) {

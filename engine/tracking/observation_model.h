@@ -31,7 +31,7 @@ Eigen::Matrix<double, 2, 3> BounceJacobian(const Eigen::Vector2d& point, double 
 struct Prediction {
   Eigen::Vector2d value;
   Eigen::MatrixXd jacobian;           // 2 × state size
-  Eigen::Matrix2d offset_jacobian;    // d value / d δ of this plant
+  Eigen::MatrixXd offset_jacobian;    // d value / d(δx, δy[, δh]) of this plant
   Eigen::Matrix<double, 2, 3> bounce_jacobian;  // d value / d(pitch, roll, height) of the camera
 };
 
@@ -51,10 +51,16 @@ class ObservationModel {
   Prediction Predict(const Eigen::VectorXd& x, const geometry::GridState& state, int m, int n,
                      int offset_index) const;
   Measurement Measure(const Feature& feature) const;
+  // Prior variances of a plant's own states: δx, δy, then δh (plant_heights).
+  static Eigen::VectorXd PlantPrior(const TrackerOptions& options);
 
  private:
   const geometry::CameraModel& camera_;
   const TrackerOptions& options_;
+  // Height above the soil at which a crop centroid at `point` (vehicle
+  // frame) is located: the height model's, or the virtual plane.
+  double LocatedHeight(const Eigen::Vector2d& point) const;
+
   const geometry::CentroidHeights* heights_;
 };
 

@@ -44,12 +44,14 @@ bool InsideQuad(const Quad& q, const Eigen::Vector2d& p) {
 
 std::optional<Quad> FootprintOnPlane(const geometry::CameraModel& camera,
                                      const Eigen::Vector2d& centroid_px, double u0, double v0,
-                                     double u1, double v1, double scale) {
+                                     double u1, double v1, double scale,
+                                     std::optional<double> plane_height_m) {
+  const double plane = plane_height_m.value_or(camera.options().virtual_plane_height_m);
   const Eigen::Vector2d corners[4] = {{u0, v0}, {u1, v0}, {u1, v1}, {u0, v1}};
   Quad q;
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector2d uv = centroid_px + scale * (corners[i] - centroid_px);
-    const std::optional<Eigen::Vector2d> g = camera.ImageToVirtualPlane(uv);
+    const std::optional<Eigen::Vector2d> g = camera.ImageToPlane(uv, plane);
     if (!g) return std::nullopt;
     q[static_cast<size_t>(i)] = *g;
   }

@@ -44,9 +44,11 @@ bool InsideQuad(const Quad& q, const Eigen::Vector2d& p);
 // bounding box scaled by `scale` about the centroid, corners projected
 // (thesis §8.2: "the bounding box of each feature is projected from the image
 // to a quadrilateral area of the map"; scale 1 is the thesis's). nullopt when
-// a corner's ray misses the plane.
+// a corner's ray misses the plane. The plane is the camera's virtual plane,
+// or `plane_height_m` (where the plant's centroid was located).
 std::optional<Quad> FootprintOnPlane(const geometry::CameraModel& camera,
                                      const Eigen::Vector2d& centroid_px, double u0, double v0,
-                                     double u1, double v1, double scale);
+                                     double u1, double v1, double scale,
+                                     std::optional<double> plane_height_m = std::nullopt);
 
 }  // namespace plantscale::treatment

@@ -27,7 +27,8 @@ bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
                                         std::span<const classify::PredictedCrop> crops) const {
   const std::optional<Quad> q =
       FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
-                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0);
+                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0,
+                       CropPlaneHeight(b.centroid_px));
   if (!q) return false;
   return std::any_of(crops.begin(), crops.end(), [&](const classify::PredictedCrop& c) {
     return InsideQuad(*q, c.ground_m);
@@ -43,6 +44,10 @@ TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
       scheduler_(options.scheduler, std::move(sink)),
       registry_(options.registry) {}
 
+double TreatmentSystem::CropPlaneHeight(const Eigen::Vector2d& centroid_px) const {
+  return heights_ ? heights_->HeightAt(centroid_px) : camera_.options().virtual_plane_height_m;
+}
+
 void TreatmentSystem::AddFootprint(const BedPose& pose, const vision::Blob& b, bool crop) {
   AddFootprint(pose, b.centroid_px, b.bbox_px, crop);
 }
@@ -50,8 +55,11 @@ void TreatmentSystem::AddFootprint(const BedPose& pose, const vision::Blob& b, b
 void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px,
                                    const cv::Rect& box, bool crop) {
   const double scale = crop ? options_.crop_footprint_scale : options_.weed_footprint_scale;
+  // Weeds stand lower than crops: their footprints stay on the virtual plane.
+  const std::optional<double> plane =
+      crop ? std::optional<double>(CropPlaneHeight(centroid_px)) : std::nullopt;
   const std::optional<Quad> q = FootprintOnPlane(camera_, centroid_px, box.x, box.y,
-                                                 box.x + box.width, box.y + box.height, scale);
+                                                 box.x + box.width, box.y + box.height, scale, plane);
   if (!q) return;
   Quad bed;
   for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i]);
@@ -94,7 +102,7 @@ bool TreatmentSystem::SplitMergedBlob(int feature, const vision::Blob& blob,
   SplitBlob split;
   split.feature = feature;
   split_ground_.clear();
-  const double h = camera_.options().virtual_plane_height_m;
+  const double h = CropPlaneHeight(blob.centroid_px);
   for (const cv::Point& p : split_pixels_) {
     const auto g = camera_.ImageToPlane({p.x + 0.5, p.y + 0.5}, h);
     if (!g) continue;
@@ -122,6 +130,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                                                std::span<const int> blob_of_feature,
                                                const cv::Mat& mask) {
   last_frame_utime_ = utime;
+  heights_ = tracker.centroid_heights();
   frame_.classified = false;
   frame_.map_reset = false;
   frame_.decisions.clear();

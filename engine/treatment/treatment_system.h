@@ -133,7 +133,13 @@ class TreatmentSystem {
                        std::span<const classify::PredictedCrop> crops,
                        const geometry::Matrix5d& covariance, const cv::Mat& mask);
 
+  // Where a crop blob centred at centroid_px stands: the tracker's centroid
+  // height there (TrackerOptions::crop_radius_m), else the virtual plane,
+  // so that crop footprints and the tracker's predictions agree in scale.
+  double CropPlaneHeight(const Eigen::Vector2d& centroid_px) const;
+
   geometry::CameraModel camera_;
+  const geometry::CentroidHeights* heights_ = nullptr;  // the tracker's, set each frame
   std::vector<int> newly_sprayed_;
   TreatmentOptions options_;
   classify::CropClassifier classifier_;
