@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "engine/tracking/grid_tracker.h"
 #include "engine/tracking/observation_model.h"
 
 namespace plantscale::tracking {
@@ -145,6 +146,56 @@ TEST(ObservationModel, BounceJacobianMatchesTheCameraModel) {
     EXPECT_LT((fd_roll - sr * j.col(1)).norm(), 1e-3 * j.col(1).norm() + 1e-4) << p.transpose();
     EXPECT_LT((fd_height - j.col(2)).norm(), 1e-4) << p.transpose();
   }
+}
+
+}  // namespace
+}  // namespace plantscale::tracking
+
+namespace plantscale::tracking {
+namespace {
+
+// The whole prediction of a plant with its offset and its own centroid
+// height δh, located on the crop's centroid heights: ∂/∂ every state.
+TEST(ObservationModel, PredictionJacobianWithPlantHeightMatchesFiniteDifferences) {
+  geometry::CameraOptions co;
+  co.height_m = 1.5;
+  co.tilt_rad = 0.785;
+  co.focal_length_m = 0.0048;
+  co.pixel_width_m = 8.6e-6;
+  co.pixel_height_m = 8.3e-6;
+  co.virtual_plane_height_m = 0.1;
+  const geometry::CameraModel camera(co);
+  geometry::CentroidHeightOptions ho;
+  ho.shape = {0.14, 0.112};
+  const geometry::CentroidHeights heights(camera, ho);
+  TrackerOptions o;
+  const ObservationModel model(camera, o, &heights);
+  // Core (t_x, Y, Ψ, r̄, l̄), the wheel scale k, then (δx, δy, δh).
+  Eigen::VectorXd x(9);
+  x << 0.02, 1.3, 0.03, 0.475, 0.45, -0.03, 0.01, -0.02, 0.015;
+  const auto predict = [&](const Eigen::VectorXd& v) {
+    return model.Predict(v, GridState::FromVector(v.head<5>()), 1, -1, 6);
+  };
+  const Prediction p = predict(x);
+  ASSERT_EQ(p.jacobian.cols(), 9);
+  for (int i = 0; i < 9; ++i) {
+    const double h = 1e-6;
+    Eigen::VectorXd hi = x;
+    Eigen::VectorXd lo = x;
+    hi(i) += h;
+    lo(i) -= h;
+    const Eigen::Vector2d fd = (predict(hi).value - predict(lo).value) / (2 * h);
+    // The located height's own slope over the ground (a few mm per metre)
+    // times δh/(H − h) is left out of J: under 3e-4 here (J's entries reach 1.5).
+    EXPECT_LT((fd - p.jacobian.col(i)).cwiseAbs().maxCoeff(), 3e-4) << "state " << i;
+  }
+  // A plant with δh = 0 is where the grid puts it.
+  Eigen::VectorXd flat = x;
+  flat(8) = 0.0;
+  const GridState s = GridState::FromVector(flat.head<5>());
+  EXPECT_LT((predict(flat).value - PlantWithOffset(s, 1, -1, flat.segment<2>(6))).norm(), 1e-12);
+  // δh > 0 (a taller centroid) moves it away from the nadir.
+  EXPECT_GT(p.value.norm(), PlantWithOffset(s, 1, -1, x.segment<2>(6)).norm());
 }
 
 }  // namespace
