@@ -1,5 +1,6 @@
 #include "app/tracking_commands.h"
 
+#include <fstream>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -21,6 +22,7 @@ struct TrackingArgs {
   double spacing_offset_mm = 25.0;
   std::string baseline;
   bool virtual_plane = false;
+  std::string trace_csv;
   bool json = false;
 };
 
@@ -125,6 +127,15 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
   o.spacing_offset_m = a.spacing_offset_mm / 1000.0;
   o.baseline_thesis = a.baseline == "thesis";
   o.centroids_on_virtual_plane = a.virtual_plane;
+  std::ofstream trace;
+  if (!a.trace_csv.empty()) {
+    trace.open(a.trace_csv);
+    if (!trace) {
+      std::cerr << "evaluate tracking: cannot write " << a.trace_csv << '\n';
+      return 1;
+    }
+    o.trace = &trace;
+  }
   const TrackingEvaluation e = EvaluateTracking(o);
   if (a.json) {
     nlohmann::json j = MetricsJson(e.ours);
@@ -158,6 +169,8 @@ void AddTrackingCommands(CommandRegistry& registry) {
   cmd->add_flag("--virtual-plane", args.virtual_plane,
                 "locate our blob centroids on the preset's virtual plane (thesis §2.3.8) instead of "
                 "at the crop's centroid heights");
+  cmd->add_option("--trace-csv", args.trace_csv,
+                  "write our per-frame errors, σ, spacings and wheel scale to this CSV");
   cmd->add_flag("--json", args.json, "print one JSON object");
 }
 

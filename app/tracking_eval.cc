@@ -24,6 +24,8 @@ struct Scorer {
   tracking::GridTracker tracker;
   vision::Segmenter segmenter;
   const TrackingEvalOptions& options;
+  std::ostream* trace = nullptr;  // ours only
+  uint64_t seed = 0;
   std::vector<tracking::Feature> features;
   bool ever_tracked = false;
   double init_distance_m = 0.0;
@@ -81,6 +83,14 @@ struct Scorer {
     normalised2 += e.cwiseAbs2().cwiseQuotient(p.diagonal());
     if (n >= kNeesLow && n <= kNeesHigh) ++nees_in;
     ++scored;
+    if (trace) {
+      *trace << seed << ',' << index << ',' << frame.truth.distance_m << ',' << e_lat << ','
+             << e_fwd << ',' << e_bear << ',' << std::sqrt(p(0, 0)) << ',' << std::sqrt(p(1, 1))
+             << ',' << std::sqrt(p(2, 2)) << ',' << est.row_spacing_m << ','
+             << truth.row_spacing_m << ',' << est.plant_spacing_m << ','
+             << truth.plant_spacing_m << ',' << r.matched << ',' << tracker.odometry_scale()
+             << ',' << n << '\n';
+    }
     if (past >= options.spacing_settle_m) {
       row2 += std::pow(est.row_spacing_m - truth.row_spacing_m, 2);
       row1 += est.row_spacing_m - truth.row_spacing_m;
@@ -247,6 +257,13 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     tracking::TrackerOptions ours_options = OurTrackerOptions(so, options.spacing_offset_m);
     if (options.centroids_on_virtual_plane) ours_options.crop_radius_m = ours_options.crop_height_m = 0.0;
     Scorer ours(simulator, ours_options, ours_seg, options);
+    ours.trace = options.trace;
+    ours.seed = so.seed;
+    if (options.trace && k == 0) {
+      *options.trace << "seed,frame,distance_m,offset_error_m,forward_error_m,bearing_error_rad,"
+                        "offset_sd_m,forward_sd_m,bearing_sd_rad,row_spacing_m,true_row_spacing_m,"
+                        "plant_spacing_m,true_plant_spacing_m,matched,odometry_scale,nees\n";
+    }
     std::optional<Scorer> thesis;
     if (options.baseline_thesis) thesis.emplace(simulator, ThesisTrackerOptions(so), thesis_seg, options);
     InitProbe probe(simulator, ours_options);

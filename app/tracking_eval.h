@@ -7,6 +7,7 @@
 // threshold segmentation) runs on the same frames as the baseline
 // (SIMULATOR.md: calibrated presets).
 
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,8 @@ struct TrackingEvalOptions {
   // Ours locates centroids on the virtual plane, not at the crop's
   // centroid heights (to measure what the height model is worth).
   bool centroids_on_virtual_plane = false;
+  // Per-frame errors of ours (one CSV row per scored frame), when set.
+  std::ostream* trace = nullptr;
   double settle_m = 1.0;           // errors count from this far past initialisation
   double spacing_settle_m = 5.0;   // spacing errors count from this far
   double init_probe_interval_m = 5.0;  // a fresh initialisation is tried this often

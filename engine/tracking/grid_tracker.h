@@ -52,7 +52,12 @@ struct TrackerOptions {
   double plant_spacing_m = 0.45;   // l̄
   double row_spacing_sd_m = 0.03;  // initial σ of r̄, l̄ when estimated
   double plant_spacing_sd_m = 0.03;
-  double spacing_step_sd_m = 0.002;  // process noise on r̄, l̄ per line entering or leaving (§4.1.2)
+  // Process noise on r̄, l̄ per line entering or leaving (§4.1.2). The
+  // thesis adds it because the mean over the plants in view changes as
+  // plants come and go; with plant_offsets each plant's own deviation is a
+  // state, so this only carries the bed's true drift (a planter's slipping
+  // ground wheel: about 1 mm per metre, some 2 lines in and 2 out).
+  double spacing_step_sd_m = 0.001;
   double plant_offset_sd_m = 0.015;  // σ of a plant's persistent offset from its grid position
   // A plant's own centroid height differs from the crop's (size, lean,
   // leaves): as the plant crosses the view that error moves its located
