@@ -1,7 +1,7 @@
 #include "app/tracking_commands.h"
 
-#include <fstream>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
