@@ -204,6 +204,12 @@ tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, doubl
   o.crop_height_m = s.field.crop_height_ratio * s.field.crop_radius_m;
   o.plant_height_sd_m = std::max(0.002, s.field.crop_radius_sd_fraction * o.crop_height_m);
   o.plant_offset_sd_m = std::max(0.002, std::hypot(s.field.planting_jitter_m, s.field.crop_lean_sd_m));
+  // The vehicle's camera bounce as its suspension was measured: size and
+  // how long it lasts.
+  o.camera_pitch_sd_rad = std::max(1e-4, s.vehicle.bump_pitch_sd_rad);
+  o.camera_roll_sd_rad = std::max(1e-4, s.vehicle.bump_roll_sd_rad);
+  o.camera_height_sd_m = std::max(1e-4, s.vehicle.bump_height_sd_m);
+  o.camera_bounce_correlation_s = s.vehicle.bump_correlation_s;
   return o;
 }
 

@@ -42,6 +42,7 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "camera_pitch_sd_rad", camera_pitch_sd_rad);
   RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
+  RequireNonNegative(e, "camera_bounce_correlation_s", camera_bounce_correlation_s);
   RequirePositive(e, "track_width_m", track_width_m);
   RequireNonNegative(e, "wheel_sd_fraction", wheel_sd_fraction);
   RequireNonNegative(e, "forward_sd_per_sqrt_m", forward_sd_per_sqrt_m);
@@ -117,6 +118,7 @@ void GridTracker::Reset() {
   if (options_.estimate_odometry_scale) {
     p_(core(), core()) = options_.odometry_scale_sd * options_.odometry_scale_sd;
   }
+  ResetBounce();
   offsets_.clear();
   initialiser_.Reset();
   since_frame_ = {};
@@ -166,6 +168,7 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
     x_(core()) = scale_k;
     p_(core(), core()) = scale_var;
   }
+  ResetBounce();
   mode_ = TrackerMode::kTracking;
   if (utime_ < 0 || utime > utime_) utime_ = utime;
   last_update_utime_ = utime;
@@ -215,7 +218,7 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
     // its covariance says how much less.
     const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
     const double sd = 0.5 * std::max({std::abs(left_m_s_), std::abs(right_m_s_), 0.5}) * dt;
-    Predict(u, sd, sd);
+    Predict(u, sd, sd, dt);
     utime_ = utime;
     if (std::isfinite(left_m_s) && std::isfinite(right_m_s) &&
         std::abs(left_m_s) <= options_.max_wheel_speed_m_s &&
@@ -231,7 +234,7 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
   have_speeds_ = true;
   const WheelIncrement u{left_m_s * dt, right_m_s * dt};
   Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
-          options_.wheel_sd_fraction * std::abs(u.right_m));
+          options_.wheel_sd_fraction * std::abs(u.right_m), dt);
   utime_ = utime;
   return status;
 }
@@ -248,11 +251,38 @@ void GridTracker::PredictTo(int64_t utime) {
   const double dt = (utime - utime_) * 1e-6;
   const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
   Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
-          options_.wheel_sd_fraction * std::abs(u.right_m));
+          options_.wheel_sd_fraction * std::abs(u.right_m), dt);
   utime_ = utime;
 }
 
-void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, double right_sd_m) {
+Eigen::Vector3d GridTracker::BouncePrior() const {
+  return {options_.camera_pitch_sd_rad * options_.camera_pitch_sd_rad,
+          options_.camera_roll_sd_rad * options_.camera_roll_sd_rad,
+          options_.camera_height_sd_m * options_.camera_height_sd_m};
+}
+
+void GridTracker::ResetBounce() {
+  if (!PersistentBounce()) return;
+  const int b = BounceIndex();
+  x_.segment<3>(b).setZero();
+  p_.middleRows(b, 3).setZero();
+  p_.middleCols(b, 3).setZero();
+  p_.block<3, 3>(b, b) = BouncePrior().asDiagonal();
+}
+
+Prediction GridTracker::PredictPlant(const ObservationModel& h, const GridState& s, int m,
+                                     int n) const {
+  Prediction pred = h.Predict(x_, s, m, n, OffsetIndex(m, n));
+  if (PersistentBounce()) {
+    const int b = BounceIndex();
+    pred.value += pred.bounce_jacobian * x_.segment<3>(b);
+    pred.jacobian.middleCols<3>(b) = pred.bounce_jacobian;
+  }
+  return pred;
+}
+
+void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, double right_sd_m,
+                          double dt_s) {
   since_frame_.left_m += measured.left_m;
   since_frame_.right_m += measured.right_m;
   const double distance = std::abs(0.5 * (measured.left_m + measured.right_m));
@@ -270,7 +300,9 @@ void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, doub
   Eigen::MatrixXd a = Eigen::MatrixXd::Identity(h, h);
   a.topLeftCorner(c, c) = f.d_state.topLeftCorner(c, c);
   const Eigen::MatrixXd g = f.d_wheels.topRows(c);
-  if (h > c) a.block(0, c, c, 1) = g * Eigen::Vector2d(measured.left_m, measured.right_m);
+  if (options_.estimate_odometry_scale) {
+    a.block(0, c, c, 1) = g * Eigen::Vector2d(measured.left_m, measured.right_m);
+  }
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(h, h);
   q.topLeftCorner(c, c) = g * Eigen::Vector2d(left_sd_m * left_sd_m, right_sd_m * right_sd_m)
                                   .asDiagonal() * g.transpose() * (scale * scale);
@@ -280,9 +312,17 @@ void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, doub
       options_.forward_sd_per_sqrt_m * options_.forward_sd_per_sqrt_m * distance;
   q(GridState::kBearing, GridState::kBearing) +=
       options_.bearing_sd_per_sqrt_m * options_.bearing_sd_per_sqrt_m * distance;
-  if (h > c) {
+  if (options_.estimate_odometry_scale) {
     q(c, c) = options_.odometry_scale_step_sd_per_sqrt_m *
               options_.odometry_scale_step_sd_per_sqrt_m * distance;
+  }
+  if (PersistentBounce()) {
+    // First-order Gauss–Markov: b ← a·b, stationary variance kept.
+    const int b = BounceIndex();
+    const double decay = std::exp(-std::max(0.0, dt_s) / options_.camera_bounce_correlation_s);
+    a.block<3, 3>(b, b) = decay * Eigen::Matrix3d::Identity();
+    q.block<3, 3>(b, b) = (1.0 - decay * decay) * BouncePrior().asDiagonal();
+    x_.segment<3>(b) *= decay;
   }
 
   x_(GridState::kOffset) = f.state.offset_m;
@@ -474,9 +514,7 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   DropOffsetsOutOfView(in_view);
 
   ObservationModel h(camera_, options_, centroid_heights());
-  const Eigen::Vector3d bounce_prior(options_.camera_pitch_sd_rad * options_.camera_pitch_sd_rad,
-                                     options_.camera_roll_sd_rad * options_.camera_roll_sd_rad,
-                                     options_.camera_height_sd_m * options_.camera_height_sd_m);
+  const Eigen::Vector3d bounce_prior = BouncePrior();
   struct Candidate {
     int plant;
     int feature;
@@ -486,29 +524,25 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   for (int i = 0; i < static_cast<int>(in_view.size()); ++i) {
     const auto& g = in_view[static_cast<size_t>(i)];
     const int offset = OffsetIndex(g.m, g.n);
-    const Prediction pred = h.Predict(x_, s, g.m, g.n, offset);
+    const Prediction pred = PredictPlant(h, s, g.m, g.n);
     // Covariance of the prediction: the filter's, plus the prior of a new
-    // plant's offset. H touches only the grid states and this plant's own
-    // offset, so only that block of P is needed.
-    const int c = core();
-    const int k = PlantStates();
-    const int used = offset >= 0 ? c + k : c;
-    Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, 8> hs(2, used);
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 8, 8> ps(used, used);
-    hs.leftCols(c) = pred.jacobian.leftCols(c);
-    ps.topLeftCorner(c, c) = p_.topLeftCorner(c, c);
-    if (offset >= 0) {
-      hs.rightCols(k) = pred.jacobian.middleCols(offset, k);
-      ps.topRightCorner(c, k) = p_.block(0, offset, c, k);
-      ps.bottomLeftCorner(k, c) = p_.block(offset, 0, k, c);
-      ps.bottomRightCorner(k, k) = p_.block(offset, offset, k, k);
+    // plant's offset. H touches only the grid states, the bounce and this
+    // plant's own states, so only that block of P is needed.
+    std::vector<int> used;
+    for (int i2 = 0; i2 < core(); ++i2) used.push_back(i2);
+    if (PersistentBounce()) {
+      for (int i2 = 0; i2 < 3; ++i2) used.push_back(BounceIndex() + i2);
     }
-    Eigen::Matrix2d hph = hs * ps * hs.transpose();
+    if (offset >= 0) {
+      for (int i2 = 0; i2 < PlantStates(); ++i2) used.push_back(offset + i2);
+    }
+    const Eigen::MatrixXd hs = pred.jacobian(Eigen::all, used);
+    Eigen::Matrix2d hph = hs * p_(used, used) * hs.transpose();
     if (offset < 0 && options_.plant_offsets) {
       hph += pred.offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
              pred.offset_jacobian.transpose();
     }
-    if (options_.model_bounce) {
+    if (options_.model_bounce && !PersistentBounce()) {
       hph += pred.bounce_jacobian * bounce_prior.asDiagonal() * pred.bounce_jacobian.transpose();
     }
     for (int j = 0; j < static_cast<int>(features.size()); ++j) {
@@ -577,10 +611,11 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
       if (OffsetIndex(g.m, g.n) < 0) AddOffset(g.m, g.n);
     }
   }
-  // This frame's camera bounce: a nuisance state, appended for the update
-  // and marginalised after it.
+  // This frame's camera bounce, when it does not persist: a nuisance
+  // state, appended for the update and marginalised after it.
   const int persistent = static_cast<int>(x_.size());
-  if (options_.model_bounce) {
+  const bool nuisance = options_.model_bounce && !PersistentBounce();
+  if (nuisance) {
     x_.conservativeResize(persistent + 3);
     x_.tail<3>().setZero();
     Eigen::MatrixXd p = Eigen::MatrixXd::Zero(persistent + 3, persistent + 3);
@@ -595,8 +630,8 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   Eigen::MatrixXd stacked_r = Eigen::MatrixXd::Zero(2 * matches.size(), 2 * matches.size());
   for (size_t k = 0; k < matches.size(); ++k) {
     const auto& g = in_view[static_cast<size_t>(matches[k].plant)];
-    Prediction pred = h.Predict(x_, s, g.m, g.n, OffsetIndex(g.m, g.n));
-    if (options_.model_bounce) pred.jacobian.rightCols<3>() = pred.bounce_jacobian;
+    Prediction pred = PredictPlant(h, s, g.m, g.n);
+    if (nuisance) pred.jacobian.rightCols<3>() = pred.bounce_jacobian;
     const Measurement z = h.Measure(features[static_cast<size_t>(matches[k].feature)]);
     const Eigen::Matrix2d r_inv = z.covariance.inverse();
     const Eigen::Vector2d nu = z.value - pred.value;
@@ -610,7 +645,7 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   const Eigen::MatrixXd stacked_s = stacked_h * p_ * stacked_h.transpose() + stacked_r;
   report.nis = stacked_nu.dot(stacked_s.ldlt().solve(stacked_nu));
   Apply(compressed);
-  if (options_.model_bounce) {
+  if (nuisance) {
     x_.conservativeResize(persistent);
     p_.conservativeResize(persistent, persistent);
   }

@@ -47,6 +47,11 @@ struct TrackerOptions {
   double camera_pitch_sd_rad = 0.005;
   double camera_roll_sd_rad = 0.0035;
   double camera_height_sd_m = 0.004;
+  // How long the bounce lasts. 0: white, a fresh nuisance state each frame.
+  // > 0: a first-order Gauss–Markov process with this time constant (a
+  // suspension's), kept as a state: bounce that lasts over several frames
+  // moves them all alike, so treating it as white is overconfident.
+  double camera_bounce_correlation_s = 0.0;
   int rows_each_side = 1;      // the bed: rows −k..k
   double row_spacing_m = 0.475;    // r̄: nominal, the fixed value or the initial estimate
   double plant_spacing_m = 0.45;   // l̄
@@ -196,10 +201,21 @@ class GridTracker {
   int PlantStates() const { return options_.PlantHeightStates() ? 3 : 2; }
 
   int core() const { return options_.estimate_spacing ? 5 : 3; }
-  // The core grid state, then k when the odometry scale is estimated.
-  int head() const { return core() + (options_.estimate_odometry_scale ? 1 : 0); }
+  // The core grid state, then k when the odometry scale is estimated, then
+  // the camera bounce (pitch, roll, height) when it persists.
+  bool PersistentBounce() const {
+    return options_.model_bounce && options_.camera_bounce_correlation_s > 0.0;
+  }
+  int BounceIndex() const { return core() + (options_.estimate_odometry_scale ? 1 : 0); }
+  int head() const { return BounceIndex() + (PersistentBounce() ? 3 : 0); }
+  Eigen::Vector3d BouncePrior() const;
+  // The ObservationModel's prediction of plant (m, n) with the persistent
+  // bounce's effect and columns added.
+  struct Prediction PredictPlant(const class ObservationModel& h, const geometry::GridState& s,
+                                 int m, int n) const;
   double OdometryScale() const { return options_.estimate_odometry_scale ? 1.0 + x_(core()) : 1.0; }
-  void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m);
+  void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m, double dt_s);
+  void ResetBounce();
   void PredictTo(int64_t utime);
   void MoveMean(const WheelIncrement& u);  // the mean only (out-of-sequence frames)
   void ShiftReference(FrameReport& report);
