@@ -624,27 +624,30 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     p_ = std::move(p);
   }
   const int n = static_cast<int>(x_.size());
-  PseudoObservation compressed{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
-  Eigen::MatrixXd stacked_h(2 * matches.size(), n);
-  Eigen::VectorXd stacked_nu(2 * matches.size());
-  Eigen::MatrixXd stacked_r = Eigen::MatrixXd::Zero(2 * matches.size(), 2 * matches.size());
+  const Eigen::Index stacked = 2 * static_cast<Eigen::Index>(matches.size());
+  PseudoObservation compressed{Eigen::MatrixXd::Zero(stacked, n), Eigen::VectorXd(stacked), {}};
+  std::vector<bool> touched(static_cast<size_t>(n), false);
+  for (int i = 0; i < head(); ++i) touched[static_cast<size_t>(i)] = true;
+  if (nuisance) {
+    for (int i = persistent; i < n; ++i) touched[static_cast<size_t>(i)] = true;
+  }
   for (size_t k = 0; k < matches.size(); ++k) {
     const auto& g = in_view[static_cast<size_t>(matches[k].plant)];
     Prediction pred = PredictPlant(h, s, g.m, g.n);
     if (nuisance) pred.jacobian.rightCols<3>() = pred.bounce_jacobian;
+    const int offset = OffsetIndex(g.m, g.n);
+    for (int i = 0; i < PlantStates(); ++i) touched[static_cast<size_t>(offset + i)] = true;
     const Measurement z = h.Measure(features[static_cast<size_t>(matches[k].feature)]);
-    const Eigen::Matrix2d r_inv = z.covariance.inverse();
-    const Eigen::Vector2d nu = z.value - pred.value;
-    compressed.information += pred.jacobian.transpose() * r_inv * pred.jacobian;  // eq. 4.77
-    compressed.information_vector += pred.jacobian.transpose() * r_inv * nu;     // eq. 4.78
-    stacked_h.middleRows(2 * static_cast<Eigen::Index>(k), 2) = pred.jacobian;
-    stacked_nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = nu;
-    stacked_r.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) =
-        z.covariance;
+    // Whitening by R's Cholesky factor C: eqs. 4.77–4.78 as LᵀL and Lᵀr.
+    const Eigen::LLT<Eigen::Matrix2d> c(z.covariance);
+    const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
+    compressed.factor.middleRows(r, 2) = c.matrixL().solve(pred.jacobian);
+    compressed.residual.segment<2>(r) = c.matrixL().solve(z.value - pred.value);
   }
-  const Eigen::MatrixXd stacked_s = stacked_h * p_ * stacked_h.transpose() + stacked_r;
-  report.nis = stacked_nu.dot(stacked_s.ldlt().solve(stacked_nu));
-  Apply(compressed);
+  for (int i = 0; i < n; ++i) {
+    if (touched[static_cast<size_t>(i)]) compressed.support.push_back(i);
+  }
+  report.nis = Apply(compressed);
   if (nuisance) {
     x_.conservativeResize(persistent);
     p_.conservativeResize(persistent, persistent);
@@ -653,15 +656,22 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   last_update_utime_ = utime_;
 }
 
-void GridTracker::Apply(const PseudoObservation& z) {
-  // Eqs. 4.73–4.74 rearranged so that P need not be inverted:
-  //   P⁺ = (P⁻¹ + Ĩ)⁻¹ = (I + P Ĩ)⁻¹ P,   x⁺ = x⁻ + P⁺ ĩ.
-  const Eigen::Index n = x_.size();
-  const Eigen::MatrixXd m = Eigen::MatrixXd::Identity(n, n) + p_ * z.information;
-  Eigen::MatrixXd p = m.partialPivLu().solve(p_);
-  p = 0.5 * (p + p.transpose());
-  x_ += p * z.information_vector;
-  p_ = std::move(p);
+double GridTracker::Apply(const PseudoObservation& z) {
+  // Eqs. 4.73–4.74, P⁺ = (P⁻¹ + LᵀL)⁻¹ and x⁺ = x⁻ + P⁺ Lᵀ r, by the
+  // matrix inversion lemma so that only a (2 × features)² matrix is
+  // inverted: with S = I + L P Lᵀ and K = P Lᵀ S⁻¹, P⁺ = P − K (P Lᵀ)ᵀ and
+  // P⁺ Lᵀ = K. L is zero outside z.support, so P Lᵀ = P(:, support) L(:, support)ᵀ.
+  // S is also the whitened innovation covariance: NIS = rᵀ S⁻¹ r.
+  const Eigen::MatrixXd l = z.factor(Eigen::all, z.support);
+  const Eigen::MatrixXd plt = p_(Eigen::all, z.support) * l.transpose();
+  Eigen::MatrixXd s = l * plt(z.support, Eigen::all);
+  s.diagonal().array() += 1.0;
+  const Eigen::LLT<Eigen::MatrixXd> s_llt(s);
+  const Eigen::MatrixXd k = s_llt.solve(plt.transpose()).transpose();
+  x_ += k * z.residual;
+  p_.noalias() -= k * plt.transpose();
+  p_ = 0.5 * (p_ + p_.transpose());
+  return z.residual.dot(s_llt.solve(z.residual));
 }
 
 void GridTracker::CheckLost(int64_t utime, FrameReport& report) {

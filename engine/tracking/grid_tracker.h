@@ -146,13 +146,17 @@ struct FrameReport {
   std::vector<Association> associations;
 };
 
-// The vision node's compressed measurement (eqs. 4.77–4.78) in information
-// form, so that it is defined even when the features do not observe every
-// state on their own: Ĩ = Σ Hᵀ R⁻¹ H and ĩ = Σ Hᵀ R⁻¹ ν, linearised at the
-// dead-reckoning prediction.
+// The vision node's compressed measurement (eqs. 4.77–4.78) in square-root
+// information form: with each feature's innovation whitened by its R
+// (R = C Cᵀ), L stacks C⁻¹ H and r stacks C⁻¹ ν, so that Ĩ = Σ Hᵀ R⁻¹ H =
+// LᵀL and ĩ = Σ Hᵀ R⁻¹ ν = Lᵀ r, linearised at the dead-reckoning
+// prediction. It is defined even when the features do not observe every
+// state on their own, and L's columns are zero outside `support` (the grid,
+// the bounce and the matched plants' own states), which the update uses.
 struct PseudoObservation {
-  Eigen::MatrixXd information;
-  Eigen::VectorXd information_vector;
+  Eigen::MatrixXd factor;    // L: 2·(matched features) × state size
+  Eigen::VectorXd residual;  // r
+  std::vector<int> support;  // the states L touches
 };
 
 class GridTracker {
@@ -221,7 +225,8 @@ class GridTracker {
   void ShiftReference(FrameReport& report);
   void AddSpacingNoise(int lines_changed);
   void Update(std::span<const Feature> features, FrameReport& report);
-  void Apply(const PseudoObservation& z);
+  // Applies z (eqs. 4.73–4.74); returns the normalised innovation squared.
+  double Apply(const PseudoObservation& z);
   void DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& in_view);
   int OffsetIndex(int m, int n) const;
   int AddOffset(int m, int n);
