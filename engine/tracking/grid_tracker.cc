@@ -636,7 +636,9 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     Prediction pred = PredictPlant(h, s, g.m, g.n);
     if (nuisance) pred.jacobian.rightCols<3>() = pred.bounce_jacobian;
     const int offset = OffsetIndex(g.m, g.n);
-    for (int i = 0; i < PlantStates(); ++i) touched[static_cast<size_t>(offset + i)] = true;
+    for (int i = 0; offset >= 0 && i < PlantStates(); ++i) {
+      touched[static_cast<size_t>(offset + i)] = true;
+    }
     const Measurement z = h.Measure(features[static_cast<size_t>(matches[k].feature)]);
     // Whitening by R's Cholesky factor C: eqs. 4.77–4.78 as LᵀL and Lᵀr.
     const Eigen::LLT<Eigen::Matrix2d> c(z.covariance);
