@@ -33,6 +33,7 @@ struct TreatmentArgs {
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
+  bool footprint_at_centroid = false;
   bool abstain_merged = false;
   double costs_ratio = 1.0;
   bool json = false;
@@ -147,6 +148,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
+  if (a.footprint_at_centroid) o.treatment.crop_footprint_at_tracked_plant = false;
   if (a.abstain_merged) o.treatment.abstain_merged = true;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
@@ -224,6 +226,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
                 "every crop blob its own footprint (not one per predicted plant)");
+  cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,
+                "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
   cmd->add_flag("--abstain-merged", args.abstain_merged,
                 "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--no-split-merged", args.no_split_merged,

@@ -255,6 +255,13 @@ void GridTracker::PredictTo(int64_t utime) {
   utime_ = utime;
 }
 
+Eigen::Vector2d GridTracker::PlantPosition(int m, int n) const {
+  const int offset = OffsetIndex(m, n);
+  const Eigen::Vector2d delta =
+      offset >= 0 ? Eigen::Vector2d(x_.segment<2>(offset)) : Eigen::Vector2d::Zero();
+  return PlantWithOffset(state(), m, n, delta);
+}
+
 Eigen::Vector3d GridTracker::BouncePrior() const {
   return {options_.camera_pitch_sd_rad * options_.camera_pitch_sd_rad,
           options_.camera_roll_sd_rad * options_.camera_roll_sd_rad,

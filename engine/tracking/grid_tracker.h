@@ -185,6 +185,9 @@ class GridTracker {
   double forward_distance_m() const { return passed_m_ + initial_forward_m_ - x_(1); }
   int lines_passed() const { return lines_passed_; }
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
+  // Where plant (m, n) of the current grid stands (vehicle frame, on its
+  // axis): its grid position plus its own offset when it has one.
+  Eigen::Vector2d PlantPosition(int m, int n) const;
   // Ground distance per measured wheel distance (1 + k); 1 when not estimated.
   double odometry_scale() const { return OdometryScale(); }
   const TrackerOptions& options() const { return options_; }

@@ -53,7 +53,8 @@ void TreatmentSystem::AddFootprint(const BedPose& pose, const vision::Blob& b, b
 }
 
 void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px,
-                                   const cv::Rect& box, bool crop) {
+                                   const cv::Rect& box, bool crop,
+                                   std::optional<Eigen::Vector2d> centre_m) {
   const double scale = crop ? options_.crop_footprint_scale : options_.weed_footprint_scale;
   // Weeds stand lower than crops: their footprints stay on the virtual plane.
   const std::optional<double> plane =
@@ -61,8 +62,21 @@ void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& c
   const std::optional<Quad> q = FootprintOnPlane(camera_, centroid_px, box.x, box.y,
                                                  box.x + box.width, box.y + box.height, scale, plane);
   if (!q) return;
+  // Moved as a whole so that its middle lands on centre_m: the image box
+  // projects further beyond its centroid than short of it (perspective),
+  // and the spray should straddle the plant evenly.
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+  if (centre_m) {
+    Eigen::Vector2d low = (*q)[0];
+    Eigen::Vector2d high = (*q)[0];
+    for (const Eigen::Vector2d& corner : *q) {
+      low = low.cwiseMin(corner);
+      high = high.cwiseMax(corner);
+    }
+    shift = *centre_m - 0.5 * (low + high);
+  }
   Quad bed;
-  for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i]);
+  for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i] + shift);
   map_.AddFootprint(bed, crop);
 }
 
@@ -221,7 +235,12 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                      : std::nullopt);
   }
   for (const PlantFootprint& p : plants) {
-    if (p.area_px > 0.0) AddFootprint(pose, p.moment_px / p.area_px, p.box, true);
+    if (!(p.area_px > 0.0)) continue;
+    const std::optional<Eigen::Vector2d> centre =
+        options_.crop_footprint_at_tracked_plant
+            ? std::optional<Eigen::Vector2d>(tracker.PlantPosition(p.m, p.n))
+            : std::nullopt;
+    AddFootprint(pose, p.moment_px / p.area_px, p.box, true, centre);
   }
   return frame_;
 }

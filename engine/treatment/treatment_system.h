@@ -39,6 +39,13 @@ struct TreatmentOptions {
   // so the footprint is centred on the plant's canopy rather than on each
   // leaf. Off: every blob its own footprint (as before).
   bool crop_footprint_per_plant = true;
+  // That footprint is centred where the tracker holds the plant (its grid
+  // position plus its own offset, learnt from every frame that saw it)
+  // rather than on this frame's centroid, whose place moves with the view
+  // (the plant's own centroid height, leaves lost or gained by
+  // segmentation): each frame votes the same cells. Needs
+  // crop_footprint_per_plant.
+  bool crop_footprint_at_tracked_plant = true;
   // A blob that passed the size filter but missed every association region
   // while its bounding box covers a predicted crop position may be touching
   // plants merged (its centroid between them): it casts no weed votes, which
@@ -121,8 +128,10 @@ class TreatmentSystem {
   // Does the blob's bounding box, projected, hold a predicted crop position?
   bool CoversAPrediction(const vision::Blob& blob,
                          std::span<const classify::PredictedCrop> crops) const;
+  // centre_m: where to centre the footprint (vehicle frame), when not on
+  // the centroid's own ray.
   void AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px, const cv::Rect& bbox,
-                    bool crop);
+                    bool crop, std::optional<Eigen::Vector2d> centre_m = std::nullopt);
   // The blob's pixels in `mask` (its 8-connected component inside its box).
   // False when the component is not found.
   bool BlobPixels(const cv::Mat& mask, const vision::Blob& blob, std::vector<cv::Point>& out);
