@@ -253,8 +253,10 @@ TickResult TreatmentSystem::OnPose(int64_t utime, const tracking::GridTracker& t
   safety.camera_ok = camera_ok;
   safety.odometry_valid = odometry_ok;
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
-  const BedPose pose =
-      BedPoseFromGrid(tracker.utime(), tracker.state(), tracker.forward_distance_m(), speed_m_s);
+  // The wheels' speed corrected by the scale the tracker has learnt: the
+  // latency lead and the tick's strip are ground distances.
+  const BedPose pose = BedPoseFromGrid(tracker.utime(), tracker.state(), tracker.forward_distance_m(),
+                                       speed_m_s * tracker.odometry_scale());
   return Tick(utime, pose, safety);
 }
 
