@@ -89,7 +89,7 @@ struct Scorer {
              << ',' << std::sqrt(p(2, 2)) << ',' << est.row_spacing_m << ','
              << truth.row_spacing_m << ',' << est.plant_spacing_m << ','
              << truth.plant_spacing_m << ',' << r.matched << ',' << tracker.odometry_scale()
-             << ',' << n << '\n';
+             << ',' << n << ',' << tracker.forward_distance_m() << ',' << past << '\n';
     }
     if (past >= options.spacing_settle_m) {
       row2 += std::pow(est.row_spacing_m - truth.row_spacing_m, 2);
@@ -268,7 +268,8 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     if (options.trace && k == 0) {
       *options.trace << "seed,frame,distance_m,offset_error_m,forward_error_m,bearing_error_rad,"
                         "offset_sd_m,forward_sd_m,bearing_sd_rad,row_spacing_m,true_row_spacing_m,"
-                        "plant_spacing_m,true_plant_spacing_m,matched,odometry_scale,nees\n";
+                        "plant_spacing_m,true_plant_spacing_m,matched,odometry_scale,nees,"
+                        "forward_distance_m,true_distance_m\n";
     }
     std::optional<Scorer> thesis;
     if (options.baseline_thesis) thesis.emplace(simulator, ThesisTrackerOptions(so), thesis_seg, options);
