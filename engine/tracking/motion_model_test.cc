@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "engine/geometry/test_cameras.h"
 #include "engine/tracking/grid_tracker.h"
 #include "engine/tracking/observation_model.h"
 
@@ -113,12 +114,7 @@ namespace {
 // The camera bounce a frame suffers, against its first-order model: the
 // point the nominal camera reads where the bounced camera sees P.
 TEST(ObservationModel, BounceJacobianMatchesTheCameraModel) {
-  geometry::CameraOptions nominal;
-  nominal.height_m = 1.5;
-  nominal.tilt_rad = 0.7854;
-  nominal.focal_length_m = 0.0048;
-  nominal.pixel_width_m = 8.6e-6;
-  nominal.pixel_height_m = 8.3e-6;
+  const geometry::CameraOptions nominal = geometry::testing::ThesisCamera();
   const geometry::CameraModel camera(nominal);
   const double eps = 1e-5;
   for (const Eigen::Vector2d& p : {Eigen::Vector2d(0.0, 1.5), Eigen::Vector2d(0.4, 1.2),
@@ -148,21 +144,10 @@ TEST(ObservationModel, BounceJacobianMatchesTheCameraModel) {
   }
 }
 
-}  // namespace
-}  // namespace plantscale::tracking
-
-namespace plantscale::tracking {
-namespace {
-
 // The whole prediction of a plant with its offset and its own centroid
 // height δh, located on the crop's centroid heights: ∂/∂ every state.
 TEST(ObservationModel, PredictionJacobianWithPlantHeightMatchesFiniteDifferences) {
-  geometry::CameraOptions co;
-  co.height_m = 1.5;
-  co.tilt_rad = 0.785;
-  co.focal_length_m = 0.0048;
-  co.pixel_width_m = 8.6e-6;
-  co.pixel_height_m = 8.3e-6;
+  geometry::CameraOptions co = geometry::testing::ThesisCamera();
   co.virtual_plane_height_m = 0.1;
   const geometry::CameraModel camera(co);
   geometry::CentroidHeightOptions ho;
