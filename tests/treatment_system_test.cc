@@ -35,25 +35,27 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(e.missed_crops.size(), 2u);
   for (const MissedCrop& c : e.missed_crops) EXPECT_GE(c.nearest_spray_m, 0.0);
   // Issue: |bias| ≤ 3 mm on both axes (thesis 9.7 / −23.1 mm): met,
-  // +2.5 / −0.4 mm.
+  // +2.7 / −0.7 mm.
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
   // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3):
-  // 15.7 mm along, 10.05 mm across, with each plant's footprint centred
+  // 15.1 mm along, 10.3 mm across, with each plant's footprint centred
   // where the tracker holds it (27.0 / 12.2 on each frame's centroid; 28.5
   // / 12.4 with one virtual plane); thesis 34.4 / 33.6 mm.
-  EXPECT_LE(m.placement_rms_along_m, 0.017);
-  EXPECT_LE(m.placement_rms_across_m, 0.011);
-  EXPECT_LE(m.centre_rms_across_m, 0.011);
-  // Issue target ≤ 15 % of the bed: met, 10.7 % (thesis 33 %).
+  EXPECT_LE(m.placement_rms_along_m, 0.0165);
+  EXPECT_LE(m.placement_rms_across_m, 0.0115);
+  EXPECT_LE(m.centre_rms_across_m, 0.0115);
+  // Issue target ≤ 15 % of the bed: met, 6.6 % with 0.30 footprints
+  // (10.7 % with 0.40; thesis 33 %).
   EXPECT_LE(m.treated_area_fraction, 0.15);
-  EXPECT_GE(m.treated_area_fraction, 0.08);  // a real spray pattern, not nothing
+  EXPECT_GE(m.treated_area_fraction, 0.04);  // a real spray pattern, not nothing
   // Weeds clear of the crop's leaves are not sprayed (0 of 1115: the
   // thesis's count, which saw weeds on photographs; 2.2 % on each frame's
-  // centroid); weeds under a crop's leaves share its spray (18.5 % of all
-  // weeds hit; issue target 0.5 % not met).
+  // centroid); weeds under a crop's leaves share its spray (12.1 % of all
+  // weeds hit with 0.30 footprints, 18.5 % with 0.40; issue target 0.5 %
+  // not met).
   EXPECT_LE(m.weed_hit_rate_clear, 0.005);
-  EXPECT_LE(m.weed_hit_rate, 0.20);
+  EXPECT_LE(m.weed_hit_rate, 0.135);
   // Crop pixels labelled crop 85.0 % (merged blobs split among the
   // predicted crops; 81.2 % without); issue target 95 % not met: 11.5 %
   // of the crop pixels are lost to soil by segmentation. Of the crop
