@@ -84,7 +84,8 @@ std::optional<double> SilhouetteCentroidHeight(const CameraModel& camera,
   int hits = 0;
   for (int j = 0; j < samples; ++j) {
     for (int i = 0; i < samples; ++i) {
-      const Eigen::Vector2d uv = box->low + Eigen::Vector2d((i + 0.5) * step.x(), (j + 0.5) * step.y());
+      const Eigen::Vector2d uv =
+          box->low + Eigen::Vector2d((i + 0.5) * step.x(), (j + 0.5) * step.y());
       if (!RayHitsCrop(o, camera.Ray(uv), root, shape)) continue;
       sum += uv;
       ++hits;

@@ -49,8 +49,9 @@ bool RayHitsCrop(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction
 // silhouette is sampled on a grid of `samples` × `samples` pixels' worth
 // over its image bounding box (equal image area per sample, as a blob's
 // pixel centroid weighs it).
-std::optional<double> SilhouetteCentroidHeight(const CameraModel& camera, const Eigen::Vector2d& root,
-                                               const CropShape& shape, int samples = 40);
+std::optional<double> SilhouetteCentroidHeight(const CameraModel& camera,
+                                               const Eigen::Vector2d& root, const CropShape& shape,
+                                               int samples = 40);
 
 struct CentroidHeightOptions {
   CropShape shape;

@@ -34,8 +34,8 @@ TEST(CentroidHeight, RayTestAgreesWithSamplingTheSolid) {
   int disagreements = 0;
   for (int i = 0; i < 4000; ++i) {
     // Rays aimed at random points of a box around the plant.
-    const Eigen::Vector3d target(root.x() + rng.Uniform(-0.2, 0.2), root.y() + rng.Uniform(-0.2, 0.2),
-                                 rng.Uniform(0.0, 0.12));
+    const Eigen::Vector3d target(root.x() + rng.Uniform(-0.2, 0.2),
+                                 root.y() + rng.Uniform(-0.2, 0.2), rng.Uniform(0.0, 0.12));
     const Eigen::Vector3d d = target - o;
     const bool exact = RayHitsCrop(o, d, root, shape);
     hits += exact;
@@ -72,7 +72,7 @@ TEST(CentroidHeight, TableFollowsTheModelOverTheImage) {
   const CentroidHeights heights(camera, o);
   // Between nodes the table is within 1 mm of the model at that pixel.
   for (const Eigen::Vector2d& uv : {Eigen::Vector2d(333.0, 411.0), Eigen::Vector2d(97.0, 250.0),
-                                   Eigen::Vector2d(520.0, 77.0)}) {
+                                    Eigen::Vector2d(520.0, 77.0)}) {
     const auto root = camera.ImageToPlane(uv, heights.HeightAt(uv));
     ASSERT_TRUE(root);
     const auto model = SilhouetteCentroidHeight(camera, *root, o.shape, o.samples);
