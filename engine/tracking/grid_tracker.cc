@@ -31,7 +31,6 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "spacing_step_sd_m", spacing_step_sd_m);
   RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
   RequirePositive(e, "plant_height_sd_m", plant_height_sd_m);
-
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "crop_radius_m", crop_radius_m);
   RequireNonNegative(e, "crop_height_m", crop_height_m);

@@ -32,6 +32,9 @@
 
 namespace plantscale::tracking {
 
+class ObservationModel;  // observation_model.h
+struct Prediction;
+
 enum class ObservationSpace {
   kGround,  // centroids on the virtual ground plane (ours)
   kImage,   // pixel centroids with R projected from the ground (thesis eq. 4.28)
@@ -218,8 +221,8 @@ class GridTracker {
   Eigen::Vector3d BouncePrior() const;
   // The ObservationModel's prediction of plant (m, n) with the persistent
   // bounce's effect and columns added.
-  struct Prediction PredictPlant(const class ObservationModel& h, const geometry::GridState& s,
-                                 int m, int n) const;
+  Prediction PredictPlant(const ObservationModel& h, const geometry::GridState& s, int m,
+                          int n) const;
   double OdometryScale() const { return options_.estimate_odometry_scale ? 1.0 + x_(core()) : 1.0; }
   void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m, double dt_s);
   void ResetBounce();
