@@ -33,6 +33,8 @@ nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
           {"rotation_rmse_deg", m.rotation_rmse_deg},
           {"translation_rmse_m", m.translation_rmse_m},
           {"drift_cm_per_m", m.drift_cm_per_m},
+          {"drift_along_cm_per_m", m.drift_along_cm_per_m},
+          {"drift_across_cm_per_m", m.drift_across_cm_per_m},
           {"rows_fitted", m.rows_fitted},
           {"row_fit_rms_m", m.row_fit_rms_m},
           {"row_angle_deg", m.row_angle_deg},
@@ -80,6 +82,8 @@ void PrintTable(const MotionEvaluation& e, bool with_paper, std::ostream& out) {
   row("rotation RMSE (deg)", o.rotation_rmse_deg, p.rotation_rmse_deg, "-");
   row("translation RMSE (m)", o.translation_rmse_m, p.translation_rmse_m, "-");
   row("drift (cm/m)", o.drift_cm_per_m, p.drift_cm_per_m, "-");
+  row("  of it along, signed", o.drift_along_cm_per_m, p.drift_along_cm_per_m, "-");
+  row("  of it across, signed", o.drift_across_cm_per_m, p.drift_across_cm_per_m, "-");
   row("row-fit RMS (m)", o.row_fit_rms_m, p.row_fit_rms_m, "0.0327, 0.0272, 0.0086");
   row("angle between rows (deg)", o.row_angle_deg, p.row_angle_deg, "0.42, 0.54");
   row("row spacing (m)", o.row_spacing_m, p.row_spacing_m, "0.4132, 0.4083");

@@ -67,6 +67,7 @@ PlanarMotion TrueMotion(const sim::Pose2& previous, const sim::Pose2& current) {
 struct Totals {
   int pairs = 0, locked = 0, matches = 0, correct = 0, frames = 0;
   double rotation_sq = 0.0, translation_sq = 0.0, drift_sum = 0.0, seconds = 0.0;
+  double along_sum = 0.0, across_sum = 0.0;
   int sequences = 0;
   std::vector<double> rms, spacings, angles;
 };
@@ -108,8 +109,13 @@ class MethodRun {
     const VehiclePose2 first = ToVehiclePose(first_pose_);
     const Eigen::Vector2d truth = first.FromWorld({previous_pose_.x_m, previous_pose_.y_m});
     const double distance = last_distance_ - first_distance_;
-    if (distance > 0.0)
-      totals.drift_sum += 100.0 * (tracker_.pose().position_m - truth).norm() / distance;
+    if (distance > 0.0) {
+      // Vehicle frame: x across (right), y along the forward axis.
+      const Eigen::Vector2d error = tracker_.pose().position_m - truth;
+      totals.drift_sum += 100.0 * error.norm() / distance;
+      totals.along_sum += 100.0 * error.y() / distance;
+      totals.across_sum += 100.0 * error.x() / distance;
+    }
     ++totals.sequences;
     const maps::CropMap map = mosaic_.Build();
     std::vector<Eigen::Vector2d> plants;
@@ -179,6 +185,8 @@ MotionMethodEvaluation Summarise(const std::string& name, const Totals& t) {
   e.rotation_rmse_deg = t.pairs > 0 ? std::sqrt(t.rotation_sq / t.pairs) * 180.0 / M_PI : 0.0;
   e.translation_rmse_m = t.pairs > 0 ? std::sqrt(t.translation_sq / t.pairs) : 0.0;
   e.drift_cm_per_m = t.sequences > 0 ? t.drift_sum / t.sequences : 0.0;
+  e.drift_along_cm_per_m = t.sequences > 0 ? t.along_sum / t.sequences : 0.0;
+  e.drift_across_cm_per_m = t.sequences > 0 ? t.across_sum / t.sequences : 0.0;
   e.rows_fitted = static_cast<int>(t.rms.size());
   e.row_fit_rms_m = Mean(t.rms);
   e.row_angle_deg = Mean(t.angles) * 180.0 / M_PI;

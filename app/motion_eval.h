@@ -51,6 +51,11 @@ struct MotionMethodEvaluation {
   double rotation_rmse_deg = 0.0;
   double translation_rmse_m = 0.0;
   double drift_cm_per_m = 0.0;  // mean over seeds of |T − T_true| / distance
+  // The signed parts of T − T_true along and across the first frame's
+  // forward axis, per metre, mean over seeds: a systematic heading error
+  // shows as a mean across, a wrong scale or speed as a mean along.
+  double drift_along_cm_per_m = 0.0;
+  double drift_across_cm_per_m = 0.0;
   int rows_fitted = 0;          // rows found, summed over seeds
   double row_fit_rms_m = 0.0;   // mean over fitted rows
   double row_angle_deg = 0.0;   // mean between neighbouring rows

@@ -9,6 +9,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$bin" evaluate motion --preset sanchiz_pla --seeds 1 --frames 8 --json > "$work/eval.json"
 for key in correct_correspondence_rate rotation_rmse_deg translation_rmse_m drift_cm_per_m \
+           drift_along_cm_per_m drift_across_cm_per_m \
            row_fit_rms_m row_angle_deg row_spacing_m true_row_spacing_m preset seeds \
            baseline_paper published; do
   grep -q "\"$key\"" "$work/eval.json" || fail "JSON key $key missing"
