@@ -39,6 +39,8 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "min_row_occupancy", min_row_occupancy, 0.0, 1.0);
   RequireInRange(e, "min_gap_row_occupancy", min_gap_row_occupancy, 0.0, 1.0);
   RequirePositive(e, "min_visible_spacing_px", min_visible_spacing_px);
+  RequireInRange(e, "orientation_floor", orientation_floor, 0.0, 1.0);
+  if (orientation_candidates < 0) e.push_back({"orientation_candidates", "must be >= 0"});
   return e;
 }
 
@@ -157,6 +159,9 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   const int h = work_.rows;
   const double kw = W / w;
   const double kh = H / h;
+
+  const bool use_orientation = o.orientation_floor > 0.0;
+  if (use_orientation) orientation_.Build(work_, kw, kh, v_bottom);
 
   // Bands and their column profiles.
   const int n_bands = std::min(o.strips, h);
@@ -378,6 +383,39 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     });
     if (!near) chosen.push_back(index);
   }
+  // The streaks' support over the same grid; its best cells are candidates
+  // too (a near-field plant can make a wrong geometry the sharpest).
+  double support_max = 0.0;
+  if (use_orientation) {
+    std::vector<double> support(sharpness.size(), 0.0);
+    for (int i = 0; i < ng; ++i) {
+      for (int j = 0; j < nl; ++j) {
+        const Geometry geo = geometry_at(i * g_step, -o.max_lean + j * l_step);
+        support[static_cast<size_t>(i) * nl + j] = orientation_.Support(geo.g, geo.c);
+      }
+    }
+    std::vector<int> by_support(order);
+    std::sort(by_support.begin(), by_support.end(), [&](int a, int b) {
+      return support[static_cast<size_t>(a)] > support[static_cast<size_t>(b)];
+    });
+    support_max = support[static_cast<size_t>(by_support.front())];
+    std::vector<int> taken;
+    for (int index : by_support) {
+      if (static_cast<int>(taken.size()) >= o.orientation_candidates) break;
+      const bool near = std::any_of(taken.begin(), taken.end(), [&](int c) {
+        return std::abs(c / nl - index / nl) <= 1 && std::abs(c % nl - index % nl) <= 1;
+      });
+      if (near) continue;
+      taken.push_back(index);
+      if (std::find(chosen.begin(), chosen.end(), index) == chosen.end()) chosen.push_back(index);
+    }
+  }
+  const auto streak_factor = [&](const Geometry& geo) {
+    if (!use_orientation) return 1.0;
+    const double floor = o.orientation_floor;
+    return std::min(1.0, (orientation_.Support(geo.g, geo.c) + floor) / (support_max + floor));
+  };
+
   // Sharpness alone favours little convergence when wide rows merge far
   // away; every convergence keeps its sharpest lean as a candidate too.
   for (int i = 0; i < ng; ++i) {
@@ -489,7 +527,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     const Rows rows = find_rows(geo, period, bc.phase);
     if (!rows.adjacent) return false;
     hyp.sc = bc.phase;
-    hyp.score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows);
+    hyp.score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows) *
+                streak_factor(geo);
     n_rows = rows.rows.size();
     return true;
   };

@@ -20,7 +20,12 @@
 // tracker's initialiser does on the calibrated ground plane):
 //   1. a Hough over (g, lean) scoring how sharply the plant matter piles up
 //      in s (all rows must converge on one point); the sharpest cells and
-//      the sharpest leans of every convergence go on,
+//      the sharpest leans of every convergence go on, and so do
+//      the geometries whose lines the plant matter's streaks follow best
+//      (orientation.h) go on as well, and every score below is scaled by
+//      that agreement relative to the best, so that a comb leaning through
+//      one big near-field plant does not beat the geometry every narrow
+//      row and gap farther up points along,
 //   2. the row comb (comb.h, whose votes the ground-plane initialiser
 //      shares) over period and phase, each hypothesis scored by the comb's
 //      coherence × the agreement of its phase from band to band × the
@@ -54,6 +59,7 @@
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/rows/orientation.h"
 
 namespace plantscale::rows {
 
@@ -83,6 +89,12 @@ struct RowDetectorOptions {
   double min_row_occupancy = 0.4;    // fraction of its bands in which a row has plant matter
   double min_gap_row_occupancy = 0.15;  // ... for a row between two such rows (plants missing)
   double min_visible_spacing_px = 6.0;  // rows are reported up to where they are this close
+  // The streaks' vote (orientation.h): every hypothesis's score is scaled by
+  // (E + floor) / (E_max + floor), E its support beyond chance and E_max the
+  // best support over the Hough grid; the floor keeps images without
+  // streaks (seen from above, scattered plants) as they were. 0 disables.
+  double orientation_floor = 0.02;
+  int orientation_candidates = 2;  // best-supported Hough cells also taken on to the comb
 
   OptionErrors Validate() const;
 };
@@ -136,6 +148,7 @@ class RowDetector {
   std::vector<double> cumulative_;  // running sums of profiles_, w + 1 per band
   std::vector<float> fit_profiles_;
   std::vector<double> histogram_;
+  OrientationField orientation_;
 };
 
 }  // namespace plantscale::rows

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "engine/common/check.h"
-#include "engine/vision/vectorise.h"
+#include "engine/common/vectorise.h"
 
 namespace plantscale::vision {
 namespace {

@@ -4,7 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "engine/common/check.h"
-#include "engine/vision/vectorise.h"
+#include "engine/common/vectorise.h"
 
 namespace plantscale::vision {
 

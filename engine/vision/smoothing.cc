@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "engine/common/check.h"
-#include "engine/vision/vectorise.h"
+#include "engine/common/vectorise.h"
 
 namespace plantscale::vision {
 namespace {

@@ -1,5 +1,5 @@
 #pragma once
-// Per-pixel loops of engine/vision are plain C++ that GCC vectorises (the
+// Per-pixel loops of engine/vision and engine/rows are plain C++ that GCC vectorises (the
 // files are compiled with -O3). The build targets baseline x86-64 (SSE2),
 // so a loop marked PLANTSCALE_VECTOR_CLONES is compiled twice, for AVX2 and
 // for the baseline, and the loader picks the one the CPU runs (GCC/Clang
