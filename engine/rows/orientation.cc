@@ -43,9 +43,9 @@ inline float Term(float u, float dv, float nu, float nv, float weight, float g, 
 // Σ Term over the cells, in kLanes partial sums so that the loop vectorises
 // without reassociating one float sum.
 PLANTSCALE_VECTOR_CLONES
-float SupportSum(const float* __restrict u, const float* __restrict dv,
-                 const float* __restrict nu, const float* __restrict nv,
-                 const float* __restrict weight, size_t n, float g, float c) {
+float SupportSum(const float* __restrict u, const float* __restrict dv, const float* __restrict nu,
+                 const float* __restrict nv, const float* __restrict weight, size_t n, float g,
+                 float c) {
   constexpr size_t kLanes = 8;
   float partial[kLanes] = {};
   size_t i = 0;
@@ -77,7 +77,8 @@ void OrientationField::Build(const cv::Mat& plant, double scale_u, double scale_
   double max_trace = 0.0;
   for (int y = kCellPx / 2; y < plant.rows; y += kCellPx) {
     for (int x = kCellPx / 2; x < plant.cols; x += kCellPx) {
-      max_trace = std::max(max_trace, static_cast<double>(juu_.at<float>(y, x) + jvv_.at<float>(y, x)));
+      max_trace =
+          std::max(max_trace, static_cast<double>(juu_.at<float>(y, x) + jvv_.at<float>(y, x)));
     }
   }
   if (max_trace <= 0.0) return;

@@ -35,7 +35,8 @@ TEST(OrientationFieldTest, ConvergingRowsSupportTheirOwnVanishingPointMost) {
   const double own = field.Support(g, c);
   // Streaks along their lines: sin^16 near 1 on most cells, minus chance.
   EXPECT_GT(own, 0.5);  // measured 0.76
-  // Another vanishing point (measured 0.08, 0.55, and 0.27 for parallel rows): half as high, or 20 px to the side.
+  // Another vanishing point (measured 0.08, 0.55, and 0.27 for parallel rows): half as high, or 20
+  // px to the side.
   EXPECT_LT(field.Support(2.0 * g, 2.0 * c), 0.6 * own);
   EXPECT_LT(field.Support(g, c + 20.0 * g), 0.8 * own);
   // Parallel vertical rows would be a poor fit.

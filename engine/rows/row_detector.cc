@@ -386,6 +386,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   // The streaks' support over the same grid; its best cells are candidates
   // too (a near-field plant can make a wrong geometry the sharpest).
   double support_max = 0.0;
+  int best_support_index = 0;
   if (use_orientation) {
     std::vector<double> support(sharpness.size(), 0.0);
     for (int i = 0; i < ng; ++i) {
@@ -398,7 +399,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     std::sort(by_support.begin(), by_support.end(), [&](int a, int b) {
       return support[static_cast<size_t>(a)] > support[static_cast<size_t>(b)];
     });
-    support_max = support[static_cast<size_t>(by_support.front())];
+    best_support_index = by_support.front();
+    support_max = support[static_cast<size_t>(best_support_index)];
     std::vector<int> taken;
     for (int index : by_support) {
       if (static_cast<int>(taken.size()) >= o.orientation_candidates) break;
@@ -408,6 +410,30 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       if (near) continue;
       taken.push_back(index);
       if (std::find(chosen.begin(), chosen.end(), index) == chosen.end()) chosen.push_back(index);
+    }
+  }
+  // The streaks' own best geometry, refined off the grid by halving steps:
+  // the vanishing point the refit may keep (step 4).
+  double lock_g = 0.0, lock_lean = 0.0;
+  const bool locked = use_orientation && support_max > 0.0;
+  if (locked) {
+    lock_g = (best_support_index / nl) * g_step;
+    lock_lean = -o.max_lean + (best_support_index % nl) * l_step;
+    double best_support = support_max, sg = g_step, sl = l_step;
+    for (int level = 0; level < 6; ++level) {
+      sg *= 0.5;
+      sl *= 0.5;
+      double bg = lock_g, bl = lock_lean;
+      for (int i = -1; i <= 1; ++i) {
+        for (int j = -1; j <= 1; ++j) {
+          const double g = std::max(0.0, lock_g + i * sg), l = lock_lean + j * sl;
+          const Geometry geo = geometry_at(g, l);
+          const double e = orientation_.Support(geo.g, geo.c);
+          if (e > best_support) best_support = e, bg = g, bl = l;
+        }
+      }
+      lock_g = bg;
+      lock_lean = bl;
     }
   }
   const auto streak_factor = [&](const Geometry& geo) {
@@ -520,8 +546,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   // before they are compared.
   std::vector<Hypothesis> by_count(12);
   double best_start = -1.0;
-  const auto score_of = [&](const Geometry& geo, double period, double floor,
-                            Hypothesis& hyp, size_t& n_rows) {
+  const auto score_of = [&](const Geometry& geo, double period, double floor, Hypothesis& hyp,
+                            size_t& n_rows) {
     const BandComb bc = band_comb(geo, period);
     if (bc.score() <= floor) return false;
     const Rows rows = find_rows(geo, period, bc.phase);
@@ -630,69 +656,126 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   const double kfh = H / fh;
   const int fit_bands = std::max(4, fh / 4);
   const std::vector<Band> fbands = SplitIntoBands(fit_, fit_bands, kfh, v_bottom, fit_profiles_);
-  for (int iteration = 0; iteration < o.fit_iterations; ++iteration) {
-    Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
-    int observations = 0;
-    for (int k = 0; k < fit_bands; ++k) {
-      const Band& b = fbands[static_cast<size_t>(k)];
-      if (b.v_top + b.rows * kfh < found.top_v) continue;
-      const double shrink = 1.0 - geo.g * b.dv;
-      const double ds = d * shrink;
-      if (shrink < kMinShrink || ds < min_spacing) continue;
-      const float* p = &fit_profiles_[static_cast<size_t>(k) * fw];
-      const auto column = [&](double u) { return static_cast<int>(std::floor(u / kfw)); };
-      // Lowest column in [u0, u1), or −1 when the range leaves the image.
-      const auto gap = [&](double u0, double u1) {
-        const int x0 = column(u0);
-        const int x1 = column(u1);
-        if (x0 < 0 || x1 >= fw) return -1;
-        int lowest = x0;
-        for (int x = x0 + 1; x <= x1; ++x) {
-          if (p[x] < p[lowest] || (p[x] == p[lowest] && std::abs(x - 0.5 * (x0 + x1)) <
-                                                        std::abs(lowest - 0.5 * (x0 + x1)))) {
-            lowest = x;
+  struct Fit {
+    Geometry geo;
+    double d = 0.0, sc = 0.0;
+    Rows found;
+  };
+  // With fix_vp the vanishing point stays and only (s_c, d) are fitted,
+  // linear as well: u − c·Δv = s_c·(1 − g·Δv) + n·d·(1 − g·Δv).
+  const auto refit = [&](Fit& fit, bool fix_vp) {
+    for (int iteration = 0; iteration < o.fit_iterations; ++iteration) {
+      Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+      Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
+      Eigen::Matrix2d a2 = Eigen::Matrix2d::Zero();
+      Eigen::Vector2d rhs2 = Eigen::Vector2d::Zero();
+      int observations = 0;
+      for (int k = 0; k < fit_bands; ++k) {
+        const Band& b = fbands[static_cast<size_t>(k)];
+        if (b.v_top + b.rows * kfh < fit.found.top_v) continue;
+        const double shrink = 1.0 - fit.geo.g * b.dv;
+        const double ds = fit.d * shrink;
+        if (shrink < kMinShrink || ds < min_spacing) continue;
+        const float* p = &fit_profiles_[static_cast<size_t>(k) * fw];
+        const auto column = [&](double u) { return static_cast<int>(std::floor(u / kfw)); };
+        // Lowest column in [u0, u1), or −1 when the range leaves the image.
+        const auto gap = [&](double u0, double u1) {
+          const int x0 = column(u0);
+          const int x1 = column(u1);
+          if (x0 < 0 || x1 >= fw) return -1;
+          int lowest = x0;
+          for (int x = x0 + 1; x <= x1; ++x) {
+            if (p[x] < p[lowest] || (p[x] == p[lowest] && std::abs(x - 0.5 * (x0 + x1)) <
+                                                              std::abs(lowest - 0.5 * (x0 + x1)))) {
+              lowest = x;
+            }
           }
+          return lowest;
+        };
+        for (const DetectedRow& row : fit.found.rows) {
+          const int n = row.n;
+          const double u = (fit.sc + n * fit.d) * shrink + fit.geo.c * b.dv;
+          const double f = o.gap_search_fraction;
+          const int left = gap(u - (0.5 + f) * ds, u - (0.5 - f) * ds);
+          const int right = gap(u + (0.5 - f) * ds, u + (0.5 + f) * ds);
+          if (left < 0 || right <= left + 1) continue;
+          double mass = 0.0, moment = 0.0;
+          for (int x = left + 1; x < right; ++x) {
+            mass += static_cast<double>(p[x]);
+            moment += static_cast<double>(p[x]) * (x + 0.5) * kfw;
+          }
+          // A band where the row has little plant matter says little.
+          if (mass < 0.1 * (right - left - 1) * b.rows) continue;
+          const double u_obs = moment / mass;
+          // Residuals measured in s (u / shrink): a band counts as much at
+          // the top of the rows as at the bottom.
+          const double ws = mass / (shrink * shrink);
+          if (fix_vp) {
+            const Eigen::Vector2d z(shrink, n * shrink);
+            a2.noalias() += ws * z * z.transpose();
+            rhs2.noalias() += ws * (u_obs - fit.geo.c * b.dv) * z;
+          } else {
+            const Eigen::Vector4d z(1.0, n, b.dv, -n * b.dv);
+            a.noalias() += ws * z * z.transpose();
+            rhs.noalias() += ws * u_obs * z;
+          }
+          ++observations;
         }
-        return lowest;
-      };
-      for (const DetectedRow& row : found.rows) {
-        const int n = row.n;
-        const double u = (sc + n * d) * shrink + geo.c * b.dv;
-        const double f = o.gap_search_fraction;
-        const int left = gap(u - (0.5 + f) * ds, u - (0.5 - f) * ds);
-        const int right = gap(u + (0.5 - f) * ds, u + (0.5 + f) * ds);
-        if (left < 0 || right <= left + 1) continue;
-        double mass = 0.0, moment = 0.0;
-        for (int x = left + 1; x < right; ++x) {
-          mass += static_cast<double>(p[x]);
-          moment += static_cast<double>(p[x]) * (x + 0.5) * kfw;
-        }
-        // A band where the row has little plant matter says little.
-        if (mass < 0.1 * (right - left - 1) * b.rows) continue;
-        const double u_obs = moment / mass;
-        // Residuals measured in s (u / shrink): a band counts as much at
-        // the top of the rows as at the bottom.
-        const double ws = mass / (shrink * shrink);
-        const Eigen::Vector4d z(1.0, n, b.dv, -n * b.dv);
-        a.noalias() += ws * z * z.transpose();
-        rhs.noalias() += ws * u_obs * z;
-        ++observations;
       }
+      if (observations < 6) break;
+      if (fix_vp) {
+        const Eigen::Vector2d q = a2.ldlt().solve(rhs2);
+        if (!q.allFinite() || q(1) <= 0.7 * fit.d || q(1) >= 1.3 * fit.d) break;
+        const Rows next_rows = find_rows(fit.geo, q(1), q(0));
+        if (!next_rows.adjacent) break;
+        fit.d = q(1);
+        fit.sc = q(0);
+        fit.found = next_rows;
+        continue;
+      }
+      const Eigen::LDLT<Eigen::Matrix4d> ldlt(a);
+      if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) break;
+      const Eigen::Vector4d p = ldlt.solve(rhs);
+      if (!p.allFinite() || p(1) <= 0.7 * fit.d || p(1) >= 1.3 * fit.d) break;
+      const Geometry next{p(3) / p(1), p(2) + p(3) / p(1) * p(0)};
+      const Rows next_rows = find_rows(next, p(1), p(0));
+      if (!next_rows.adjacent) break;
+      fit.geo = next;
+      fit.d = p(1);
+      fit.sc = p(0);
+      fit.found = next_rows;
     }
-    if (observations < 6) break;
-    const Eigen::LDLT<Eigen::Matrix4d> ldlt(a);
-    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) break;
-    const Eigen::Vector4d p = ldlt.solve(rhs);
-    if (!p.allFinite() || p(1) <= 0.7 * d || p(1) >= 1.3 * d) break;
-    const Geometry next{p(3) / p(1), p(2) + p(3) / p(1) * p(0)};
-    const Rows next_rows = find_rows(next, p(1), p(0));
-    if (!next_rows.adjacent) break;
-    geo = next;
-    d = p(1);
-    sc = p(0);
-    found = next_rows;
+  };
+  // Two fits compete by the score the search used: the full refit from the
+  // best hypothesis, and the refit of (s_c, d) on the streaks' own
+  // vanishing point. On photographs of tall, leafy rows the row centres
+  // between gaps pull the full fit's vanishing point away (the rows merge
+  // into a canopy towards it) where the streaks still point true; on
+  // clean rows of separate plants the full fit is the finer one.
+  // The final score of a fitted comb, as the search scored hypotheses.
+  const auto fit_score = [&](const Fit& fit) {
+    if (!fit.found.adjacent) return -1.0;
+    return band_comb(fit.geo, fit.d).score() * MeanOccupancy(fit.found.rows) * fit.found.contrast *
+           RowCountFactor(fit.found.rows) * streak_factor(fit.geo);
+  };
+  Fit chosen_fit{geo, d, sc, found};
+  refit(chosen_fit, false);
+  if (locked) {
+    Fit fixed;
+    fixed.geo = geometry_at(lock_g, lock_lean);
+    fixed.d = d;
+    fixed.sc = band_comb(fixed.geo, d).phase;
+    fixed.found = find_rows(fixed.geo, fixed.d, fixed.sc);
+    if (fixed.found.adjacent) {
+      refit(fixed, true);
+      const double a = fit_score(chosen_fit), b = fit_score(fixed);
+      if (b > a) chosen_fit = fixed;
+    }
   }
+  geo = chosen_fit.geo;
+  d = chosen_fit.d;
+  sc = chosen_fit.sc;
+  found = chosen_fit.found;
 
   // 5. The central row (nearest the image's centre at the bottom), the
   // comb's coherence over every usable band, the confidence.
@@ -747,8 +830,7 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
       found.contrast < o.min_contrast) {
     out.reason = "no rows: plant matter does not follow evenly spaced rows (coherence " +
                  std::to_string(final_fit.coherence) + ", band agreement " +
-                 std::to_string(alignment) + ", contrast " + std::to_string(found.contrast) +
-                 ")";
+                 std::to_string(alignment) + ", contrast " + std::to_string(found.contrast) + ")";
     return out;
   }
   out.rows = std::move(found.rows);

@@ -45,7 +45,10 @@
 //      the four parameters (linear in (s_c, d, c − g·s_c, g·d)) to each
 //      row's centre in thin bands, the centroid of its plant matter between
 //      the gaps on either side: narrow rows are centred by their mass, rows
-//      whose plants nearly touch by their edges.
+//      whose plants nearly touch by their edges; the same refit of (s_c, d)
+//      alone on the streaks' best vanishing point competes with it, by the
+//      same score (leafy rows merging into a canopy pull the full refit's
+//      vanishing point away; the streaks still point true).
 // Weeds between rows add a floor to the comb; missing plants, shadows and
 // tyre tracks take parts of teeth away; rows are reported only where their
 // tooth has plant matter along its length (or, between two such rows, some).
