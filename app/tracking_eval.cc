@@ -204,6 +204,11 @@ tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, doubl
   o.crop_height_m = s.field.crop_height_ratio * s.field.crop_radius_m;
   o.plant_height_sd_m = std::max(0.002, s.field.crop_radius_sd_fraction * o.crop_height_m);
   o.plant_offset_sd_m = std::max(0.002, std::hypot(s.field.planting_jitter_m, s.field.crop_lean_sd_m));
+  // A centroid's wander as the view changes is the parallax of the plant's
+  // leaves: it scales with the crop's height from where it was measured.
+  const double wander = o.crop_height_m / tracking::TrackerOptions::kOffsetWalkCropHeightM;
+  o.plant_offset_walk_across_sd_per_sqrt_m *= wander;
+  o.plant_offset_walk_along_sd_per_sqrt_m *= wander;
   // The vehicle's camera bounce as its suspension was measured: size and
   // how long it lasts.
   o.camera_pitch_sd_rad = std::max(1e-4, s.vehicle.bump_pitch_sd_rad);

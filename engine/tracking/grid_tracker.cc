@@ -30,6 +30,8 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "plant_spacing_sd_m", plant_spacing_sd_m);
   RequireNonNegative(e, "spacing_step_sd_m", spacing_step_sd_m);
   RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
+  RequireNonNegative(e, "plant_offset_walk_across_sd_per_sqrt_m", plant_offset_walk_across_sd_per_sqrt_m);
+  RequireNonNegative(e, "plant_offset_walk_along_sd_per_sqrt_m", plant_offset_walk_along_sd_per_sqrt_m);
   RequirePositive(e, "plant_height_sd_m", plant_height_sd_m);
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "crop_radius_m", crop_radius_m);
@@ -261,6 +263,12 @@ Eigen::Vector2d GridTracker::PlantPosition(int m, int n) const {
   return PlantWithOffset(state(), m, n, delta);
 }
 
+std::optional<Eigen::Matrix2d> GridTracker::PlantOffsetCovariance(int m, int n) const {
+  const int offset = OffsetIndex(m, n);
+  if (offset < 0) return std::nullopt;
+  return Eigen::Matrix2d(p_.block<2, 2>(offset, offset));
+}
+
 Eigen::Vector3d GridTracker::BouncePrior() const {
   return {options_.camera_pitch_sd_rad * options_.camera_pitch_sd_rad,
           options_.camera_roll_sd_rad * options_.camera_roll_sd_rad,
@@ -341,6 +349,15 @@ void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, doub
     const Eigen::MatrixXd phl = a * p_.topRightCorner(h, n - h);
     p_.topRightCorner(h, n - h) = phl;
     p_.bottomLeftCorner(n - h, h) = phl.transpose();
+  }
+  // Each plant's located centroid wanders as the view of it changes.
+  const double across = options_.plant_offset_walk_across_sd_per_sqrt_m *
+                        options_.plant_offset_walk_across_sd_per_sqrt_m * distance;
+  const double along = options_.plant_offset_walk_along_sd_per_sqrt_m *
+                       options_.plant_offset_walk_along_sd_per_sqrt_m * distance;
+  for (const PlantOffset& o : offsets_) {
+    p_(o.index, o.index) += across;
+    p_(o.index + 1, o.index + 1) += along;
   }
 }
 

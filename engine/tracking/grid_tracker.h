@@ -67,6 +67,17 @@ struct TrackerOptions {
   // ground wheel: about 1 mm per metre, some 2 lines in and 2 out).
   double spacing_step_sd_m = 0.001;
   double plant_offset_sd_m = 0.015;  // σ of a plant's persistent offset from its grid position
+  // Where a plant's centroid is located wanders as the view of it changes
+  // (leaves turn in and out of view, self-shadow, lobes): a random walk of
+  // its offset per √m driven, across and along the rows. A fixed offset
+  // pushes that wander into r̄ and l̄. Measured on the field preset as the
+  // linear trend of each plant's located-minus-true centroid over its
+  // passage through the view (about 2.1 m): 8.2 mm across, 18.7 mm along,
+  // for a crop 0.112 m tall; the wander is the parallax of its leaves, so
+  // for another crop scale these by its height over kOffsetWalkCropHeightM.
+  static constexpr double kOffsetWalkCropHeightM = 0.112;
+  double plant_offset_walk_across_sd_per_sqrt_m = 0.006;
+  double plant_offset_walk_along_sd_per_sqrt_m = 0.013;
   // A plant's own centroid height differs from the crop's (size, lean,
   // leaves): as the plant crosses the view that error moves its located
   // centroid radially from the nadir by p·δh/(H − h), a shift that grows
@@ -191,6 +202,9 @@ class GridTracker {
   // Where plant (m, n) of the current grid stands (vehicle frame, on its
   // axis): its grid position plus its own offset when it has one.
   Eigen::Vector2d PlantPosition(int m, int n) const;
+  // Covariance of plant (m, n)'s own offset (δx across, δy along the rows);
+  // none when the plant has no offset state.
+  std::optional<Eigen::Matrix2d> PlantOffsetCovariance(int m, int n) const;
   // Ground distance per measured wheel distance (1 + k); 1 when not estimated.
   double odometry_scale() const { return OdometryScale(); }
   const TrackerOptions& options() const { return options_; }

@@ -4,6 +4,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "engine/tracking/test_scene.h"
 
@@ -244,6 +246,9 @@ TEST(GridTracker, CovarianceIsConsistentOnTheSyntheticGrid) {
   TrackerOptions o;
   o.plant_offset_sd_m = 0.01;
   o.feature_sd_m = 0.004;
+  // The scene's plants keep one offset: their centroids do not wander.
+  o.plant_offset_walk_across_sd_per_sqrt_m = 0.0;
+  o.plant_offset_walk_along_sd_per_sqrt_m = 0.0;
   Drive run(o);
   run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
   run.Frames(10);
@@ -261,6 +266,55 @@ TEST(GridTracker, CovarianceIsConsistentOnTheSyntheticGrid) {
   }
   EXPECT_GT(sum / n, 1.0);
   EXPECT_LT(sum / n, 6.0);
+}
+
+TEST(GridTracker, PlantOffsetsWanderByTheirRandomWalkBetweenFrames) {
+  // Driving without frames, each plant's offset variance grows by σ²·d
+  // across and along, independently, and the prediction leaves it at that.
+  TrackerOptions o;
+  o.plant_offset_walk_across_sd_per_sqrt_m = 0.006;
+  o.plant_offset_walk_along_sd_per_sqrt_m = 0.013;
+  Drive run(o);
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(5);
+  ASSERT_GT(run.tracker.plant_offset_states(), 3);
+  std::vector<std::pair<std::pair<int, int>, Eigen::Matrix2d>> before;
+  for (int m = -3; m <= 8; ++m) {
+    for (int n = -1; n <= 1; ++n) {
+      if (auto p = run.tracker.PlantOffsetCovariance(m, n)) before.push_back({{m, n}, *p});
+    }
+  }
+  ASSERT_EQ(static_cast<int>(before.size()), run.tracker.plant_offset_states());
+  const double speed = 0.7;
+  const int ticks = 10;  // 0.2 s at 50 Hz: 0.14 m, within one plant spacing
+  for (int k = 0; k < ticks; ++k) {
+    run.utime += kOdoUs;
+    run.tracker.AddOdometry(run.utime, speed, speed);
+  }
+  const double d = speed * ticks * kOdoUs * 1e-6;
+  for (const auto& [mn, p0] : before) {
+    const auto p1 = run.tracker.PlantOffsetCovariance(mn.first, mn.second);
+    ASSERT_TRUE(p1) << mn.first << "," << mn.second;
+    EXPECT_NEAR((*p1)(0, 0) - p0(0, 0), 0.006 * 0.006 * d, 1e-12);
+    EXPECT_NEAR((*p1)(1, 1) - p0(1, 1), 0.013 * 0.013 * d, 1e-12);
+    EXPECT_NEAR((*p1)(0, 1), p0(0, 1), 1e-12);
+  }
+  // Without a walk the offsets' covariance stays as the last frame left it.
+  o.plant_offset_walk_across_sd_per_sqrt_m = 0.0;
+  o.plant_offset_walk_along_sd_per_sqrt_m = 0.0;
+  Drive still(o);
+  still.tracker.Initialise(0, still.scene.truth, InitialCovariance());
+  still.Frames(5);
+  const auto q0 = still.tracker.PlantOffsetCovariance(before[0].first.first, before[0].first.second);
+  ASSERT_TRUE(q0);
+  for (int k = 0; k < ticks; ++k) {
+    still.utime += kOdoUs;
+    still.tracker.AddOdometry(still.utime, speed, speed);
+  }
+  const auto q1 = still.tracker.PlantOffsetCovariance(before[0].first.first, before[0].first.second);
+  ASSERT_TRUE(q1);
+  EXPECT_NEAR((*q1)(0, 0), (*q0)(0, 0), 1e-15);
+  EXPECT_NEAR((*q1)(1, 1), (*q0)(1, 1), 1e-15);
 }
 
 }  // namespace
