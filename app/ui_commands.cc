@@ -46,6 +46,7 @@ int Station(StationArgs& a) {
     const ui::StationResult r = ui::RunStation(a.options);
     std::cout << "station: " << r.frames << " frames in " << std::fixed << std::setprecision(1)
               << r.seconds << " s (" << r.frames_per_second << " fps)\n";
+    std::cout << "station: link: " << r.link << '\n';
     for (const std::string& p : r.problems) std::cout << "station: problem: " << p << '\n';
   } catch (const ui::DisplayError& e) {
     return NoDisplay(e);

@@ -68,9 +68,10 @@ void Hud::AddTo(vtkRenderer* renderer) {
 
 void Hud::Update(const RunModel& model, int64_t now_utime) {
   const LinkStatus link = model.Link(now_utime);
-  const Rgb bg = link.level == LinkLevel::kOk      ? palette::kHudOk
-                 : link.level == LinkLevel::kLost ? palette::kHudLost
-                                                  : palette::kHudNoMessages;
+  const Rgb bg = link.level == LinkLevel::kOk         ? palette::kHudOk
+                 : link.level == LinkLevel::kLost     ? palette::kHudLost
+                 : link.level == LinkLevel::kFinished ? palette::kHudFinished
+                                                      : palette::kHudNoMessages;
   if (renderer_) renderer_->SetBackground(bg.r, bg.g, bg.b);
   line1_->SetInput(HudLine(model, now_utime).c_str());
   const std::vector<std::string> problems = model.Problems(now_utime);

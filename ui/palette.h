@@ -27,6 +27,7 @@ inline constexpr Rgb kBlobUnknown{1.0, 1.0, 0.6};
 inline constexpr Rgb kHudOk{0.10, 0.22, 0.14};
 inline constexpr Rgb kHudLost{0.80, 0.05, 0.05};
 inline constexpr Rgb kHudNoMessages{0.55, 0.40, 0.0};
+inline constexpr Rgb kHudFinished{0.14, 0.18, 0.30};  // the run ended: quiet slate
 inline constexpr Rgb kNozzleClosed{0.30, 0.30, 0.32};
 inline constexpr Rgb kNozzleOpen{0.10, 0.60, 1.0};
 inline constexpr Rgb kNozzleFault{1.0, 0.5, 0.0};

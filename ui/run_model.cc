@@ -159,6 +159,8 @@ void RunModel::ObserveEvent(const tm::TelemetrySnapshot& s) {
   if (s.events.empty()) return;
   const plantscale_event_t& e = s.events.back();
   events_.push_back(e);
+  if (e.kind == "run_finished") finished_ = e;
+  if (e.kind == "run_started") finished_.reset();
   if (e.severity >= plantscale_event_t::SEVERITY_WARNING &&
       static_cast<int>(event_snapshots_.size()) < options_.max_event_snapshots) {
     event_snapshots_.push_back({e, thumbnail_, grid_ ? grid_ : truth_});
@@ -178,6 +180,11 @@ LinkStatus RunModel::Link(int64_t now_utime) const {
   }
   link.heartbeat_age_s = 1e-6 * static_cast<double>(now_utime - health_recv_utime_);
   const bool lost = link.heartbeat_age_s > options_.link_lost_after_s;
+  if (lost && finished_) {
+    link.level = LinkLevel::kFinished;
+    link.text = finished_->text + "; last heartbeat " + Seconds(link.heartbeat_age_s) + " ago";
+    return link;
+  }
   link.level = lost ? LinkLevel::kLost : LinkLevel::kOk;
   link.text = lost ? "LINK LOST: no heartbeat for " + Seconds(link.heartbeat_age_s)
                    : "link ok, heartbeat " + Seconds(link.heartbeat_age_s) + " ago";
@@ -187,7 +194,7 @@ LinkStatus RunModel::Link(int64_t now_utime) const {
 std::vector<std::string> RunModel::Problems(int64_t now_utime) const {
   std::vector<std::string> out;
   const LinkStatus link = Link(now_utime);
-  if (link.level != LinkLevel::kOk) out.push_back(link.text);
+  if (link.level != LinkLevel::kOk && link.level != LinkLevel::kFinished) out.push_back(link.text);
   const int64_t known = messages_ - unknown_messages_;
   if (messages_ > 0 && known == 0) {
     out.push_back("no plantscale messages: " + std::to_string(messages_) +

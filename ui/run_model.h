@@ -49,7 +49,9 @@ struct EventSnapshot {
   std::optional<telemetry::GridEstimate> grid;
 };
 
-enum class LinkLevel { kNoMessages, kOk, kLost };
+// kFinished: the heartbeat stopped after the vehicle said the run finished
+// (a run_finished event and no run_started since): quiet, not lost.
+enum class LinkLevel { kNoMessages, kOk, kLost, kFinished };
 
 struct LinkStatus {
   LinkLevel level = LinkLevel::kNoMessages;
@@ -138,6 +140,7 @@ class RunModel {
   std::vector<std::pair<double, double>> path_;
   std::vector<telemetry::NozzleShot> shots_;
   std::vector<plantscale_event_t> events_;
+  std::optional<plantscale_event_t> finished_;  // run_finished, until the next run_started
   std::vector<EventSnapshot> event_snapshots_;
   std::vector<std::string> vehicle_faults_;
   std::vector<std::string> restarts_;

@@ -68,6 +68,24 @@ TEST(RunModel, HeartbeatAgeAndLostLinkAtTheLimit) {
   EXPECT_TRUE(Mentions(run.model().Problems(run.now_utime()), "LINK LOST"));
 }
 
+TEST(RunModel, QuietAfterTheRunFinishedIsNotALostLink) {
+  SyntheticRunOptions o;
+  o.length_m = 2.0;  // 4 s at 0.5 m/s; run_finished at 4.0 s
+  LogTimeline run = testing::RunUpTo(o, 4.0);
+  run.Seek(run.duration_s());
+  const int64_t later = run.now_utime() + 10'000'000;
+  const LinkStatus link = run.model().Link(later);
+  EXPECT_EQ(link.level, LinkLevel::kFinished);
+  EXPECT_TRUE(link.text.find("run finished after 51 frames") != std::string::npos) << link.text;
+  EXPECT_GT(link.heartbeat_age_s, 10.0);
+  EXPECT_FALSE(Mentions(run.model().Problems(later), "LINK LOST"));
+  // A heartbeat that stops before the run ends is a lost link.
+  o.heartbeat_stops_at_s = 1.0;
+  LogTimeline cut = testing::RunUpTo(o, 3.9);
+  EXPECT_EQ(cut.model().Link(cut.now_utime()).level, LinkLevel::kLost);
+  EXPECT_TRUE(Mentions(cut.model().Problems(cut.now_utime()), "LINK LOST"));
+}
+
 TEST(RunModel, VehicleRestartIsSaidAndCounted) {
   SyntheticRunOptions o;
   o.restart_at_s = 4.0;

@@ -169,6 +169,7 @@ StationResult RunStation(const StationOptions& options) {
   std::lock_guard lock(source->mutex);
   if (!source->LogError().empty()) result.problems.push_back("log: " + source->LogError());
   for (const std::string& p : source->model().Problems(source->now_utime())) result.problems.push_back(p);
+  result.link = source->model().Link(source->now_utime()).text;
   return result;
 }
 

@@ -68,6 +68,7 @@ struct StationResult {
   double seconds = 0.0;
   double frames_per_second = 0.0;
   std::vector<std::string> problems;  // what was wrong when it closed
+  std::string link;                   // the link when it closed (LinkStatus::text)
 };
 
 // Runs until the window closes, max_seconds pass or, with close_when_quiet_s,

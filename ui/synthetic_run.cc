@@ -99,6 +99,13 @@ std::vector<tm::LogEvent> Generator::Run() {
     const double t = f / o_.frame_rate_hz;
     Frame(f, t, o_.start_utime + static_cast<int64_t>(t * 1e6));
   }
+  // As the vehicle's runner ends a run.
+  plantscale_event_t end{};
+  end.utime = o_.start_utime + static_cast<int64_t>(frames / o_.frame_rate_hz * 1e6);
+  end.severity = plantscale_event_t::SEVERITY_INFO;
+  end.kind = "run_finished";
+  end.text = "run finished after " + std::to_string(frames + 1) + " frames";
+  Emit(ch::kEvents, end, end.utime);
   return std::move(events_);
 }
 
