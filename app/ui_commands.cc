@@ -140,7 +140,8 @@ int DemoSystem(const DemoArgs& a) {
   const bool can_render = ui::DisplayAvailable();
   // The station shows a window when there is a real display, else renders off-screen.
   const bool virtual_display = std::getenv("PLANTSCALE_DEMO_XVFB") != nullptr;
-  std::vector<std::string> station{"station", "--lcm-url", a.lcm_url, "--close-when-quiet", "3", "--seconds", "900"};
+  std::vector<std::string> station{"station",  "--lcm-url", a.lcm_url, "--close-when-quiet", "3", "--seconds", "900",
+                                   "--screenshot", (out / "station.png").string()};
   if (virtual_display) station.push_back("--offscreen");
   station.insert(station.begin(), self);
   const pid_t station_pid = can_render ? Spawn(station, out / "station.txt") : -1;
@@ -195,6 +196,7 @@ void AddUiCommands(CommandRegistry& registry) {
   station->add_option("--close-when-quiet", s.options.close_when_quiet_s,
                       "close this many seconds after the last message (0: never)");
   station->add_flag("--offscreen", s.options.offscreen, "render without showing a window (needs --seconds)");
+  station->add_option("--screenshot", s.options.screenshot, "write the window as it closed to this PNG");
 
   ReportArgs& r = registry.Keep(ReportArgs{});
   CLI::App* report = registry.Add("report", "render a run report (index.html and PNGs) from a log",

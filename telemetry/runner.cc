@@ -117,6 +117,7 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
     for (const std::unique_ptr<Stage>& stage : stages_) stage->Process(frame, status_, publisher_);
     summary.seconds = 1e-6 * static_cast<double>(frame.utime - first_utime);
   }
+  for (const std::unique_ptr<Stage>& stage : stages_) stage->Finish(now_utime_, publisher_);
   Event(plantscale_event_t::SEVERITY_INFO, "run_finished",
         "run finished after " + std::to_string(status_.frames) + " frames");
   summary.frames = status_.frames;

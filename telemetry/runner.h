@@ -81,6 +81,9 @@ class Stage {
   virtual ~Stage() = default;
   virtual std::string name() const = 0;
   virtual void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) = 0;
+  // The run has ended (after the last frame, before run_finished): send
+  // what was held back for later.
+  virtual void Finish(int64_t /*utime*/, Publisher& /*publisher*/) {}
 };
 
 struct RunnerOptions {

@@ -140,6 +140,19 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
   // The thesis camera's view starts about 0.5 m ahead of the vehicle, which
   // starts tracking at bed y ≈ 0: nothing behind it was seen.
   EXPECT_GT(soil_min_y, 0.0);
+  // At the end of the run the rows the bar had not passed went too: the
+  // map reaches past the vehicle, to where the camera last looked (its far
+  // edge is some 2 m ahead; tiles are 0.85 m deep).
+  double crop_max_y = -1e9;
+  for (const auto& [id, tile] : snap.tiles) {
+    for (int r = 0; r < tile.height; ++r) {
+      for (int c = 0; c < tile.width; ++c) {
+        if (tile.cells[static_cast<size_t>(r * tile.width + c)] != plantscale_map_tile_t::CELL_CROP) continue;
+        crop_max_y = std::max(crop_max_y, tile.origin_m.y() + (r + 0.5) * tile.resolution_m);
+      }
+    }
+  }
+  EXPECT_GT(crop_max_y, tracked.tracker().forward_distance_m() + 0.5);
 }
 
 TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {

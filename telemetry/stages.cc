@@ -309,15 +309,40 @@ void TreatmentStage::PublishNozzles(int64_t utime, Publisher& publisher) {
   publisher.Publish(channels::kNozzles, ToLcm(bar, utime));
 }
 
-// A tile row is sent once the bar has passed it: its cells are final.
-void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher) {
+void TreatmentStage::Finish(int64_t utime, Publisher& publisher) { PublishTiles(utime, publisher, true); }
+
+bool TreatmentStage::TileRowObserved(int tile_row) const {
+  const treatment::TreatmentMap& map = system_.map();
+  for (int r = tile_row * kTileCells; r < std::min(map.rows(), (tile_row + 1) * kTileCells); ++r) {
+    for (int c = 0; c < map.columns(); ++c) {
+      if (map.Observed(c, r)) return true;
+    }
+  }
+  return false;
+}
+
+// A tile row is sent once the bar has passed it: its cells are final. At
+// the end of the run, every row up to the last the camera saw.
+void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end) {
   const tracking::GridTracker& tracker = tracker_.tracker();
-  if (tracker.mode() != tracking::TrackerMode::kTracking) return;
+  if (!to_the_end && tracker.mode() != tracking::TrackerMode::kTracking) return;
   const treatment::TreatmentMap& map = system_.map();
   const double bar_y = tracker.forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
   const double edge = kTileCells * map.options().cell_m;
-  while (map.options().start_y_m + (next_tile_row_ + 1) * edge < bar_y &&
-         (next_tile_row_ + 1) * kTileCells <= map.rows()) {
+  int last_seen = -1;  // the last tile row with a cell the camera saw
+  if (to_the_end) {
+    for (int row = map.rows() / kTileCells - 1; row >= next_tile_row_; --row) {
+      if (TileRowObserved(row)) {
+        last_seen = row;
+        break;
+      }
+    }
+  }
+  const auto due = [&](int row) {
+    if ((row + 1) * kTileCells > map.rows()) return false;
+    return to_the_end ? row <= last_seen : map.options().start_y_m + (row + 1) * edge < bar_y;
+  };
+  while (due(next_tile_row_)) {
     for (int tx = 0; tx * kTileCells < map.columns(); ++tx) {
       MapTileDelta d;
       d.tile_x = tx;

@@ -112,6 +112,9 @@ class TreatmentStage : public Stage {
                  treatment::NozzleSink sink = {});
   std::string name() const override { return "treatment"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+  // The tile rows the bar has not passed yet, up to the last one the camera
+  // saw: the run is over, so they are final too.
+  void Finish(int64_t utime, Publisher& publisher) override;
   const treatment::TreatmentSystem& system() const { return system_; }
 
  private:
@@ -119,7 +122,8 @@ class TreatmentStage : public Stage {
   void PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
                      Publisher& publisher);
   void PublishNozzles(int64_t utime, Publisher& publisher);
-  void PublishTiles(int64_t utime, Publisher& publisher);
+  void PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end = false);
+  bool TileRowObserved(int tile_row) const;
 
   treatment::TreatmentSystem system_;
   const SegmentationStage& segmentation_;

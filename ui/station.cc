@@ -163,6 +163,11 @@ StationResult RunStation(const StationOptions& options) {
     RunInteractive(canvas, controller);
   }
   StationResult result;
+  if (!options.screenshot.empty()) {
+    // The window as it closed, the HUD at the closing time.
+    controller.Frame(0.0);
+    WritePng(canvas.Render(), options.screenshot);
+  }
   result.frames = controller.frames();
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.frames_per_second = result.seconds > 0 ? result.frames / result.seconds : 0.0;

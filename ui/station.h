@@ -35,6 +35,7 @@ struct StationOptions {
   double max_seconds = 0.0;    // > 0: close after this long (demo, tests)
   double close_when_quiet_s = 0.0;  // > 0: close this long after the last message (demo)
   bool offscreen = false;      // no window: render into the back buffer only
+  std::filesystem::path screenshot;  // non-empty: the last frame as PNG on closing
   CameraViewParams camera;
 
   OptionErrors Validate() const;

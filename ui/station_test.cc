@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 
 #include "telemetry/log.h"
 #include "ui/golden.h"
@@ -95,6 +96,51 @@ TEST(Station, KeepsRunningOnAGoodLog) {
   EXPECT_GE(r.seconds, 0.9);
   EXPECT_GE(r.frames, 3);
   EXPECT_TRUE(r.problems.empty()) << r.problems.front();
+}
+
+TEST(Station, ScreenshotIsTheWindowAsItClosed) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions run;
+  run.length_m = 3.0;
+  StationOptions o;
+  o.log = LogWith("station_screenshot", run);
+  o.offscreen = true;
+  o.max_seconds = 1.5;  // 12 s of log at speed 8: past its end, where replay time stops
+  o.speed = 8.0;
+  o.width_px = 640, o.height_px = 360;
+  o.screenshot = fs::path(testing::OutputDir()) / "station_screenshot.png";
+  fs::remove(o.screenshot);
+  const StationResult r = RunStation(o);
+  EXPECT_TRUE(r.problems.empty()) << r.problems.front();
+  EXPECT_NE(r.link.find("link ok"), std::string::npos) << r.link;
+  const cv::Mat image = cv::imread(o.screenshot.string());
+  ASSERT_FALSE(image.empty()) << o.screenshot;
+  EXPECT_EQ(image.cols, 640);
+  EXPECT_EQ(image.rows, 360);
+  const cv::Vec3b hud = image.at<cv::Vec3b>(5, 636);  // BGR: link ok at the log's last message
+  EXPECT_NEAR(hud[1], 255 * palette::kHudOk.g, 2);
+  EXPECT_NEAR(hud[2], 255 * palette::kHudOk.r, 2);
+}
+
+// Live, the heartbeat stops when the vehicle ends its run: after its
+// run_finished event the HUD turns slate, not the lost link's red.
+TEST(Station, HudIsSlateOnceTheRunFinished) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions run;
+  run.length_m = 3.0;
+  LogTimeline timeline = testing::RunUpTo(run, 6.0);
+  timeline.Seek(timeline.duration_s());
+  StationOptions o;
+  o.width_px = 640, o.height_px = 360;
+  Canvas canvas(o.width_px, o.height_px);
+  StationScene scene(canvas, o);
+  scene.Update(timeline.model(), timeline.now_utime() + 5'000'000, 1.0);
+  const cv::Mat image = canvas.Render();
+  const cv::Vec3b hud = image.at<cv::Vec3b>(26, 636);  // BGR, clear of the text
+  EXPECT_NEAR(hud[0], 255 * palette::kHudFinished.b, 2);
+  EXPECT_NEAR(hud[1], 255 * palette::kHudFinished.g, 2);
+  EXPECT_NEAR(hud[2], 255 * palette::kHudFinished.r, 2);
+  cv::imwrite((fs::path(testing::OutputDir()) / "station_finished.png").string(), image);
 }
 
 TEST(Station, SaysWhatIsWrongWithBadLogs) {
