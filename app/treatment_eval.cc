@@ -238,6 +238,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.crop_footprint_per_plant = false;  // each feature's own box
   o.abstain_merged = false;
   o.split_merged = false;  // whole blobs, labelled and mapped
+  o.weed_height_m = s.camera.virtual_plane_height_m;  // everything on the one plane (§2.3.8)
   // Table 7.2's operating points: size ς in pixels and clustering radius r
   // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).
   double size_px = 80.0, radius_m = 0.1;

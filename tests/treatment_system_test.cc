@@ -88,12 +88,13 @@ TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
   const TreatmentEvaluation e = EvaluateTreatment(o);
   EXPECT_EQ(e.mode, "weed");
   ASSERT_GT(e.ours.weeds, 50);
-  // 31 % of the weeds clear of the crop are sprayed here (5 seeds × 40 m:
-  // 35 %): small weeds are lost to segmentation (≈ 30 % of weed pixels
-  // labelled soil) or stay below the map's majority threshold. The crop is
-  // spared: none of 96 hit here, 3 of 1103 on 5 seeds × 40 m (a 15 m
-  // field of this seed is a harder one: 5 of 63).
-  EXPECT_GT(e.ours.weed_hit_rate_clear, 0.25);
+  // 81 % of the weeds clear of the crop are sprayed here, since weed blobs
+  // are located at the weeds' own height (31 % when they stood on the
+  // crop's 0.1 m plane, 20 cm beyond where they are 3 m ahead): the rest
+  // are small weeds lost to segmentation (≈ 30 % of weed pixels labelled
+  // soil) or below the map's majority threshold. The crop is spared: none
+  // of 96 hit here.
+  EXPECT_GT(e.ours.weed_hit_rate_clear, 0.7);
   EXPECT_LT(e.ours.crop_hit_rate, 0.03);
 }
 

@@ -13,6 +13,7 @@ OptionErrors TreatmentOptions::Validate() const {
   add(Prefixed("registry", registry.Validate()));
   RequireInRange(e, "crop_footprint_scale", crop_footprint_scale, 0.05, 2.0);
   RequireInRange(e, "weed_footprint_scale", weed_footprint_scale, 0.05, 2.0);
+  RequireInRange(e, "weed_height_m", weed_height_m, 0.0, 0.5);
   return e;
 }
 
@@ -56,9 +57,8 @@ void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& c
                                    const cv::Rect& box, bool crop,
                                    std::optional<Eigen::Vector2d> centre_m) {
   const double scale = crop ? options_.crop_footprint_scale : options_.weed_footprint_scale;
-  // Weeds stand lower than crops: their footprints stay on the virtual plane.
-  const std::optional<double> plane =
-      crop ? std::optional<double>(CropPlaneHeight(centroid_px)) : std::nullopt;
+  // Weeds stand lower than crops: their footprints lie at the weeds' height.
+  const std::optional<double> plane = crop ? CropPlaneHeight(centroid_px) : options_.weed_height_m;
   const std::optional<Quad> q = FootprintOnPlane(camera_, centroid_px, box.x, box.y,
                                                  box.x + box.width, box.y + box.height, scale, plane);
   if (!q) return;
@@ -229,8 +229,10 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
       // frames.
       AddFootprint(pose, blob, d.crop);
     }
+    const std::optional<Eigen::Vector2d> low =
+        d.crop ? std::nullopt : camera_.ImageToPlane(blob.centroid_px, options_.weed_height_m);
     frame_.plant_ids[i] = registry_.Observe(
-        VehicleToBed(pose, features[i].ground_m), d, options_.classifier,
+        VehicleToBed(pose, low ? *low : features[i].ground_m), d, options_.classifier,
         d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
                      : std::nullopt);
   }
