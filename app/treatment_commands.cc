@@ -71,6 +71,7 @@ nlohmann::json MetricsJson(const TreatmentMetrics& m) {
       {"shots", m.shots},
       {"map_resets", m.map_resets},
       {"plants_recorded", m.plants_recorded},
+      {"plants_confirmed", m.plants_confirmed},
   };
 }
 

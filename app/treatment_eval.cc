@@ -139,7 +139,7 @@ struct Sums {
   SprayScore spray;
   Confusion confusion{};
   int frames_classified = 0, ticks = 0, ticks_fail_safe = 0, shots = 0, map_resets = 0,
-      plants = 0;
+      plants = 0, confirmed = 0;
 };
 
 void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
@@ -153,6 +153,7 @@ void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
   sums.shots += shots;
   sums.map_resets += c.system.map_resets();
   sums.plants += static_cast<int>(c.system.registry().records().size());
+  for (const treatment::PlantRecord& r : c.system.registry().records()) sums.confirmed += r.confirmed();
 }
 
 double Ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
@@ -197,6 +198,7 @@ TreatmentMetrics Finish(const Sums& s) {
   m.shots = s.shots;
   m.map_resets = s.map_resets;
   m.plants_recorded = s.plants;
+  m.plants_confirmed = s.confirmed;
   return m;
 }
 

@@ -60,6 +60,7 @@ struct TreatmentMetrics {
   double crop_pixel_rate_of_plant = 0.0, weed_pixel_fpr_of_plant = 0.0;
   int frames_classified = 0;
   int ticks = 0, ticks_fail_safe = 0, shots = 0, map_resets = 0, plants_recorded = 0;
+  int plants_confirmed = 0;  // records that are plants, not passing detections (PlantRecord::confirmed)
 };
 
 struct TreatmentEvaluation {

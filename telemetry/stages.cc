@@ -281,7 +281,7 @@ void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::F
   for (int id : ids) {
     if (id < 0) continue;
     const treatment::PlantRecord& r = system_.registry().records()[static_cast<size_t>(id)];
-    if (r.observations < 2) continue;
+    if (!r.confirmed()) continue;
     PlantObservation p;
     p.id = r.id;
     p.kind = r.crop() ? PlantKind::kCrop : PlantKind::kWeed;

@@ -108,4 +108,11 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
   }
 }
 
+void PlantRegistry::CountView(const Quad& view) {
+  constexpr std::ptrdiff_t kLookBack = 400;
+  for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < kLookBack; ++it) {
+    if (InsideQuad(view, it->bed_m)) ++it->frames_in_view;
+  }
+}
+
 }  // namespace plantscale::treatment

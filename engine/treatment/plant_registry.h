@@ -24,6 +24,7 @@ struct PlantRecord {
   int id = 0;
   Eigen::Vector2d bed_m{0.0, 0.0};  // mean of its observations
   int observations = 0;
+  int frames_in_view = 0;  // frames whose view held its position (seen or not)
   int crop_votes = 0;
   int weed_votes = 0;
   double area_m2 = 0.0;  // largest seen
@@ -38,6 +39,15 @@ struct PlantRecord {
   std::string why;
 
   bool crop() const { return crop_votes >= weed_votes && crop_votes > 0; }
+  // A plant rather than a passing detection (a speck, a stone's glint, a leaf
+  // cut off for a frame or two): seen in at least 3 frames and in at least
+  // 40 % of the (8 or more) frames that looked at its place. Measured on
+  // field seed 1: crop records are seen in 100 % of their frames (median),
+  // weed records seen 20 times or more in 76 %, while the 1 532 records
+  // seen once or twice were seen in 11–17 % of theirs.
+  bool confirmed() const {
+    return observations >= 3 && frames_in_view >= 8 && observations >= 0.4 * frames_in_view;
+  }
 };
 
 struct RegistryOptions {
@@ -60,6 +70,8 @@ class PlantRegistry {
   void MarkSprayed(const NozzleTarget& strip, std::vector<int>* newly = nullptr);
   // Reads the map under every record and writes its `why`.
   void Explain(const TreatmentMap& map, SprayMode mode, const classify::ClassifierOptions& c);
+  // A frame looked at this part of the bed: the records inside it were in view.
+  void CountView(const Quad& view);
   void Clear() { records_.clear(); }
 
   const std::vector<PlantRecord>& records() const { return records_; }

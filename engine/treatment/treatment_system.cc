@@ -165,10 +165,12 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   const BedPose pose = BedPoseFromGrid(utime, state, tracker.forward_distance_m(), 0.0);
   // What the camera saw this frame (the image on the plane): soil there is soil.
   const double w = camera_.width(), h = camera_.height();
+  std::optional<Quad> seen;  // on the bed
   if (const std::optional<Quad> view = FootprintOnPlane(camera_, {0.5 * w, 0.5 * h}, 0.0, 0.0, w, h, 1.0)) {
     Quad bed;
     for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*view)[i]);
     map_.MarkObserved(bed);
+    seen = bed;
   }
   struct PlantFootprint {
     int m, n;
@@ -236,6 +238,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
         d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
                      : std::nullopt);
   }
+  if (seen) registry_.CountView(*seen);
   for (const PlantFootprint& p : plants) {
     if (!(p.area_px > 0.0)) continue;
     const std::optional<Eigen::Vector2d> centre =

@@ -321,6 +321,39 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   EXPECT_NE(b.why.find("not sprayed"), std::string::npos) << b.why;
 }
 
+TEST(PlantRegistry, APlantIsConfirmedByBeingSeenWhereverItWasInView) {
+  PlantRegistry reg;
+  classify::ClassifierOptions c;
+  classify::BlobDecision weed;
+  weed.area_m2 = 0.002;
+  // The camera's view on the bed: 1 m square, moving 0.05 m per frame.
+  const auto view = [](double y0) {
+    return Quad{Eigen::Vector2d(-0.5, y0), Eigen::Vector2d(0.5, y0), Eigen::Vector2d(0.5, y0 + 1.0),
+                Eigen::Vector2d(-0.5, y0 + 1.0)};
+  };
+  // A weed at y = 1.5 seen in every other frame of the 20 that hold it, and
+  // a speck at y = 1.2 seen in 3 of them.
+  for (int f = 0; f < 20; ++f) {
+    if (f % 2 == 0) reg.Observe({0.1, 1.5}, weed, c);
+    if (f == 3 || f == 4 || f == 12) reg.Observe({-0.2, 1.2}, weed, c);
+    reg.CountView(view(0.55 + 0.05 * f));
+  }
+  ASSERT_EQ(reg.records().size(), 2u);
+  const PlantRecord& plant = reg.records()[0];
+  const PlantRecord& speck = reg.records()[1];
+  EXPECT_EQ(plant.observations, 10);
+  EXPECT_GE(plant.frames_in_view, 14);
+  EXPECT_TRUE(plant.confirmed());
+  EXPECT_EQ(speck.observations, 3);
+  EXPECT_GE(speck.frames_in_view, 8);
+  EXPECT_FALSE(speck.confirmed());
+  // Seen twice only: never confirmed, however briefly it was in view.
+  PlantRecord twice;
+  twice.observations = 2;
+  twice.frames_in_view = 2;
+  EXPECT_FALSE(twice.confirmed());
+}
+
 TEST(PlantRegistry, LeafFragmentsOfOneGridPlantMakeOneRecord) {
   PlantRegistry reg;  // merge radius 50 mm
   classify::ClassifierOptions c;
