@@ -23,6 +23,8 @@ struct TreatmentArgs {
   std::optional<double> latency_ms;
   std::optional<double> true_latency_ms;
   std::optional<double> footprint_scale;
+  std::optional<double> weed_footprint_scale;
+  std::optional<double> weed_height_mm;
   std::optional<double> cell_mm;
   std::optional<double> min_crop_area_m2;
   std::optional<double> assoc_chi2;
@@ -138,6 +140,8 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.latency_ms) o.treatment.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
   if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
+  if (a.weed_footprint_scale) o.treatment.weed_footprint_scale = *a.weed_footprint_scale;
+  if (a.weed_height_mm) o.treatment.weed_height_m = 1e-3 * *a.weed_height_mm;
   if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
   if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
   if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
@@ -207,6 +211,12 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--footprint-scale", args.footprint_scale,
                   "crop footprint: bounding box scaled about the centroid (1: thesis)")
       ->check(CLI::Range(0.05, 2.0));
+  cmd->add_option("--weed-footprint-scale", args.weed_footprint_scale,
+                  "weed footprint: bounding box scaled about the centroid (default 1)")
+      ->check(CLI::Range(0.05, 2.0));
+  cmd->add_option("--weed-height-mm", args.weed_height_mm,
+                  "height at which weed blobs are located (default 5)")
+      ->check(CLI::Range(0.0, 500.0));
   cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default 13.33)")
       ->check(CLI::Range(1.0, 500.0));
   cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
