@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ranges>
 
 namespace plantscale::treatment {
 
@@ -20,29 +21,25 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
                            const std::optional<Eigen::Vector2d>& predicted_bed) {
   PlantRecord* best = nullptr;
   const bool grid = d.associated && predicted_bed.has_value();
-  // Records are appended as plants come into view; look back from the newest.
-  constexpr std::ptrdiff_t kLookBack = 400;
   if (grid) {
     double best_d = options_.merge_radius_m;
-    for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < kLookBack;
-         ++it) {
-      if (!it->grid_plant) continue;
-      const double dist = (it->grid_bed_m - *predicted_bed).norm();
+    for (PlantRecord& r : Recent() | std::views::reverse) {
+      if (!r.grid_plant) continue;
+      const double dist = (r.grid_bed_m - *predicted_bed).norm();
       if (dist <= best_d) {
         best_d = dist;
-        best = &*it;
+        best = &r;
       }
     }
   }
   if (!best) {
     double best_d = options_.merge_radius_m;
-    for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < kLookBack;
-         ++it) {
-      if (grid && it->grid_plant) continue;  // another grid plant's record
-      const double dist = (it->bed_m - bed).norm();
+    for (PlantRecord& r : Recent() | std::views::reverse) {
+      if (grid && r.grid_plant) continue;  // another grid plant's record
+      const double dist = (r.bed_m - bed).norm();
       if (dist <= best_d) {
         best_d = dist;
-        best = &*it;
+        best = &r;
       }
     }
   }
@@ -109,9 +106,8 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
 }
 
 void PlantRegistry::CountView(const Quad& view) {
-  constexpr std::ptrdiff_t kLookBack = 400;
-  for (auto it = records_.rbegin(); it != records_.rend() && it - records_.rbegin() < kLookBack; ++it) {
-    if (InsideQuad(view, it->bed_m)) ++it->frames_in_view;
+  for (PlantRecord& r : Recent()) {
+    if (InsideQuad(view, r.bed_m)) ++r.frames_in_view;
   }
 }
 

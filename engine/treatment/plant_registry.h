@@ -10,7 +10,9 @@
 
 #include <Eigen/Core>
 #include <limits>
+#include <algorithm>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -77,6 +79,14 @@ class PlantRegistry {
   const std::vector<PlantRecord>& records() const { return records_; }
 
  private:
+  // Records are appended as plants come into view: the newest kLookBack are
+  // the ones that can still be in view (newest first when reversed).
+  static constexpr size_t kLookBack = 400;
+  std::span<PlantRecord> Recent() {
+    const size_t n = std::min(records_.size(), kLookBack);
+    return {records_.data() + records_.size() - n, n};
+  }
+
   RegistryOptions options_;
   std::vector<PlantRecord> records_;  // bed y increasing, within a merge radius
 };
