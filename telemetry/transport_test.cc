@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace plantscale::telemetry {
@@ -20,6 +23,26 @@ TEST(LcmTransport, MemqDeliversBytesToRegexSubscribers) {
   while (t.Handle(0)) {
   }
   EXPECT_EQ(got, (std::vector<std::string>{"PLANTSCALE_A:abc", "PLANTSCALE_B:de"}));
+}
+
+// A station busy rendering lets messages pile up: the end-of-run flush is
+// some 16 map tiles and an event at once, and LCM's default queue of 30 per
+// subscription dropped the rest without a word. Only udpm:// queues (memq://
+// hands each message over directly), so this runs inside
+// tests/telemetry_udpm_test.sh's private network namespace, which sets
+// PLANTSCALE_TEST_UDPM_URL.
+TEST(LcmTransport, ABurstWaitingToBeHandledIsKeptWhole) {
+  const char* url = std::getenv("PLANTSCALE_TEST_UDPM_URL");
+  if (url == nullptr) GTEST_SKIP() << "needs udpm:// (run by tests/telemetry_udpm_test.sh)";
+  LcmTransport t(url);
+  int got = 0;
+  t.Subscribe("PLANTSCALE_BURST", [&](const ReceivedMessage&) { ++got; });
+  const std::string tile(2000, 't');
+  for (int i = 0; i < 200; ++i) t.Publish("PLANTSCALE_BURST", tile.data(), tile.size());
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // all of it waits in LCM
+  while (t.Handle(100)) {
+  }
+  EXPECT_EQ(got, 200);
 }
 
 TEST(LcmTransport, HandleTimesOutWhenNothingArrives) {
