@@ -47,9 +47,9 @@ TEST(MotionSystem, FirstSetUpCorrespondencesAndDrift) {
 
 // Second set-up (vertical camera at 1.77 m, f = 28 mm, 0.25 m/s, 140 ms),
 // driven 0.2 m beside the central row so that two rows are whole in view;
-// 200 frames (7 m, the length of the paper's map).
+// 200 frames (7 m, the length of the paper's map), 9 seeds.
 TEST(MotionSystem, SecondSetUpMosaicRowFit) {
-  MotionEvalOptions o = Sequences(3, 200);
+  MotionEvalOptions o = Sequences(9, 200);
   o.sim.camera = LoadCamera("sanchiz_pla_90", DefaultConfigDir());
   o.sim.vehicle.speed_m_s = 0.25;
   o.sim.vehicle.frame_rate_hz = 1.0 / 0.14;
@@ -69,9 +69,11 @@ TEST(MotionSystem, SecondSetUpMosaicRowFit) {
   EXPECT_NEAR(e.ours.row_spacing_m, e.true_row_spacing_m, 0.003);
   EXPECT_LT(e.ours.row_fit_rms_m, 0.0228);
   EXPECT_LT(e.ours.row_angle_deg, 0.42);
-  // Drift without odometry: ours 1.3 cm/m, the paper's method 3.0 cm/m.
-  EXPECT_LT(e.ours.drift_cm_per_m, 1.6);
-  EXPECT_LT(e.ours.drift_cm_per_m, 0.6 * e.paper.drift_cm_per_m);
+  // Drift without odometry: ours 0.70 cm/m, the paper's method 3.04 cm/m;
+  // 0.82 when the rotation prior returned to the first frame's heading
+  // instead of the rows' fitted on the map (row_heading.h).
+  EXPECT_LT(e.ours.drift_cm_per_m, 0.78);
+  EXPECT_LT(e.ours.drift_cm_per_m, 0.3 * e.paper.drift_cm_per_m);
 }
 
 }  // namespace

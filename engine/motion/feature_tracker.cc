@@ -29,6 +29,20 @@ const char* Name(LockLoss loss) {
   return "?";
 }
 
+namespace {
+
+// Length of the image's footprint on the feature plane along the forward
+// axis, down the middle column.
+double ViewAlong(const geometry::CameraModel& camera, const Eigen::Matrix3d& plane_to_image) {
+  const Eigen::Matrix3d image_to_plane = plane_to_image.inverse();
+  const double u = 0.5 * camera.width();
+  const Eigen::Vector2d top = (image_to_plane * Eigen::Vector3d(u, 0.0, 1.0)).hnormalized();
+  const Eigen::Vector2d bottom = (image_to_plane * Eigen::Vector3d(u, camera.height(), 1.0)).hnormalized();
+  return std::max(1e-3, std::abs(top.y() - bottom.y()));
+}
+
+}  // namespace
+
 OptionErrors TrackerOptions::Validate() const {
   OptionErrors e;
   RequireInRange(e, "depth_tolerance", depth_tolerance, 0.0, 1.0, false, false);
@@ -39,6 +53,7 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "hough.join_m", hough.join_m);
   if (hough.open_m < hough.join_m) e.push_back({"hough.open_m", "must be >= hough.join_m"});
   RequirePositive(e, "residual_gate_m", residual_gate_m);
+  for (OptionError& r : Prefixed("row_heading", row_heading.Validate())) e.push_back(std::move(r));
   RequireNonNegative(e, "similarity_weight_m", similarity_weight_m);
   if (min_matches < 2) e.push_back({"min_matches", "must be >= 2"});
   RequirePositive(e, "max_motion_change_m", max_motion_change_m);
@@ -58,7 +73,8 @@ OptionErrors TrackerOptions::Validate() const {
 FeatureTracker::FeatureTracker(const TrackerOptions& options, const geometry::CameraModel& camera,
                                double plane_height_m)
     : options_(options), camera_(camera),
-      plane_to_image_(camera.PlaneToImageHomography(plane_height_m)) {
+      plane_to_image_(camera.PlaneToImageHomography(plane_height_m)),
+      view_along_m_(ViewAlong(camera, plane_to_image_)), rows_(options.row_heading) {
   ThrowIfInvalid("TrackerOptions", options.Validate());
   const bool paper = options.method == MotionMethod::kPaper;
   p0_ = Isotropic(paper ? options.track_sigma_m : options.measurement_sigma_m);
@@ -70,7 +86,40 @@ FeatureTracker::FeatureTracker(const TrackerOptions& options, const geometry::Ca
 
 double FeatureTracker::PriorPsi() const {
   if (options_.method == MotionMethod::kPaper) return last_motion_.psi_rad;
-  return options_.heading_return_per_frame * result_.pose.heading_rad;
+  return options_.heading_return_per_frame * WrapAngle(result_.pose.heading_rad - row_heading_rad());
+}
+
+double FeatureTracker::row_heading_rad() const {
+  const bool fit = options_.method == MotionMethod::kOurs && options_.fit_row_heading;
+  return fit ? row_heading_rad_ : 0.0;
+}
+
+void FeatureTracker::MapRows(std::span<const Feature> features, double driven_m) {
+  rows_.Drive(driven_m);
+  // A plant stays in view for view_along_m_ / driven_m frames: each frame's
+  // sighting weighs its share, so every plant counts about once.
+  const double weight = first_mapped_ ? std::min(1.0, driven_m / view_along_m_) : 1.0;
+  first_mapped_ = true;
+  std::vector<std::pair<int, Eigen::Vector2d>> sums;  // blob, Σ position
+  std::vector<int> counts;
+  for (const Feature& f : features) {
+    if (!f.on_plant) continue;
+    auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& s) { return s.first == f.blob; });
+    if (it == sums.end()) {
+      sums.emplace_back(f.blob, Eigen::Vector2d::Zero());
+      counts.push_back(0);
+      it = sums.end() - 1;
+    }
+    it->second += f.position_m;
+    ++counts[static_cast<size_t>(it - sums.begin())];
+  }
+  for (size_t b = 0; b < sums.size(); ++b) {
+    rows_.Add(result_.pose.ToWorld(sums[b].second / static_cast<double>(counts[b])), weight);
+  }
+  if (options_.method == MotionMethod::kOurs && options_.fit_row_heading) {
+    row_heading_rad_ = rows_.heading_rad();
+    row_fit_ = rows_.fit();
+  }
 }
 
 PlanarMotion FeatureTracker::CoastingMotion() const {
@@ -100,6 +149,7 @@ const FrameMotion& FeatureTracker::Update(std::span<const Feature> features) {
     Coast(features, LockLoss::kFirstFrame, true);
     result_.motion = PlanarMotion{};
     result_.pose = VehiclePose2{};
+    MapRows(features, 0.0);
   } else if (features.empty()) {
     Coast(features, LockLoss::kNoFeatures, false);
   } else if (IsDuplicate(features)) {
@@ -286,6 +336,7 @@ void FeatureTracker::Advance(std::span<const Feature> features, const std::vecto
   result_.loss = LockLoss::kNone;
   result_.motion = motion;
   result_.pose = Compose(result_.pose, motion);
+  MapRows(features, motion.t_m.norm());
   last_motion_ = motion;
   smoothed_t_m_ += options_.translation_smoothing * (motion.t_m - smoothed_t_m_);
   DropLostTracks();
@@ -299,6 +350,7 @@ void FeatureTracker::Coast(std::span<const Feature> features, LockLoss loss, boo
   result_.loss = loss;
   result_.motion = coast;
   result_.pose = Compose(result_.pose, coast);
+  if (loss != LockLoss::kFirstFrame) MapRows(features, coast.t_m.norm());
   DropLostTracks();
   result_.new_track_of_feature.assign(features.size(), -1);
   if (add_tracks) StartTracks(features, std::vector<uint8_t>(features.size(), 0));

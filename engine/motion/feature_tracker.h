@@ -13,8 +13,9 @@
 //           matches), greedy final matching on residual plus similarity,
 //           a refit without outliers, tight filter noise, and a
 //           row-following motion prior: the rotation ψ is fused with
-//           ψ_prior = κ·H (H the heading from the first frame, which the
-//           vehicle steers back to along the rows), because with the small
+//           ψ_prior = κ·(H − H_rows) (H the heading from the first frame,
+//           H_rows the rows' heading fitted to the crop plants mapped so far,
+//           row_heading.h, which the vehicle steers back to), because with the small
 //           overlap of consecutive frames the features span a few
 //           centimetres and ψ alone is not observable to the 0.01° per
 //           frame that 1 cm/m of drift needs. Coasting uses the smoothed
@@ -34,6 +35,7 @@
 #include "engine/motion/feature_filter.h"
 #include "engine/motion/features.h"
 #include "engine/motion/planar_motion.h"
+#include "engine/motion/row_heading.h"
 
 namespace plantscale::motion {
 
@@ -57,6 +59,10 @@ struct TrackerOptions {
   double min_matched_fraction = 0.3;
   double rotation_prior_sigma_rad = 0.2 * M_PI / 180.0;  // kOurs: σ of ψ about ψ_prior
   double heading_return_per_frame = 0.05;               // kOurs: κ
+  // kOurs: H_rows from the mapped crop plants (false: H_rows = 0, the first
+  // frame's heading).
+  bool fit_row_heading = true;
+  RowHeadingOptions row_heading;
   double translation_smoothing = 0.3;   // kOurs: weight of a new t in the coasting motion
   double max_motion_change_m = 0.12;  // a jump in t from the previous frame loses lock
   double max_rotation_change_rad = 5.0 * M_PI / 180.0;
@@ -108,6 +114,10 @@ class FeatureTracker {
   const FrameMotion& Update(std::span<const Feature> features);
   const std::vector<Track>& tracks() const { return tracks_; }
   const VehiclePose2& pose() const { return result_.pose; }
+  // The rows' heading the rotation prior returns to (0 for kPaper or
+  // without fit_row_heading).
+  double row_heading_rad() const;
+  const RowHeadingFit& row_fit() const { return row_fit_; }
   const TrackerOptions& options() const { return options_; }
 
  private:
@@ -131,6 +141,8 @@ class FeatureTracker {
   void Coast(std::span<const Feature> features, LockLoss loss, bool add_tracks);
   void StartTracks(std::span<const Feature> features, const std::vector<uint8_t>& matched);
   void DropLostTracks();
+  // Maps the crop blobs' features at the current pose into the row fit.
+  void MapRows(std::span<const Feature> features, double driven_m);
 
   TrackerOptions options_;
   geometry::CameraModel camera_;
@@ -141,6 +153,11 @@ class FeatureTracker {
   PlanarMotion last_motion_;
   Eigen::Vector2d smoothed_t_m_{0.0, 0.0};
   FrameMotion result_;
+  double view_along_m_;           // the image's footprint along y on the feature plane
+  RowHeading rows_;
+  RowHeadingFit row_fit_;         // rows_.fit() after the last frame
+  double row_heading_rad_ = 0.0;  // rows_.heading_rad() after the last frame
+  bool first_mapped_ = false;
   int64_t next_id_ = 1;
   bool first_ = true;
 };

@@ -1,0 +1,157 @@
+#include "engine/motion/row_heading.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace plantscale::motion {
+namespace {
+
+// Histogram of x + tan H·y over [lo, lo + bins·bin).
+std::vector<double> Histogram(const std::vector<Eigen::Vector3d>& p, double tan_h, double lo,
+                              double bin, int bins) {
+  std::vector<double> h(static_cast<size_t>(bins), 0.0);
+  for (const Eigen::Vector3d& q : p) {
+    const int i = static_cast<int>(std::floor((q.x() + tan_h * q.y() - lo) / bin));
+    if (i >= 0 && i < bins) h[static_cast<size_t>(i)] += q.z();
+  }
+  return h;
+}
+
+// Sum of squares of the histogram smoothed by (1, 2, 1) / 4: how sharp the rows are.
+double Sharpness(const std::vector<double>& h) {
+  double s = 0.0;
+  for (size_t i = 0; i < h.size(); ++i) {
+    const double l = i > 0 ? h[i - 1] : 0.0, r = i + 1 < h.size() ? h[i + 1] : 0.0;
+    const double v = 0.25 * (l + 2.0 * h[i] + r);
+    s += v * v;
+  }
+  return s;
+}
+
+}  // namespace
+
+OptionErrors RowHeadingOptions::Validate() const {
+  OptionErrors e;
+  RequirePositive(e, "bin_m", bin_m);
+  RequireInRange(e, "max_angle_rad", max_angle_rad, 0.0, 0.5 * M_PI, false, false);
+  RequirePositive(e, "coarse_step_rad", coarse_step_rad);
+  RequirePositive(e, "fine_step_rad", fine_step_rad);
+  RequireInRange(e, "peak_fraction", peak_fraction, 0.0, 1.0);
+  RequirePositive(e, "gate_m", gate_m);
+  RequirePositive(e, "scatter_m", scatter_m);
+  RequirePositive(e, "initial_sigma_rad", initial_sigma_rad);
+  RequirePositive(e, "memory_m", memory_m);
+  RequireNonNegative(e, "refit_every_m", refit_every_m);
+  return e;
+}
+
+RowHeadingFit FitRowHeading(const std::vector<Eigen::Vector3d>& p, const RowHeadingOptions& o) {
+  RowHeadingFit fit;
+  fit.sigma_rad = std::numeric_limits<double>::infinity();
+  if (p.size() < 2) return fit;
+  // Step 1: the sharpest heading. x + tan H·y stays within the points' x
+  // range widened by the largest |y| times tan(max angle).
+  double x_lo = p[0].x(), x_hi = x_lo, y_abs = 0.0;
+  for (const Eigen::Vector3d& q : p) {
+    x_lo = std::min(x_lo, q.x()), x_hi = std::max(x_hi, q.x()), y_abs = std::max(y_abs, std::abs(q.y()));
+  }
+  const double reach = y_abs * std::tan(o.max_angle_rad) + 2.0 * o.bin_m;
+  const double lo = x_lo - reach;
+  const int bins = static_cast<int>(std::ceil((x_hi + reach - lo) / o.bin_m)) + 1;
+  auto best_in = [&](double from, double to, double step, double start) {
+    double best = start, best_score = -1.0;
+    for (double h = from; h <= to + 1e-12; h += step) {
+      const double s = Sharpness(Histogram(p, std::tan(h), lo, o.bin_m, bins));
+      if (s > best_score) best_score = s, best = h;
+    }
+    return best;
+  };
+  double h = best_in(-o.max_angle_rad, o.max_angle_rad, o.coarse_step_rad, 0.0);
+  h = best_in(h - o.coarse_step_rad, h + o.coarse_step_rad, o.fine_step_rad, h);
+  // Step 2: rows at the peaks of 2-bin-wide histogram, then the pooled fit.
+  const std::vector<double> hist = Histogram(p, std::tan(h), lo, 2.0 * o.bin_m, (bins + 1) / 2);
+  const double top = *std::max_element(hist.begin(), hist.end());
+  std::vector<double> row_x;  // of x + tan H·y at the peaks
+  for (size_t i = 0; i < hist.size(); ++i) {
+    const double l = i > 0 ? hist[i - 1] : 0.0, r = i + 1 < hist.size() ? hist[i + 1] : 0.0;
+    if (hist[i] > 0.0 && hist[i] >= l && hist[i] > r && hist[i] >= o.peak_fraction * top)
+      row_x.push_back(lo + (static_cast<double>(i) + 0.5) * 2.0 * o.bin_m);
+  }
+  double slope = -std::tan(h);
+  std::vector<double> syy, sxy, sw, sx, sy;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    const size_t n = row_x.size();
+    sw.assign(n, 0.0), sx.assign(n, 0.0), sy.assign(n, 0.0), sxy.assign(n, 0.0), syy.assign(n, 0.0);
+    for (const Eigen::Vector3d& q : p) {
+      // The row whose line is nearest, within the gate.
+      size_t best = n;
+      double nearest = o.gate_m;
+      for (size_t r = 0; r < n; ++r) {
+        const double d = std::abs(q.x() - slope * q.y() - row_x[r]);
+        if (d <= nearest) nearest = d, best = r;
+      }
+      if (best == n) continue;
+      const double w = q.z();
+      sw[best] += w, sx[best] += w * q.x(), sy[best] += w * q.y();
+      sxy[best] += w * q.x() * q.y(), syy[best] += w * q.y() * q.y();
+    }
+    double num = 0.0, den = 0.0;
+    for (size_t r = 0; r < n; ++r) {
+      if (sw[r] <= 0.0) continue;
+      num += sxy[r] - sx[r] * sy[r] / sw[r];
+      den += syy[r] - sy[r] * sy[r] / sw[r];
+    }
+    if (den <= 1e-12) return fit;
+    slope = num / den;
+    fit.sigma_rad = o.scatter_m / std::sqrt(den);
+    for (size_t r = 0; r < n; ++r) {
+      if (sw[r] > 0.0) row_x[r] = (sx[r] - slope * sy[r]) / sw[r];
+    }
+  }
+  fit.heading_rad = -std::atan(slope);
+  fit.rows = 0;
+  fit.weight = 0.0;
+  for (double w : sw) fit.rows += w > 0.0 ? 1 : 0, fit.weight += w;
+  return fit;
+}
+
+RowHeading::RowHeading(const RowHeadingOptions& options) : options_(options) {
+  ThrowIfInvalid("RowHeadingOptions", options.Validate());
+  fit_.sigma_rad = std::numeric_limits<double>::infinity();
+}
+
+void RowHeading::Drive(double distance_m) {
+  odometer_m_ += std::abs(distance_m);
+  while (!points_.empty() && odometer_m_ - points_.front().odometer_m > options_.memory_m) {
+    points_.pop_front();
+    changed_ = true;
+  }
+}
+
+void RowHeading::Add(const Eigen::Vector2d& world_m, double weight) {
+  points_.push_back({Eigen::Vector3d(world_m.x(), world_m.y(), weight), odometer_m_});
+  changed_ = true;
+}
+
+const RowHeadingFit& RowHeading::fit() {
+  if (changed_ && (fitted_at_m_ < 0.0 || odometer_m_ - fitted_at_m_ >= options_.refit_every_m)) {
+    std::vector<Eigen::Vector3d> p;
+    p.reserve(points_.size());
+    for (const Point& q : points_) p.push_back(q.xyw);
+    fit_ = FitRowHeading(p, options_);
+    fitted_at_m_ = odometer_m_;
+    changed_ = false;
+  }
+  return fit_;
+}
+
+double RowHeading::heading_rad() {
+  const RowHeadingFit& f = fit();
+  if (!std::isfinite(f.sigma_rad) || f.sigma_rad <= 0.0) return 0.0;
+  const double p_fit = 1.0 / (f.sigma_rad * f.sigma_rad);
+  const double p0 = 1.0 / (options_.initial_sigma_rad * options_.initial_sigma_rad);
+  return p_fit * f.heading_rad / (p_fit + p0);
+}
+
+}  // namespace plantscale::motion
