@@ -51,7 +51,11 @@ std::string HudLine(const RunModel& model, int64_t now_utime) {
   out << (grid ? FilterModeName(grid->mode) : std::string("NO GRID")) << "  ";
   const double fps = model.health() ? model.health()->frame_rate_hz : 0.0;
   out << std::setprecision(1) << fps << " fps  " << model.distance_m() << " m  ";
-  out << model.Link(now_utime).text;
+  const LinkStatus link = model.Link(now_utime);
+  // Once the run finished the heartbeat's age only grows: the HUD leaves it
+  // out so that the line fits a narrow window (the station's closing line
+  // keeps it).
+  out << (link.level == LinkLevel::kFinished ? link.text.substr(0, link.text.find(';')) : link.text);
   return out.str();
 }
 

@@ -180,7 +180,10 @@ LinkStatus RunModel::Link(int64_t now_utime) const {
   }
   link.heartbeat_age_s = 1e-6 * static_cast<double>(now_utime - health_recv_utime_);
   const bool lost = link.heartbeat_age_s > options_.link_lost_after_s;
-  if (lost && finished_) {
+  // The vehicle said the run is over: the link's quiet from then on is the
+  // run's end, and a log replayed to its end (where time stops with the last
+  // message, so the heartbeat never ages) says so too.
+  if (finished_) {
     link.level = LinkLevel::kFinished;
     link.text = finished_->text + "; last heartbeat " + Seconds(link.heartbeat_age_s) + " ago";
     return link;

@@ -73,6 +73,8 @@ TEST(RunModel, QuietAfterTheRunFinishedIsNotALostLink) {
   o.length_m = 2.0;  // 4 s at 0.5 m/s; run_finished at 4.0 s
   LogTimeline run = testing::RunUpTo(o, 4.0);
   run.Seek(run.duration_s());
+  // A log replayed to its end: time stops with the last message.
+  EXPECT_EQ(run.model().Link(run.now_utime()).level, LinkLevel::kFinished);
   const int64_t later = run.now_utime() + 10'000'000;
   const LinkStatus link = run.model().Link(later);
   EXPECT_EQ(link.level, LinkLevel::kFinished);

@@ -112,14 +112,17 @@ TEST(Station, ScreenshotIsTheWindowAsItClosed) {
   fs::remove(o.screenshot);
   const StationResult r = RunStation(o);
   EXPECT_TRUE(r.problems.empty()) << r.problems.front();
-  EXPECT_NE(r.link.find("link ok"), std::string::npos) << r.link;
+  // The log ends with the vehicle's run_finished: replayed to its end the
+  // station says the run finished (the heartbeat never ages there).
+  EXPECT_NE(r.link.find("run finished after"), std::string::npos) << r.link;
   const cv::Mat image = cv::imread(o.screenshot.string());
   ASSERT_FALSE(image.empty()) << o.screenshot;
   EXPECT_EQ(image.cols, 640);
   EXPECT_EQ(image.rows, 360);
-  const cv::Vec3b hud = image.at<cv::Vec3b>(5, 636);  // BGR: link ok at the log's last message
-  EXPECT_NEAR(hud[1], 255 * palette::kHudOk.g, 2);
-  EXPECT_NEAR(hud[2], 255 * palette::kHudOk.r, 2);
+  const cv::Vec3b hud = image.at<cv::Vec3b>(5, 636);  // BGR, at the log's last message
+  EXPECT_NEAR(hud[0], 255 * palette::kHudFinished.b, 2);
+  EXPECT_NEAR(hud[1], 255 * palette::kHudFinished.g, 2);
+  EXPECT_NEAR(hud[2], 255 * palette::kHudFinished.r, 2);
 }
 
 // Live, the heartbeat stops when the vehicle ends its run: after its
