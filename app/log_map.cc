@@ -38,6 +38,7 @@ std::string WhyText(int why) {
     case plantscale_plant_t::WHY_TOO_LARGE: return "not crop: too large";
     case plantscale_plant_t::WHY_FAILSAFE: return "not sprayed: fail-safe";
     case plantscale_plant_t::WHY_MODE: return "not sprayed: treatment mode";
+    case plantscale_plant_t::WHY_NOT_REACHED: return "not sprayed: the run ended before the bar reached it";
     default: return "undecided";
   }
 }

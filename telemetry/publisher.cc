@@ -87,10 +87,15 @@ bool Publisher::PublishBytes(const std::string& channel, const Bytes& bytes, int
     ++c.dropped_budget;
     return false;
   }
+  Send(channel, bytes);
+  return true;
+}
+
+void Publisher::Send(const std::string& channel, const Bytes& bytes) {
   transport_.Publish(channel, bytes.data(), bytes.size());
+  ChannelCounters& c = counters_[channel];
   ++c.sent;
   c.bytes += static_cast<int64_t>(bytes.size());
-  return true;
 }
 
 int64_t Publisher::total_dropped() const {

@@ -55,6 +55,13 @@ class Publisher {
     message.seq = counters_[channel].sent;
     return PublishBytes(channel, Encode(message), message.utime);
   }
+  // The run's last word on `channel` (the end-of-run plant records): sent
+  // whatever the rate limit and the budget say, since it comes once.
+  template <typename Message>
+  void PublishFinal(const std::string& channel, Message message) {
+    message.seq = counters_[channel].sent;
+    Send(channel, Encode(message));
+  }
   // True when a message on `channel` at `utime` would pass the rate limit
   // (lets a stage skip costly work, e.g. JPEG encoding, for a dropped frame).
   bool Due(const std::string& channel, int64_t utime) const;
@@ -68,6 +75,7 @@ class Publisher {
   bool RateAllows(const std::string& channel, int64_t utime);
   bool BudgetAllows(const ChannelLimit& limit, size_t bytes, int64_t utime);
   const ChannelLimit& LimitFor(const std::string& channel) const;
+  void Send(const std::string& channel, const Bytes& bytes);
 
   Transport& transport_;
   PublisherOptions options_;

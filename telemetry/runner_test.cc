@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <plantscale_lcmtypes/plantscale_map_tile_t.hpp>
+#include <plantscale_lcmtypes/plantscale_plant_t.hpp>
 
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
@@ -119,6 +120,17 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
   }
   EXPECT_GT(crops, 10);
   EXPECT_GE(sprayed, 0.8 * crops) << sprayed << " of " << crops;
+  // The last plant list, sent at the run's end, names the crops still ahead
+  // of the bar as not reached, so the report tells them from misses.
+  int not_reached = 0;
+  for (const PlantObservation& p : snap.plants) {
+    if (p.why != plantscale_plant_t::WHY_NOT_REACHED) continue;
+    ++not_reached;
+    EXPECT_EQ(p.kind, PlantKind::kCrop);
+    EXPECT_FALSE(p.sprayed);
+    EXPECT_GT(p.position_m.y(), bar_y);
+  }
+  EXPECT_GE(not_reached, 5);  // the camera looks 2–4 m past the bar, 3 rows
   // The tiles: treated cells where the bar sprayed, soil only where the
   // camera looked (the map behind the start is unknown, not soil).
   std::map<int, int> cells;

@@ -183,6 +183,18 @@ int WhyCode(const treatment::PlantRecord& r) {
   return plantscale_plant_t::WHY_OUTSIDE_REGION;
 }
 
+PlantObservation Observation(const treatment::PlantRecord& r, int why) {
+  PlantObservation p;
+  p.id = r.id;
+  p.kind = r.crop() ? PlantKind::kCrop : PlantKind::kWeed;
+  p.position_m = r.bed_m;
+  p.size_m2 = r.area_m2;
+  p.sprayed = r.sprayed;
+  p.why = why;
+  p.distance_to_crop_m = std::isfinite(r.distance_m) ? r.distance_m : -1.0;
+  return p;
+}
+
 }  // namespace
 
 TreatmentStage::TreatmentStage(const geometry::CameraModel& camera,
@@ -258,6 +270,7 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
                                                        blobs, features_, blob_of_feature_,
                                                        segmentation_.mask());
   if (t.map_reset) next_tile_row_ = 0;
+  last_frame_index_ = frame.frame_index;
   PublishPlants(frame, t, publisher);
   PublishNozzles(frame.utime, publisher);
   PublishTiles(frame.utime, publisher);
@@ -281,16 +294,7 @@ void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::F
   for (int id : ids) {
     if (id < 0) continue;
     const treatment::PlantRecord& r = system_.registry().records()[static_cast<size_t>(id)];
-    if (!r.confirmed()) continue;
-    PlantObservation p;
-    p.id = r.id;
-    p.kind = r.crop() ? PlantKind::kCrop : PlantKind::kWeed;
-    p.position_m = r.bed_m;
-    p.size_m2 = r.area_m2;
-    p.sprayed = r.sprayed;
-    p.why = WhyCode(r);
-    p.distance_to_crop_m = std::isfinite(r.distance_m) ? r.distance_m : -1.0;
-    plants.push_back(p);
+    if (r.confirmed()) plants.push_back(Observation(r, WhyCode(r)));
   }
   ids.clear();
   last_plants_utime_ = frame.utime;
@@ -309,7 +313,32 @@ void TreatmentStage::PublishNozzles(int64_t utime, Publisher& publisher) {
   publisher.Publish(channels::kNozzles, ToLcm(bar, utime));
 }
 
-void TreatmentStage::Finish(int64_t utime, Publisher& publisher) { PublishTiles(utime, publisher, true); }
+// The run's end: the plant records changed since the last list, and every
+// plant the mode would spray that the bar had not yet reached, so that the
+// station, log and report tell them from misses; then the last tile rows.
+void TreatmentStage::Finish(int64_t utime, Publisher& publisher) {
+  const double bar_y =
+      tracker_.tracker().forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
+  const bool spray_crop = system_.options().scheduler.mode == treatment::SprayMode::kCrop;
+  const std::vector<int> sprayed = system_.TakeNewlySprayed();
+  changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
+  std::vector<int>& ids = changed_plants_;
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<PlantObservation> plants;
+  const std::vector<treatment::PlantRecord>& records = system_.registry().records();
+  for (const treatment::PlantRecord& r : records) {
+    if (!r.confirmed()) continue;
+    const bool target = r.crop() == spray_crop;
+    const bool not_reached = target && !r.sprayed && r.bed_m.y() > bar_y;
+    const bool changed = std::binary_search(ids.begin(), ids.end(), r.id);
+    if (not_reached || changed)
+      plants.push_back(Observation(r, not_reached ? plantscale_plant_t::WHY_NOT_REACHED : WhyCode(r)));
+  }
+  ids.clear();
+  if (!plants.empty()) publisher.PublishFinal(channels::kPlants, ToLcm(plants, utime, last_frame_index_));
+  PublishTiles(utime, publisher, true);
+}
 
 bool TreatmentStage::TileRowObserved(int tile_row) const {
   const treatment::TreatmentMap& map = system_.map();

@@ -139,6 +139,7 @@ class TreatmentStage : public Stage {
   int tile_revision_ = 0;
   std::vector<int> changed_plants_;  // record ids since the last plant list
   int64_t last_plants_utime_ = -1;
+  int64_t last_frame_index_ = 0;     // of the last frame processed
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on

@@ -26,8 +26,13 @@ void SummaryTable(std::ostringstream& out, const RunSummary& s) {
   }
   Row(out, "plants seen", std::to_string(s.plants_seen) + " (" + std::to_string(s.crop_seen) +
                               " crop, " + std::to_string(s.weeds_seen) + " weeds)");
-  Row(out, "crop treated", std::to_string(s.crop_treated));
-  Row(out, "weeds treated", std::to_string(s.weeds_treated));
+  const auto treated = [](int n, int not_reached) {
+    return std::to_string(n) + (not_reached > 0 ? " (" + std::to_string(not_reached) +
+                                                      " more the bar had not reached when the run ended)"
+                                                : std::string());
+  };
+  Row(out, "crop treated", treated(s.crop_treated, s.crop_not_reached));
+  Row(out, "weeds treated", treated(s.weeds_treated, s.weeds_not_reached));
   Row(out, "nozzle shots", std::to_string(s.shots));
   Row(out, "area treated",
       s.area_treated_m2 ? Fixed(*s.area_treated_m2, 3) + " m²" : std::string("n/a (no map tiles in log)"));

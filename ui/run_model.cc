@@ -229,6 +229,9 @@ RunSummary RunModel::Summary() const {
     s.weeds_seen += weed;
     s.crop_treated += crop && r.plant.sprayed;
     s.weeds_treated += weed && r.plant.sprayed;
+    const bool not_reached = !r.plant.sprayed && r.plant.why == plantscale_plant_t::WHY_NOT_REACHED;
+    s.crop_not_reached += crop && not_reached;
+    s.weeds_not_reached += weed && not_reached;
   }
   s.plants_seen = static_cast<int>(registry_.size());
   s.shots = static_cast<int>(shots_.size());

@@ -71,6 +71,9 @@ struct RunSummary {
   int weeds_seen = 0;
   int crop_treated = 0;
   int weeds_treated = 0;
+  // Not sprayed because the run ended before the bar reached them.
+  int crop_not_reached = 0;
+  int weeds_not_reached = 0;
   int shots = 0;
   std::optional<double> area_treated_m2;  // from TREATED map cells; none without tiles
   std::vector<std::string> faults;        // vehicle faults, error events, bad messages

@@ -88,6 +88,34 @@ TEST(RunModel, QuietAfterTheRunFinishedIsNotALostLink) {
   EXPECT_TRUE(Mentions(cut.model().Problems(cut.now_utime()), "LINK LOST"));
 }
 
+// The vehicle's last plant list names the plants the bar never reached (the
+// run ended first): the summary keeps them apart from the treated and the
+// missed.
+TEST(RunModel, PlantsTheBarNeverReachedAreCountedApart) {
+  RunModel model;
+  tm::TelemetrySnapshot s;
+  s.channels[tm::channels::kPlants].last_recv_utime = 1'000'000;
+  const auto plant = [](int64_t id, tm::PlantKind kind, bool sprayed, int why) {
+    tm::PlantObservation p;
+    p.id = id;
+    p.kind = kind;
+    p.sprayed = sprayed;
+    p.why = why;
+    return p;
+  };
+  s.plants = {plant(1, tm::PlantKind::kCrop, true, plantscale_plant_t::WHY_CROP_IN_REGION),
+              plant(2, tm::PlantKind::kCrop, false, plantscale_plant_t::WHY_CROP_IN_REGION),
+              plant(3, tm::PlantKind::kCrop, false, plantscale_plant_t::WHY_NOT_REACHED),
+              plant(4, tm::PlantKind::kCrop, false, plantscale_plant_t::WHY_NOT_REACHED),
+              plant(5, tm::PlantKind::kWeed, false, plantscale_plant_t::WHY_OUTSIDE_REGION)};
+  model.Observe(tm::channels::kPlants, true, s);
+  const RunSummary sum = model.Summary();
+  EXPECT_EQ(sum.crop_seen, 4);
+  EXPECT_EQ(sum.crop_treated, 1);
+  EXPECT_EQ(sum.crop_not_reached, 2);  // crop 2 is a miss
+  EXPECT_EQ(sum.weeds_not_reached, 0);
+}
+
 TEST(RunModel, VehicleRestartIsSaidAndCounted) {
   SyntheticRunOptions o;
   o.restart_at_s = 4.0;

@@ -16,8 +16,8 @@ namespace plantscale::ui {
 // plantscale_plant_t::WHY_* in words.
 inline std::string WhyName(int why) {
   static const char* names[] = {"undecided", "crop in its region", "outside crop region", "too small",
-                                "too large", "failsafe", "spray mode"};
-  return why >= 0 && why < 7 ? names[why] : "?";
+                                "too large", "failsafe", "spray mode", "run ended before the bar"};
+  return why >= 0 && why < 8 ? names[why] : "?";
 }
 
 class StationController {
