@@ -37,6 +37,7 @@ struct TreatmentArgs {
   bool footprint_per_blob = false;
   bool footprint_at_centroid = false;
   bool abstain_merged = false;
+  bool clipped_on_crop_votes_weed = false;
   double costs_ratio = 1.0;
   bool json = false;
 };
@@ -155,6 +156,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
   if (a.footprint_at_centroid) o.treatment.crop_footprint_at_tracked_plant = false;
   if (a.abstain_merged) o.treatment.abstain_merged = true;
+  if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
@@ -241,6 +243,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
   cmd->add_flag("--abstain-merged", args.abstain_merged,
                 "unassociated blobs covering a predicted crop cast no weed votes");
+  cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,
+                "blobs cut by the image border that cover a predicted crop vote weed (the old way)");
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "map and label merged blobs whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");

@@ -239,6 +239,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
   o.crop_footprint_per_plant = false;  // each feature's own box
   o.abstain_merged = false;
+  o.clipped_on_crop_votes_weed = true;  // every feature's box votes
   o.split_merged = false;  // whole blobs, labelled and mapped
   o.weed_height_m = s.camera.virtual_plane_height_m;  // everything on the one plane (§2.3.8)
   // Table 7.2's operating points: size ς in pixels and clustering radius r

@@ -100,6 +100,10 @@ TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
   // of 96 hit here.
   EXPECT_GT(e.ours.weed_hit_rate_clear, 0.7);
   EXPECT_LT(e.ours.crop_hit_rate, 0.03);
+  // Blobs cut by the image border over a predicted crop cast no weed votes:
+  // 79.2 % of the weeds clear of crop on 23.0 % of the bed here (81.1 % on
+  // 31.1 % when those crops, entering and leaving the view, voted weed).
+  EXPECT_LT(e.ours.treated_area_fraction, 0.26);
 }
 
 // Crop pixels labelled crop (thesis tables 7.5–7.8: 95.1, 78.9, 81.7, 55.0 %

@@ -36,6 +36,11 @@ bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
   });
 }
 
+bool TreatmentSystem::VotesWeed(const classify::BlobDecision& d, const vision::Blob& b,
+                                std::span<const classify::PredictedCrop> crops) const {
+  return !d.clipped || options_.clipped_on_crop_votes_weed || !CoversAPrediction(b, crops);
+}
+
 TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
                                  const TreatmentOptions& options, NozzleSink sink)
     : camera_(camera),
@@ -222,14 +227,14 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
           AddFootprint(pose, moment[k] / area[k], box[k], true);
         }
       }
-      AddFootprint(pose, blob, false);
+      if (VotesWeed(d, blob, crops)) AddFootprint(pose, blob, false);
     } else if (options_.abstain_merged && maybe_merged && CoversAPrediction(blob, crops)) {
       // Possibly merged plants: no votes either way.
     } else if (!d.crop || d.associated) {
       // Crop by size alone (merged plants): its centroid is no plant's
       // centre, so it marks no cells; the plants in it are mapped from other
       // frames.
-      AddFootprint(pose, blob, d.crop);
+      if (d.crop || VotesWeed(d, blob, crops)) AddFootprint(pose, blob, d.crop);
     }
     const std::optional<Eigen::Vector2d> low =
         d.crop ? std::nullopt : camera_.ImageToPlane(blob.centroid_px, options_.weed_height_m);
