@@ -95,7 +95,9 @@ double FeatureTracker::row_heading_rad() const {
 }
 
 void FeatureTracker::MapRows(std::span<const Feature> features, double driven_m) {
+  if (options_.method != MotionMethod::kOurs || !options_.fit_row_heading) return;
   rows_.Drive(driven_m);
+  if (features.empty()) return;
   // A plant stays in view for view_along_m_ / driven_m frames: each frame's
   // sighting weighs its share, so every plant counts about once.
   const double weight = first_mapped_ ? std::min(1.0, driven_m / view_along_m_) : 1.0;
@@ -116,10 +118,8 @@ void FeatureTracker::MapRows(std::span<const Feature> features, double driven_m)
   for (size_t b = 0; b < sums.size(); ++b) {
     rows_.Add(result_.pose.ToWorld(sums[b].second / static_cast<double>(counts[b])), weight);
   }
-  if (options_.method == MotionMethod::kOurs && options_.fit_row_heading) {
-    row_heading_rad_ = rows_.heading_rad();
-    row_fit_ = rows_.fit();
-  }
+  row_heading_rad_ = rows_.heading_rad();
+  row_fit_ = rows_.fit();
 }
 
 PlanarMotion FeatureTracker::CoastingMotion() const {
@@ -350,7 +350,9 @@ void FeatureTracker::Coast(std::span<const Feature> features, LockLoss loss, boo
   result_.loss = loss;
   result_.motion = coast;
   result_.pose = Compose(result_.pose, coast);
-  if (loss != LockLoss::kFirstFrame) MapRows(features, coast.t_m.norm());
+  // A frame that did not lock maps nothing (it may be a duplicate, or of
+  // another place); the distance still counts.
+  if (loss != LockLoss::kFirstFrame) MapRows({}, coast.t_m.norm());
   DropLostTracks();
   result_.new_track_of_feature.assign(features.size(), -1);
   if (add_tracks) StartTracks(features, std::vector<uint8_t>(features.size(), 0));
