@@ -38,7 +38,8 @@ bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
 
 bool TreatmentSystem::VotesWeed(const classify::BlobDecision& d, const vision::Blob& b,
                                 std::span<const classify::PredictedCrop> crops) const {
-  return !d.clipped || options_.clipped_on_crop_votes_weed || !CoversAPrediction(b, crops);
+  if (!d.clipped || options_.clipped_on_crop_votes_weed) return true;
+  return !CoversAPrediction(b, crops);
 }
 
 TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
