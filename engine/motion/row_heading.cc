@@ -43,13 +43,31 @@ OptionErrors RowHeadingOptions::Validate() const {
   RequirePositive(e, "initial_sigma_rad", initial_sigma_rad);
   RequirePositive(e, "memory_m", memory_m);
   RequireNonNegative(e, "refit_every_m", refit_every_m);
+  RequirePositive(e, "max_half_width_m", max_half_width_m);
   return e;
 }
 
-RowHeadingFit FitRowHeading(const std::vector<Eigen::Vector3d>& p, const RowHeadingOptions& o) {
+RowHeadingFit FitRowHeading(const std::vector<Eigen::Vector3d>& points, const RowHeadingOptions& o) {
   RowHeadingFit fit;
   fit.sigma_rad = std::numeric_limits<double>::infinity();
+  std::vector<Eigen::Vector3d> p;
+  p.reserve(points.size());
+  for (const Eigen::Vector3d& q : points) {
+    if (q.allFinite() && q.z() > 0.0) p.push_back(q);
+  }
   if (p.size() < 2) return fit;
+  {
+    // A stray far point must not stretch the histogram over kilometres.
+    std::vector<double> xs;
+    xs.reserve(p.size());
+    for (const Eigen::Vector3d& q : p) xs.push_back(q.x());
+    std::nth_element(xs.begin(), xs.begin() + static_cast<long>(xs.size() / 2), xs.end());
+    const double median = xs[xs.size() / 2];
+    std::erase_if(p, [&](const Eigen::Vector3d& q) {
+      return std::abs(q.x() - median) > o.max_half_width_m || std::abs(q.y()) > 1e6;
+    });
+    if (p.size() < 2) return fit;
+  }
   // Step 1: the sharpest heading. x + tan H·y stays within the points' x
   // range widened by the largest |y| times tan(max angle).
   double x_lo = p[0].x(), x_hi = x_lo, y_abs = 0.0;

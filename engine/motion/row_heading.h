@@ -39,6 +39,7 @@ struct RowHeadingOptions {
   double initial_sigma_rad = 0.7 * M_PI / 180.0;  // σ of the first frame's heading off the rows
   double memory_m = 20.0;          // plants mapped longer ago than this are forgotten
   double refit_every_m = 0.05;     // the fit is redone after this much driving
+  double max_half_width_m = 10.0;  // points farther across than this from the median are ignored
 
   OptionErrors Validate() const;
 };
@@ -50,7 +51,8 @@ struct RowHeadingFit {
   double weight = 0.0;       // of the points in the rows
 };
 
-// The fit of step 1–2 on points (x, y) with weights.
+// The fit of step 1–2 on points (x, y) with weights; non-finite points and
+// points more than max_half_width_m across from the median are ignored.
 RowHeadingFit FitRowHeading(const std::vector<Eigen::Vector3d>& points_xyw,
                             const RowHeadingOptions& options);
 

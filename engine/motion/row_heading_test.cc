@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace plantscale::motion {
@@ -50,6 +51,18 @@ TEST(RowHeading, FitFindsTheRowsHeadingAmongWeeds) {
   // Rows at the far side of the search range are found as well.
   EXPECT_NEAR(FitRowHeading(Field(-2.5 * kDeg, 6.0, 0.012, 30, 9), o).heading_rad, -2.5 * kDeg,
               0.1 * kDeg);
+}
+
+// A NaN and a point a kilometre away (a pixel projected near the horizon)
+// change nothing.
+TEST(RowHeading, NonFiniteAndFarPointsAreIgnored) {
+  std::vector<Eigen::Vector3d> p = Field(0.6 * kDeg, 6.0, 0.012, 0, 4);
+  const double clean = FitRowHeading(p, RowHeadingOptions{}).heading_rad;
+  p.emplace_back(std::numeric_limits<double>::quiet_NaN(), 1.0, 1.0);
+  p.emplace_back(1000.0, 2.0, 1.0);
+  p.emplace_back(0.0, std::numeric_limits<double>::infinity(), 1.0);
+  EXPECT_EQ(FitRowHeading(p, RowHeadingOptions{}).heading_rad, clean);
+  EXPECT_NEAR(clean, 0.6 * kDeg, 0.15 * kDeg);
 }
 
 TEST(RowHeading, PointsWithoutSpreadAlongTheRowsSayNothing) {
