@@ -282,21 +282,16 @@ void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publi
 void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
                                    Publisher& publisher) {
   if (t.map_reset) changed_plants_.clear();
-  const std::vector<int> sprayed = system_.TakeNewlySprayed();
-  changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
+  NoteNewlySprayed();
   if (!t.classified) return;
   changed_plants_.insert(changed_plants_.end(), t.plant_ids.begin(), t.plant_ids.end());
   if (last_plants_utime_ >= 0 && frame.utime - last_plants_utime_ < kPlantListPeriodUs) return;
-  std::vector<int>& ids = changed_plants_;
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   std::vector<PlantObservation> plants;
-  for (int id : ids) {
+  for (int id : TakeChangedPlants()) {
     if (id < 0) continue;
     const treatment::PlantRecord& r = system_.registry().records()[static_cast<size_t>(id)];
     if (r.confirmed()) plants.push_back(Observation(r, WhyCode(r)));
   }
-  ids.clear();
   last_plants_utime_ = frame.utime;
   publisher.Publish(channels::kPlants, ToLcm(plants, frame.utime, frame.frame_index));
 }
@@ -317,14 +312,10 @@ void TreatmentStage::PublishNozzles(int64_t utime, Publisher& publisher) {
 // plant the mode would spray that the bar had not yet reached, so that the
 // station, log and report tell them from misses; then the last tile rows.
 void TreatmentStage::Finish(int64_t utime, Publisher& publisher) {
-  const double bar_y =
-      tracker_.tracker().forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
+  const double bar_y = BarY();
   const bool spray_crop = system_.options().scheduler.mode == treatment::SprayMode::kCrop;
-  const std::vector<int> sprayed = system_.TakeNewlySprayed();
-  changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
-  std::vector<int>& ids = changed_plants_;
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  NoteNewlySprayed();
+  const std::vector<int> ids = TakeChangedPlants();
   std::vector<PlantObservation> plants;
   const std::vector<treatment::PlantRecord>& records = system_.registry().records();
   for (const treatment::PlantRecord& r : records) {
@@ -335,9 +326,25 @@ void TreatmentStage::Finish(int64_t utime, Publisher& publisher) {
     if (not_reached || changed)
       plants.push_back(Observation(r, not_reached ? plantscale_plant_t::WHY_NOT_REACHED : WhyCode(r)));
   }
-  ids.clear();
   if (!plants.empty()) publisher.PublishFinal(channels::kPlants, ToLcm(plants, utime, last_frame_index_));
   PublishTiles(utime, publisher, true);
+}
+
+void TreatmentStage::NoteNewlySprayed() {
+  const std::vector<int> sprayed = system_.TakeNewlySprayed();
+  changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
+}
+
+std::vector<int> TreatmentStage::TakeChangedPlants() {
+  std::vector<int> ids = std::move(changed_plants_);
+  changed_plants_.clear();
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+double TreatmentStage::BarY() const {
+  return tracker_.tracker().forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
 }
 
 bool TreatmentStage::TileRowObserved(int tile_row) const {
@@ -356,7 +363,7 @@ void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher, bool to_t
   const tracking::GridTracker& tracker = tracker_.tracker();
   if (!to_the_end && tracker.mode() != tracking::TrackerMode::kTracking) return;
   const treatment::TreatmentMap& map = system_.map();
-  const double bar_y = tracker.forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
+  const double bar_y = BarY();
   const double edge = kTileCells * map.options().cell_m;
   int last_seen = -1;  // the last tile row with a cell the camera saw
   if (to_the_end) {

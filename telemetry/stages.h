@@ -112,8 +112,10 @@ class TreatmentStage : public Stage {
                  treatment::NozzleSink sink = {});
   std::string name() const override { return "treatment"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
-  // The tile rows the bar has not passed yet, up to the last one the camera
-  // saw: the run is over, so they are final too.
+  // The run is over: one last plant list (the records changed since the
+  // previous one, and the plants the bar never reached, WHY_NOT_REACHED),
+  // then the tile rows the bar has not passed, up to the last one the camera
+  // saw, which are final too.
   void Finish(int64_t utime, Publisher& publisher) override;
   const treatment::TreatmentSystem& system() const { return system_; }
 
@@ -124,6 +126,12 @@ class TreatmentStage : public Stage {
   void PublishNozzles(int64_t utime, Publisher& publisher);
   void PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end = false);
   bool TileRowObserved(int tile_row) const;
+  // The plants sprayed since the last call join the changed records.
+  void NoteNewlySprayed();
+  // The changed record ids, sorted and unique; the list starts again.
+  std::vector<int> TakeChangedPlants();
+  // The spray bar's bed y: the vehicle's, less the bar's offset behind it.
+  double BarY() const;
 
   treatment::TreatmentSystem system_;
   const SegmentationStage& segmentation_;

@@ -26,10 +26,11 @@ namespace {
 constexpr int kQueueCapacity = 10000;
 
 // The station drains its socket between renders while a vehicle under --fast
-// (or the end-of-run flush of some 16 map tiles) publishes in bursts; the
-// kernel's default 208 KiB receive buffer dropped the tail of such a burst.
-// udpm:// URLs without an explicit recv_buf_size ask for 2 MiB (the kernel caps
-// it at net.core.rmem_max without failing).
+// (or the end-of-run flush of some 16 map tiles) publishes in bursts. The
+// drops seen were LCM's queue (below), not the socket; still, the kernel's
+// default 208 KiB receive buffer holds only a few such tiles, so udpm:// URLs
+// without an explicit recv_buf_size ask for 2 MiB (the kernel caps it at
+// net.core.rmem_max without failing).
 std::string WithReceiveBuffer(const std::string& url) {
   if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
   return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=2097152";

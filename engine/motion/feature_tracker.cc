@@ -86,12 +86,7 @@ FeatureTracker::FeatureTracker(const TrackerOptions& options, const geometry::Ca
 
 double FeatureTracker::PriorPsi() const {
   if (options_.method == MotionMethod::kPaper) return last_motion_.psi_rad;
-  return options_.heading_return_per_frame * WrapAngle(result_.pose.heading_rad - row_heading_rad());
-}
-
-double FeatureTracker::row_heading_rad() const {
-  const bool fit = options_.method == MotionMethod::kOurs && options_.fit_row_heading;
-  return fit ? row_heading_rad_ : 0.0;
+  return options_.heading_return_per_frame * WrapAngle(result_.pose.heading_rad - row_heading_rad_);
 }
 
 void FeatureTracker::MapRows(std::span<const Feature> features, double driven_m) {
@@ -102,21 +97,21 @@ void FeatureTracker::MapRows(std::span<const Feature> features, double driven_m)
   // sighting weighs its share, so every plant counts about once.
   const double weight = first_mapped_ ? std::min(1.0, driven_m / view_along_m_) : 1.0;
   first_mapped_ = true;
-  std::vector<std::pair<int, Eigen::Vector2d>> sums;  // blob, Σ position
-  std::vector<int> counts;
+  struct BlobSum {
+    int blob;
+    Eigen::Vector2d sum_m;
+    int count;
+  };
+  std::vector<BlobSum> blobs;  // each crop blob's features: their mean is its position
   for (const Feature& f : features) {
     if (!f.on_plant) continue;
-    auto it = std::find_if(sums.begin(), sums.end(), [&](const auto& s) { return s.first == f.blob; });
-    if (it == sums.end()) {
-      sums.emplace_back(f.blob, Eigen::Vector2d::Zero());
-      counts.push_back(0);
-      it = sums.end() - 1;
-    }
-    it->second += f.position_m;
-    ++counts[static_cast<size_t>(it - sums.begin())];
+    auto it = std::find_if(blobs.begin(), blobs.end(), [&](const BlobSum& b) { return b.blob == f.blob; });
+    if (it == blobs.end()) it = blobs.insert(blobs.end(), {f.blob, Eigen::Vector2d::Zero(), 0});
+    it->sum_m += f.position_m;
+    ++it->count;
   }
-  for (size_t b = 0; b < sums.size(); ++b) {
-    rows_.Add(result_.pose.ToWorld(sums[b].second / static_cast<double>(counts[b])), weight);
+  for (const BlobSum& b : blobs) {
+    rows_.Add(result_.pose.ToWorld(b.sum_m / static_cast<double>(b.count)), weight);
   }
   row_heading_rad_ = rows_.heading_rad();
   row_fit_ = rows_.fit();

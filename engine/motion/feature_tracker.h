@@ -115,8 +115,8 @@ class FeatureTracker {
   const std::vector<Track>& tracks() const { return tracks_; }
   const VehiclePose2& pose() const { return result_.pose; }
   // The rows' heading the rotation prior returns to (0 for kPaper or
-  // without fit_row_heading).
-  double row_heading_rad() const;
+  // without fit_row_heading, which map no rows).
+  double row_heading_rad() const { return row_heading_rad_; }
   const RowHeadingFit& row_fit() const { return row_fit_; }
   const TrackerOptions& options() const { return options_; }
 

@@ -145,10 +145,10 @@ class TreatmentSystem {
 
  private:
   void AddFootprint(const BedPose& pose, const vision::Blob& blob, bool crop);
-  // Does the blob's bounding box, projected, hold a predicted crop position?
   // False for a clipped blob covering a predicted crop (clipped_on_crop_votes_weed).
   bool VotesWeed(const classify::BlobDecision& d, const vision::Blob& b,
                  std::span<const classify::PredictedCrop> crops) const;
+  // Does the blob's bounding box, projected, hold a predicted crop position?
   bool CoversAPrediction(const vision::Blob& blob,
                          std::span<const classify::PredictedCrop> crops) const;
   // centre_m: where to centre the footprint (vehicle frame), when not on
