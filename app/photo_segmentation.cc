@@ -70,6 +70,12 @@ vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
   const bool colour = image.channels() == 3 && !IsGreyInColour(image);
   input = image;
   if (image.channels() == 3 && !colour) cv::cvtColor(image, input, cv::COLOR_BGR2GRAY);
+  // Photographs of unknown scale: light smoothing only (sensor noise, JPEG
+  // blocks); the 2 px of the product default were set on 640×480 frames.
+  o.smoothing_px = 1.0;
+  // Soil seen between a real plant's leaves is soil: a photograph's mask
+  // keeps its holes (the simulator's holes are shaded leaf, holes.h).
+  o.fill_holes_max_fraction = 0.0;
   std::string method = r.method == "auto" ? (colour ? "exg" : "nir") : r.method;
   if (method == "nir" && colour) {
     throw DataError("--method nir needs a near-infrared (single-channel) image; this one is "
@@ -92,9 +98,6 @@ vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
   } else {
     o.method = vision::ThresholdMethod::kLocal;
   }
-  // Photographs of unknown scale: light smoothing only (sensor noise, JPEG
-  // blocks); the 2 px of the product default were set on 640×480 frames.
-  o.smoothing_px = 1.0;
   const double pixels = static_cast<double>(image.total());
   o.blobs.min_area_px = r.min_area_px > 0 ? r.min_area_px
                                           : std::max(4, static_cast<int>(std::ceil(1e-5 * pixels)));

@@ -254,8 +254,7 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
   result.preset = options.sim.preset;
   result.seeds = options.seeds;
   vision::SegmenterOptions ours_seg;
-  vision::SegmenterOptions thesis_seg;
-  thesis_seg.method = vision::ThresholdMethod::kAdaptive;
+  const vision::SegmenterOptions thesis_seg = vision::ThesisSegmenterOptions();
 
   std::vector<double> init_frames_ours, init_frames_thesis;
   int trials_ours = 0, successes_ours = 0, trials_thesis = 0, successes_thesis = 0;

@@ -27,6 +27,7 @@ struct TreatmentArgs {
   std::optional<double> weed_height_mm;
   std::optional<double> cell_mm;
   std::optional<double> min_crop_area_m2;
+  std::optional<double> crop_size_fraction;
   std::optional<double> assoc_chi2;
   std::optional<double> sure_crop_area_m2;
   std::optional<int> majority;
@@ -145,6 +146,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.weed_height_mm) o.treatment.weed_height_m = 1e-3 * *a.weed_height_mm;
   if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
   if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
+  if (a.crop_size_fraction) o.treatment.classifier.crop_size_fraction = *a.crop_size_fraction;
   if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
   if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
@@ -222,6 +224,9 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default 13.33)")
       ->check(CLI::Range(1.0, 500.0));
   cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--crop-size-fraction", args.crop_size_fraction,
+                  "size filter at most this fraction of the crops' median area (0: fixed)")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--assoc-chi2", args.assoc_chi2, "classifier association region (chi2)")
       ->check(CLI::PositiveNumber);

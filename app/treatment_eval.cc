@@ -253,6 +253,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   const double pixel_m2 =
       std::abs(camera.ImageToPlaneJacobian(centre, s.camera.virtual_plane_height_m).determinant());
   o.classifier.min_crop_area_m2 = size_px * pixel_m2;
+  o.classifier.crop_size_fraction = 0.0;  // ς fixed by hand per sequence
   // A Euclidean radius r: γ² ≤ 1 with σ = r (the tracker's H P Hᵀ is small).
   o.classifier.assoc_chi2 = 1.0;
   o.classifier.feature_sd_m = radius_m;
@@ -270,8 +271,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
   result.preset = options.sim.preset;
   result.seeds = options.seeds;
   result.mode = treatment::ToString(options.treatment.scheduler.mode);
-  vision::SegmenterOptions thesis_seg;
-  thesis_seg.method = vision::ThresholdMethod::kAdaptive;
+  const vision::SegmenterOptions thesis_seg = vision::ThesisSegmenterOptions();
   const double latency = options.true_valve_latency_s >= 0.0
                              ? options.true_valve_latency_s
                              : options.treatment.scheduler.bar.valve_latency_s;

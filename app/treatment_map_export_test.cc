@@ -17,7 +17,7 @@ TEST(TreatmentMapExport, ClassLayerAndPlantsCarryOver) {
   classify::BlobDecision d;
   d.crop = true;
   d.area_m2 = 0.0314;
-  registry.Observe({0.1, 1.0}, d, c);
+  registry.Observe({0.1, 1.0}, d);
   registry.Explain(map, treatment::SprayMode::kCrop, c);
   const maps::CropMap out = ToCropMap(map, registry);
   EXPECT_NEAR(out.grid().resolution_m(), 0.01333, 1e-12);

@@ -35,7 +35,7 @@ void BM_Classify(benchmark::State& state) {
   std::vector<tracking::Feature> features(static_cast<size_t>(state.range(0)));
   for (auto& f : features) f.ground_m = {x(rng), y(rng)}, f.area_m2 = a(rng);
   const std::vector<classify::PredictedCrop> crops = Grid();
-  const classify::CropClassifier classifier(classify::ClassifierOptions{});
+  classify::CropClassifier classifier(classify::ClassifierOptions{});
   geometry::Matrix5d p = geometry::Matrix5d::Identity() * 1e-5;
   std::vector<classify::BlobDecision> out;
   for (auto _ : state) {

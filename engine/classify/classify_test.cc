@@ -56,7 +56,7 @@ TEST(CropClassifier, AssociationCovarianceIsHPHtPlusGroundNoise) {
 TEST(CropClassifier, SizeFilterThenAssociation) {
   ClassifierOptions o = SizeAndGate();
   o.sure_crop_area_m2 = 0.03;
-  const CropClassifier classifier(o);
+  CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.475, 1.0)};
   const std::vector<tracking::Feature> features = {
       FeatureAt(0.01, 1.01, 0.02),         // big, near: crop
@@ -74,19 +74,65 @@ TEST(CropClassifier, SizeFilterThenAssociation) {
   EXPECT_FALSE(d[2].crop);
   EXPECT_NEAR(d[2].distance_m, 0.2, 1e-12);
   EXPECT_TRUE(d[3].crop);
-  EXPECT_EQ(d[3].n, 0);
+  EXPECT_EQ(d[3].n, 0);  // the second prediction (n defaults to 0 in CropAt)
+  EXPECT_NEAR(d[3].distance_m, std::hypot(0.005, 0.01), 1e-12);
   // A blob bigger than any weed is crop wherever it lies (merged plants).
   const std::vector<tracking::Feature> merged = {FeatureAt(0.2, 1.0, 0.05)};
   classifier.Classify(merged, crops, geometry::Matrix5d::Zero(), d);
-  EXPECT_TRUE(d[0].crop);  // nearest is the second prediction (n defaults to 0 in CropAt)
-  EXPECT_NEAR(d[3].distance_m, std::hypot(0.005, 0.01), 1e-12);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_TRUE(d[0].crop);
+}
+
+// Young crop: whole crops of 0.005 m² teach the filter 0.3 × 0.005 = 0.0015
+// m², and a crop of 0.002 m² that the fixed 0.004 m² called weed is crop.
+TEST(CropClassifier, SizeFilterFollowsTheCropsOwnSize) {
+  ClassifierOptions o = SizeAndGate();
+  CropClassifier classifier(o);
+  const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.475, 1.0)};
+  std::vector<BlobDecision> d;
+  const std::vector<tracking::Feature> small = {FeatureAt(0.0, 1.0, 0.002)};
+  classifier.Classify(small, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_FALSE(d[0].crop);
+  EXPECT_DOUBLE_EQ(d[0].size_filter_m2, 0.004);
+  // 19 frames of two crops each, and ones the filter must not learn from:
+  // a clipped crop, a big weed between the rows.
+  for (int k = 0; k < 19; ++k) {
+    const double a = 0.004 + 0.0001 * (k % 3);  // median 0.0041 ... until the last
+    const std::vector<tracking::Feature> f = {
+        FeatureAt(0.0, 1.0, a), FeatureAt(0.475, 1.0, 0.0060), FeatureAt(0.47, 1.0, 0.5, true),
+        FeatureAt(0.2, 1.0, 0.02)};
+    classifier.Classify(f, crops, geometry::Matrix5d::Zero(), d);
+    EXPECT_FALSE(d[3].crop);
+  }
+  // 38 whole crops: 19 of 0.004–0.0042 and 19 of 0.006; median 0.006 (the
+  // 20th of 38 sorted), so the filter is 0.3 × 0.006 = 0.0018.
+  EXPECT_NEAR(classifier.size_filter_m2(), 0.0018, 1e-12);
+  classifier.Classify(small, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_TRUE(d[0].crop);
+  EXPECT_NEAR(d[0].size_filter_m2, 0.0018, 1e-12);
+  // Big crops leave the fixed filter: it never rises above ς.
+  for (int k = 0; k < 60; ++k) {
+    classifier.Classify(std::vector<tracking::Feature>{FeatureAt(0.0, 1.0, 0.05)}, crops,
+                        geometry::Matrix5d::Zero(), d);
+  }
+  EXPECT_DOUBLE_EQ(classifier.size_filter_m2(), 0.004);
+  // Off: ς alone, however small the crops.
+  o.crop_size_fraction = 0.0;
+  CropClassifier fixed(o);
+  for (int k = 0; k < 60; ++k) {
+    fixed.Classify(std::vector<tracking::Feature>{FeatureAt(0.0, 1.0, 0.0045)}, crops,
+                   geometry::Matrix5d::Zero(), d);
+  }
+  EXPECT_DOUBLE_EQ(fixed.size_filter_m2(), 0.004);
+  fixed.Classify(small, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_FALSE(d[0].crop);
 }
 
 TEST(CropClassifier, RegionGrowsWithTrackerUncertainty) {
   ClassifierOptions o;
   o.feature_sd_m = 0.01;
   o.plant_sd_m = 0.0;
-  const CropClassifier classifier(o);
+  CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0)};
   const std::vector<tracking::Feature> f = {FeatureAt(0.06, 1.0, 0.02)};  // below sure_crop_area
   std::vector<BlobDecision> d;
@@ -100,7 +146,7 @@ TEST(CropClassifier, RegionGrowsWithTrackerUncertainty) {
 }
 
 TEST(CropClassifier, WithoutPredictionsEverythingIsWeed) {
-  const CropClassifier classifier(ClassifierOptions{});
+  CropClassifier classifier(ClassifierOptions{});
   std::vector<BlobDecision> d;
   const std::vector<tracking::Feature> f = {FeatureAt(0.0, 1.0, 0.05)};
   classifier.Classify(f, {}, geometry::Matrix5d::Zero(), d);
@@ -191,7 +237,7 @@ TEST(Mrroc, SweepAucAndOperatingPoints) {
 // them; split among the predictions, each half is a crop plant again.
 TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   ClassifierOptions o = SizeAndGate();
-  const CropClassifier classifier(o);
+  CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.0, 1.45),
                                             CropAt(0.0, 1.9)};
   std::vector<Eigen::Vector2d> ground;
@@ -238,7 +284,7 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   // A wider gate for parts alone (plant 2's part: centroid 11 cm off with
   // σ 1 cm, γ² about 11²) makes it crop too; the whole blob is still weed.
   o.split_assoc_chi2 = 150.0;
-  const CropClassifier lenient(o);
+  CropClassifier lenient(o);
   EXPECT_EQ(lenient.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop), 2);
   for (size_t i = 0; i < plants_end; ++i) EXPECT_EQ(crop[i], 1) << i;
   lenient.Classify(whole, crops, geometry::Matrix5d::Zero(), d);
@@ -251,7 +297,7 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
 
   // With a wide association region plant 2's part is crop too: two parts.
   o.feature_sd_m = 0.1;
-  const CropClassifier wide(o);
+  CropClassifier wide(o);
   EXPECT_EQ(wide.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop), 2);
   for (size_t i = 0; i < plants_end; ++i) EXPECT_EQ(crop[i], 1) << i;
   for (size_t i = plants_end; i < ground.size(); ++i) EXPECT_EQ(crop[i], 0) << i;

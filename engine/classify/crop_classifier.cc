@@ -1,6 +1,8 @@
 #include "engine/classify/crop_classifier.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -20,6 +22,11 @@ OptionErrors ClassifierOptions::Validate() const {
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   RequirePositive(e, "split_radius_m", split_radius_m);
   RequirePositive(e, "split_assoc_chi2", split_assoc_chi2);
+  RequireInRange(e, "crop_size_fraction", crop_size_fraction, 0.0, 1.0);
+  if (crop_size_window < 1) e.push_back({"crop_size_window", "must be >= 1"});
+  if (crop_size_min_samples < 1 || crop_size_min_samples > crop_size_window) {
+    e.push_back({"crop_size_min_samples", "must be in [1, crop_size_window]"});
+  }
   return e;
 }
 
@@ -60,12 +67,31 @@ bool IsCrop(double area_m2, bool clipped, double gamma2, double min_crop_area_m2
 
 CropClassifier::CropClassifier(const ClassifierOptions& options) : options_(options) {
   ThrowIfInvalid("crop classifier", options_.Validate());
+  size_filter_m2_ = options_.min_crop_area_m2;
+}
+
+void CropClassifier::RememberCropArea(double area_m2) {
+  if (!(options_.crop_size_fraction > 0.0) || !std::isfinite(area_m2)) return;
+  if (crop_areas_.size() < static_cast<size_t>(options_.crop_size_window)) {
+    crop_areas_.push_back(area_m2);
+  } else {
+    crop_areas_[next_area_] = area_m2;
+    next_area_ = (next_area_ + 1) % crop_areas_.size();
+  }
+}
+
+void CropClassifier::UpdateSizeFilter() {
+  if (crop_areas_.size() < static_cast<size_t>(options_.crop_size_min_samples)) return;
+  scratch_.assign(crop_areas_.begin(), crop_areas_.end());
+  const auto mid = scratch_.begin() + static_cast<std::ptrdiff_t>(scratch_.size() / 2);
+  std::nth_element(scratch_.begin(), mid, scratch_.end());
+  size_filter_m2_ = std::min(options_.min_crop_area_m2, options_.crop_size_fraction * *mid);
 }
 
 void CropClassifier::Classify(std::span<const tracking::Feature> features,
                               std::span<const PredictedCrop> predictions,
                               const geometry::Matrix5d& covariance,
-                              std::vector<BlobDecision>& out) const {
+                              std::vector<BlobDecision>& out) {
   std::vector<Eigen::Matrix2d> s_inverse;
   s_inverse.reserve(predictions.size());
   for (const PredictedCrop& c : predictions) {
@@ -88,11 +114,17 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
       }
     }
     d.associated = d.gamma2 <= options_.assoc_chi2;
+    d.size_filter_m2 = size_filter_m2_;
     d.crop = !predictions.empty() &&
-             IsCrop(d.area_m2, d.clipped, d.gamma2, options_.min_crop_area_m2,
-                    options_.assoc_chi2, options_.sure_crop_area_m2);
+             IsCrop(d.area_m2, d.clipped, d.gamma2, size_filter_m2_, options_.assoc_chi2,
+                    options_.sure_crop_area_m2);
     out.push_back(d);
   }
+  // Learnt after the frame, so every blob of a frame meets the same filter.
+  for (const BlobDecision& d : out) {
+    if (d.crop && d.associated && !d.clipped) RememberCropArea(d.area_m2);
+  }
+  UpdateSizeFilter();
 }
 
 int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
@@ -134,7 +166,7 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
     const Eigen::Vector2d nu = moment[k] / area[k] - predictions[k].ground_m;
     const Eigen::Matrix2d s = AssociationCovariance(predictions[k], covariance, options_);
     const double g2 = nu.dot(s.ldlt().solve(nu));
-    part_crop[k] = IsCrop(area[k], clipped, g2, options_.min_crop_area_m2,
+    part_crop[k] = IsCrop(area[k], clipped, g2, size_filter_m2_,
                           options_.split_assoc_chi2, options_.sure_crop_area_m2);
     parts += part_crop[k];
   }

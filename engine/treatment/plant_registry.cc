@@ -17,7 +17,6 @@ PlantRegistry::PlantRegistry(const RegistryOptions& options) : options_(options)
 }
 
 int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecision& d,
-                           const classify::ClassifierOptions& c,
                            const std::optional<Eigen::Vector2d>& predicted_bed) {
   PlantRecord* best = nullptr;
   const bool grid = d.associated && predicted_bed.has_value();
@@ -56,12 +55,14 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
                                 : *predicted_bed;
     r.grid_plant = true;
   }
+  if (r.observations == 0) r.size_filter_m2 = d.size_filter_m2;
   r.bed_m = (r.bed_m * r.observations + bed) / (r.observations + 1);
   ++r.observations;
   (d.crop ? r.crop_votes : r.weed_votes) += 1;
   if (!d.clipped && d.area_m2 > r.area_m2) {
     r.area_m2 = d.area_m2;
-    r.small = d.area_m2 < c.min_crop_area_m2;
+    r.small = d.area_m2 < d.size_filter_m2;
+    r.size_filter_m2 = d.size_filter_m2;
   }
   if (d.gamma2 < r.gamma2) {
     r.gamma2 = d.gamma2;
@@ -97,7 +98,7 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
                   "gamma2 %.2f (gate %.2f), %.0f mm from the predicted crop; cell counters "
                   "crop %d weed %d -> %s; %s (spray-%s mode)",
                   r.crop() ? "crop" : "weed", r.crop_votes, r.weed_votes, reason, r.area_m2,
-                  c.min_crop_area_m2, std::isfinite(r.gamma2) ? r.gamma2 : -1.0, c.assoc_chi2,
+                  r.size_filter_m2, std::isfinite(r.gamma2) ? r.gamma2 : -1.0, c.assoc_chi2,
                   std::isfinite(r.distance_m) ? r.distance_m * 1000.0 : -1.0, r.counts.crop,
                   r.counts.weed, ToString(r.map_class), r.sprayed ? "sprayed" : "not sprayed",
                   ToString(mode));

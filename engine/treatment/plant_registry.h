@@ -33,6 +33,7 @@ struct PlantRecord {
   double gamma2 = std::numeric_limits<double>::infinity();  // smallest to a predicted crop
   double distance_m = std::numeric_limits<double>::infinity();
   bool small = false;  // its largest unclipped view failed the size filter
+  double size_filter_m2 = 0.0;  // ... the filter that view was held to
   CellCounts counts;   // map counters under its position at the last update
   CellClass map_class = CellClass::kSoil;
   bool sprayed = false;
@@ -65,7 +66,6 @@ class PlantRegistry {
   // One classified blob at `bed_m`; `predicted_bed_m`, when the blob is
   // associated, is its predicted crop's bed position. Returns the record's id.
   int Observe(const Eigen::Vector2d& bed_m, const classify::BlobDecision& decision,
-              const classify::ClassifierOptions& classifier,
               const std::optional<Eigen::Vector2d>& predicted_bed_m = std::nullopt);
   // A nozzle covered this bed strip: records inside it are sprayed. Appends
   // the ids of records that were not sprayed before to `newly` when given.

@@ -202,7 +202,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     const classify::BlobDecision& d = frame_.decisions[i];
     const vision::Blob& blob = blobs[static_cast<size_t>(blob_of_feature[i])];
     const bool maybe_merged = !d.crop && !d.associated &&
-                              (d.clipped || d.area_m2 >= options_.classifier.min_crop_area_m2);
+                              (d.clipped || d.area_m2 >= d.size_filter_m2);
     if (d.crop && d.associated && options_.crop_footprint_per_plant) {
       add_to_plant(d.m, d.n, blob.area_px, blob.area_px * blob.centroid_px, blob.bbox_px);
     } else if (maybe_merged && options_.split_merged && !mask.empty() &&
@@ -240,7 +240,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     const std::optional<Eigen::Vector2d> low =
         d.crop ? std::nullopt : camera_.ImageToPlane(blob.centroid_px, options_.weed_height_m);
     frame_.plant_ids[i] = registry_.Observe(
-        VehicleToBed(pose, low ? *low : features[i].ground_m), d, options_.classifier,
+        VehicleToBed(pose, low ? *low : features[i].ground_m), d,
         d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
                      : std::nullopt);
   }

@@ -296,11 +296,12 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   crop.distance_m = 0.012;
   classify::BlobDecision weed;
   weed.area_m2 = 0.001;
+  weed.size_filter_m2 = 0.0025;  // the classifier's filter in force
   weed.gamma2 = 40.0;
   weed.distance_m = 0.2;
-  EXPECT_EQ(reg.Observe({0.0, 1.0}, crop, c), 0);
-  EXPECT_EQ(reg.Observe({0.01, 1.01}, crop, c), 0);
-  EXPECT_EQ(reg.Observe({0.2, 1.0}, weed, c), 1);
+  EXPECT_EQ(reg.Observe({0.0, 1.0}, crop), 0);
+  EXPECT_EQ(reg.Observe({0.01, 1.01}, crop), 0);
+  EXPECT_EQ(reg.Observe({0.2, 1.0}, weed), 1);
   ASSERT_EQ(reg.records().size(), 2u);
   EXPECT_NEAR(reg.records()[0].bed_m.x(), 0.005, 1e-12);
   EXPECT_EQ(reg.records()[0].crop_votes, 2);
@@ -318,12 +319,12 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   const PlantRecord& b = reg.records()[1];
   EXPECT_FALSE(b.sprayed);
   EXPECT_NE(b.why.find("below the size filter"), std::string::npos) << b.why;
+  EXPECT_NE(b.why.find("area 0.0010 m2 (filter 0.0025)"), std::string::npos) << b.why;
   EXPECT_NE(b.why.find("not sprayed"), std::string::npos) << b.why;
 }
 
 TEST(PlantRegistry, APlantIsConfirmedByBeingSeenWhereverItWasInView) {
   PlantRegistry reg;
-  classify::ClassifierOptions c;
   classify::BlobDecision weed;
   weed.area_m2 = 0.002;
   // The camera's view on the bed: 1 m square, moving 0.05 m per frame.
@@ -334,8 +335,8 @@ TEST(PlantRegistry, APlantIsConfirmedByBeingSeenWhereverItWasInView) {
   // A weed at y = 1.5 seen in every other frame of the 20 that hold it, and
   // a speck at y = 1.2 seen in 3 of them.
   for (int f = 0; f < 20; ++f) {
-    if (f % 2 == 0) reg.Observe({0.1, 1.5}, weed, c);
-    if (f == 3 || f == 4 || f == 12) reg.Observe({-0.2, 1.2}, weed, c);
+    if (f % 2 == 0) reg.Observe({0.1, 1.5}, weed);
+    if (f == 3 || f == 4 || f == 12) reg.Observe({-0.2, 1.2}, weed);
     reg.CountView(view(0.55 + 0.05 * f));
   }
   ASSERT_EQ(reg.records().size(), 2u);
@@ -356,7 +357,6 @@ TEST(PlantRegistry, APlantIsConfirmedByBeingSeenWhereverItWasInView) {
 
 TEST(PlantRegistry, LeafFragmentsOfOneGridPlantMakeOneRecord) {
   PlantRegistry reg;  // merge radius 50 mm
-  classify::ClassifierOptions c;
   classify::BlobDecision leaf;
   leaf.crop = true;
   leaf.associated = true;
@@ -365,19 +365,19 @@ TEST(PlantRegistry, LeafFragmentsOfOneGridPlantMakeOneRecord) {
   const Eigen::Vector2d plant(0.0, 1.0);
   // Three leaves 80 mm apart, all associated with the same predicted plant
   // (whose bed position jitters by a few mm from frame to frame).
-  EXPECT_EQ(reg.Observe({-0.08, 1.0}, leaf, c, plant), 0);
-  EXPECT_EQ(reg.Observe({0.0, 1.08}, leaf, c, Eigen::Vector2d(0.004, 1.003)), 0);
-  EXPECT_EQ(reg.Observe({0.08, 1.0}, leaf, c, Eigen::Vector2d(-0.003, 0.998)), 0);
+  EXPECT_EQ(reg.Observe({-0.08, 1.0}, leaf, plant), 0);
+  EXPECT_EQ(reg.Observe({0.0, 1.08}, leaf, Eigen::Vector2d(0.004, 1.003)), 0);
+  EXPECT_EQ(reg.Observe({0.08, 1.0}, leaf, Eigen::Vector2d(-0.003, 0.998)), 0);
   // The next grid plant along the row is another record.
-  EXPECT_EQ(reg.Observe({0.0, 1.45}, leaf, c, Eigen::Vector2d(0.0, 1.45)), 1);
+  EXPECT_EQ(reg.Observe({0.0, 1.45}, leaf, Eigen::Vector2d(0.0, 1.45)), 1);
   // Without a prediction the same fragments split by the merge radius.
   classify::BlobDecision weed;
   weed.area_m2 = 0.01;
-  EXPECT_EQ(reg.Observe({-0.08, 2.0}, weed, c), 2);
-  EXPECT_EQ(reg.Observe({0.08, 2.0}, weed, c), 3);
+  EXPECT_EQ(reg.Observe({-0.08, 2.0}, weed), 2);
+  EXPECT_EQ(reg.Observe({0.08, 2.0}, weed), 3);
   // An unassociated blob next to a grid plant's record does not join it
   // only by the prediction: it joins by its centroid, as before.
-  EXPECT_EQ(reg.Observe({0.0, 1.45}, weed, c), 1);
+  EXPECT_EQ(reg.Observe({0.0, 1.45}, weed), 1);
   ASSERT_EQ(reg.records().size(), 4u);
   EXPECT_EQ(reg.records()[0].crop_votes, 3);
   EXPECT_TRUE(reg.records()[0].grid_plant);

@@ -1,38 +1,12 @@
 #include "engine/vision/blobs.h"
 
 #include <array>
-#include <bit>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "engine/common/check.h"
+#include "engine/vision/row_bits.h"
 
 namespace plantscale::vision {
 namespace {
-
-// Bit u % 64 of words[u / 64] is set where row[u] != 0; bits past `width`
-// are clear. Sixteen pixels a compare with SSE2 (baseline x86-64).
-void RowBits(const uint8_t* row, int width, uint64_t* words) {
-  int u = 0;
-#if defined(__SSE2__)
-  const __m128i zero = _mm_setzero_si128();
-  for (; u + 64 <= width; u += 64) {
-    uint64_t bits = 0;
-    for (int k = 0; k < 4; ++k) {
-      const __m128i px = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + u + 16 * k));
-      const auto soil = static_cast<uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(px, zero)));
-      bits |= static_cast<uint64_t>(~soil & 0xFFFFu) << (16 * k);
-    }
-    words[u / 64] = bits;
-  }
-#endif
-  for (int w = u / 64; w < (width + 63) / 64; ++w) words[w] = 0;
-  for (; u < width; ++u) {
-    if (row[u] != 0) words[u / 64] |= uint64_t{1} << (u % 64);
-  }
-}
 
 // Σ (a + k)² for k = 0..n-1.
 double SumOfSquares(double a, double n) {
@@ -83,27 +57,10 @@ void BlobExtractor::FindRuns(const cv::Mat& mask) {
   row_bits_.resize(static_cast<size_t>(words));
   int prev_begin = 0, prev_end = 0;
   for (int v = 0; v < mask.rows; ++v) {
-    RowBits(mask.ptr<uint8_t>(v), mask.cols, row_bits_.data());
+    detail::RowBits(mask.ptr<uint8_t>(v), mask.cols, row_bits_.data());
     const int cur_begin = static_cast<int>(runs_.size());
-    // Runs start and end where a bit differs from the one before it.
-    int begin = -1;
-    uint64_t carry = 0;
-    for (int w = 0; w < words; ++w) {
-      const uint64_t bits = row_bits_[static_cast<size_t>(w)];
-      uint64_t edges = bits ^ ((bits << 1) | carry);
-      carry = bits >> 63;
-      while (edges != 0) {
-        const int u = 64 * w + std::countr_zero(edges);
-        edges &= edges - 1;
-        if (begin < 0) {
-          begin = u;
-        } else {
-          runs_.push_back({v, begin, u});
-          begin = -1;
-        }
-      }
-    }
-    if (begin >= 0) runs_.push_back({v, begin, mask.cols});
+    detail::ForEachRun(row_bits_.data(), mask.cols,
+                       [&](int begin, int end) { runs_.push_back({v, begin, end}); });
     const int cur_end = static_cast<int>(runs_.size());
     parent_.resize(runs_.size());
     for (int i = cur_begin; i < cur_end; ++i) parent_[static_cast<size_t>(i)] = i;

@@ -34,9 +34,17 @@ OptionErrors SegmenterOptions::Validate() const {
   RequireInRange(e, "otsu_floor", otsu_floor, 0.0, 256.0);
   RequirePositive(e, "adaptive_gain", adaptive_gain);
   RequireInRange(e, "smoothing_px", smoothing_px, 0.0, 20.0);
+  RequireInRange(e, "fill_holes_max_fraction", fill_holes_max_fraction, 0.0, 1.0);
   for (OptionError& b : Prefixed("blobs", blobs.Validate())) e.push_back(std::move(b));
   for (OptionError& l : Prefixed("local", local.Validate())) e.push_back(std::move(l));
   return e;
+}
+
+SegmenterOptions ThesisSegmenterOptions() {
+  SegmenterOptions o;
+  o.method = ThresholdMethod::kAdaptive;
+  o.fill_holes_max_fraction = 0.0;
+  return o;
 }
 
 namespace {
@@ -110,6 +118,10 @@ void Segmenter::Threshold(const cv::Mat& image) {
       result_.threshold_at_bottom = cv::mean(t.row(t.rows - 1))[0];
       break;
     }
+  }
+  if (options_.fill_holes_max_fraction > 0.0) {
+    holes_.Fill(result_.mask, static_cast<int>(options_.fill_holes_max_fraction *
+                                               static_cast<double>(result_.mask.total())));
   }
 }
 

@@ -1,0 +1,120 @@
+#include "engine/vision/holes.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "engine/common/rng.h"
+#include "engine/vision/segmenter.h"
+
+namespace plantscale::vision {
+namespace {
+
+TEST(Holes, SoilEnclosedByPlantIsFilledAndNothingElse) {
+  cv::Mat mask(40, 50, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(10, 10, 12, 10)).setTo(255);
+  mask(cv::Rect(13, 13, 5, 4)).setTo(0);  // a 20-pixel hole
+  const cv::Mat before = mask.clone();
+  HoleFiller filler;
+  EXPECT_EQ(filler.Fill(mask, 1000), 20);
+  EXPECT_EQ(cv::countNonZero(mask), cv::countNonZero(before) + 20);
+  EXPECT_TRUE(cv::countNonZero(mask(cv::Rect(10, 10, 12, 10)) == 0) == 0);
+  // Soil outside the plant stays soil.
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(30, 0, 20, 40))), 0);
+}
+
+TEST(Holes, ABayOpenToTheSoilOrTheImageBorderIsNoHole) {
+  cv::Mat mask(30, 30, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(5, 5, 10, 10)).setTo(255);
+  mask(cv::Rect(8, 8, 4, 7)).setTo(0);  // a C shape: the gap reaches row 14, the bottom edge
+  // Plant enclosing soil against the image's left border: that soil reaches
+  // the border, so it may be soil beyond the frame.
+  mask(cv::Rect(0, 20, 6, 6)).setTo(255);
+  mask(cv::Rect(0, 22, 3, 2)).setTo(0);
+  const cv::Mat before = mask.clone();
+  HoleFiller filler;
+  EXPECT_EQ(filler.Fill(mask, 1000), 0);
+  EXPECT_EQ(cv::countNonZero(mask != before), 0);
+}
+
+TEST(Holes, SoilTouchingTheOutsideOnlyAtACornerIsAHole) {
+  // An 8-connected diamond ring of single pixels: its inside meets the
+  // outside only diagonally, and soil is 4-connected (the blob is one
+  // 8-connected piece around it).
+  cv::Mat mask(11, 11, CV_8UC1, cv::Scalar(0));
+  for (int k = 0; k <= 3; ++k) {
+    mask.at<uint8_t>(2 + k, 5 - k) = 255;
+    mask.at<uint8_t>(2 + k, 5 + k) = 255;
+    mask.at<uint8_t>(8 - k, 5 - k) = 255;
+    mask.at<uint8_t>(8 - k, 5 + k) = 255;
+  }
+  HoleFiller filler;
+  // Inside the diamond: rows 3..7 hold 1, 3, 5, 3, 1 pixels.
+  EXPECT_EQ(filler.Fill(mask, 1000), 13);
+  EXPECT_EQ(mask.at<uint8_t>(5, 5), 255);
+}
+
+TEST(Holes, HolesLargerThanTheLimitStay) {
+  cv::Mat mask(40, 40, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(2, 2, 30, 30)).setTo(255);
+  mask(cv::Rect(5, 5, 10, 10)).setTo(0);   // 100 pixels
+  mask(cv::Rect(20, 20, 3, 3)).setTo(0);   // 9 pixels
+  HoleFiller filler;
+  EXPECT_EQ(filler.Fill(mask, 99), 9);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(5, 5, 10, 10))), 0);
+  EXPECT_EQ(filler.Fill(mask, 100), 100);
+  EXPECT_EQ(filler.Fill(mask, 0), 0);
+}
+
+// Against a reference: 4-connected soil components (OpenCV) that touch no
+// border and are within the limit, on random masks of every density and
+// widths that are and are not multiples of 64.
+TEST(Holes, MatchesConnectedComponentsOfTheSoilOnRandomMasks) {
+  Rng rng(7);
+  HoleFiller filler;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int w = 20 + trial * 7 % 150, h = 10 + trial * 5 % 60;
+    const double density = 0.3 + 0.4 * (trial % 5) / 4.0;
+    cv::Mat mask(h, w, CV_8UC1);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) mask.at<uint8_t>(v, u) = rng.Uniform() < density ? 255 : 0;
+    }
+    const int limit = trial % 3 == 0 ? 3 : 100000;
+    cv::Mat soil = mask == 0, labels, stats, centroids;
+    const int n = cv::connectedComponentsWithStats(soil, labels, stats, centroids, 4, CV_32S);
+    cv::Mat expected = mask.clone();
+    int expected_filled = 0;
+    for (int k = 1; k < n; ++k) {
+      const int x = stats.at<int>(k, cv::CC_STAT_LEFT), y = stats.at<int>(k, cv::CC_STAT_TOP);
+      const int bw = stats.at<int>(k, cv::CC_STAT_WIDTH), bh = stats.at<int>(k, cv::CC_STAT_HEIGHT);
+      const int area = stats.at<int>(k, cv::CC_STAT_AREA);
+      if (x == 0 || y == 0 || x + bw == w || y + bh == h || area > limit) continue;
+      expected.setTo(255, labels == k);
+      expected_filled += area;
+    }
+    EXPECT_EQ(filler.Fill(mask, limit), expected_filled) << "trial " << trial;
+    EXPECT_EQ(cv::countNonZero(mask != expected), 0) << "trial " << trial;
+  }
+}
+
+TEST(Holes, SegmenterFillsAShadedPatchInsideAPlantButNotTheThesisBaseline) {
+  // A bright plant on dark soil with a shaded patch in the middle, darker
+  // than the plant threshold.
+  cv::Mat image(120, 160, CV_8UC1, cv::Scalar(40));
+  cv::circle(image, {80, 60}, 25, cv::Scalar(200), cv::FILLED);
+  cv::circle(image, {80, 60}, 6, cv::Scalar(60), cv::FILLED);
+  SegmenterOptions ours;
+  ours.smoothing_px = 0.0;
+  Segmenter segmenter(ours);
+  const Segmentation& seg = segmenter.Process(image);
+  ASSERT_EQ(seg.blobs.size(), 1u);
+  EXPECT_EQ(seg.mask.at<uint8_t>(60, 80), 255);
+  EXPECT_EQ(seg.blobs[0].area_px, cv::countNonZero(image > 100) + 113);  // the disc of r = 6
+  SegmenterOptions thesis = ThesisSegmenterOptions();
+  thesis.smoothing_px = 0.0;
+  Segmenter baseline(thesis);
+  EXPECT_EQ(baseline.Process(image).mask.at<uint8_t>(60, 80), 0);
+}
+
+}  // namespace
+}  // namespace plantscale::vision
