@@ -33,6 +33,7 @@ struct TreatmentArgs {
   std::optional<int> majority;
   std::optional<double> split_radius_m;
   std::optional<double> split_chi2;
+  std::optional<double> split_cover_m;
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
@@ -152,6 +153,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
   if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   if (a.split_chi2) o.treatment.classifier.split_assoc_chi2 = *a.split_chi2;
+  if (a.split_cover_m) o.treatment.classifier.split_cover_m = *a.split_cover_m;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
@@ -242,6 +244,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--split-chi2", args.split_chi2,
                   "merged blobs: association gate of each part's centroid (chi2)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--split-cover-m", args.split_cover_m,
+                  "merged blobs: a part with plant matter this close to its predicted crop is "
+                  "that crop (0: the gate alone)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
                 "every crop blob its own footprint (not one per predicted plant)");
   cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,

@@ -237,6 +237,7 @@ TEST(Mrroc, SweepAucAndOperatingPoints) {
 // them; split among the predictions, each half is a crop plant again.
 TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   ClassifierOptions o = SizeAndGate();
+  o.split_cover_m = 0.0;  // the gate alone (cover: below)
   CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.0, 1.45),
                                             CropAt(0.0, 1.9)};
@@ -294,6 +295,17 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
                                           crop),
             1);
   o.split_assoc_chi2 = 9.21;
+
+  // Plant 2's part has plant matter at its predicted position (its disk
+  // reaches 1.46 m): with a 2 cm cover it is that crop whatever its cut
+  // centroid; the small weed's part (16 cm short of 1.9 m) is not.
+  o.split_cover_m = 0.02;
+  EXPECT_EQ(CropClassifier(o).SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(),
+                                          crop),
+            2);
+  for (size_t i = 0; i < plants_end; ++i) EXPECT_EQ(crop[i], 1) << i;
+  for (size_t i = plants_end; i < ground.size(); ++i) EXPECT_EQ(crop[i], 0) << i;
+  o.split_cover_m = 0.0;
 
   // With a wide association region plant 2's part is crop too: two parts.
   o.feature_sd_m = 0.1;

@@ -22,6 +22,7 @@ OptionErrors ClassifierOptions::Validate() const {
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   RequirePositive(e, "split_radius_m", split_radius_m);
   RequirePositive(e, "split_assoc_chi2", split_assoc_chi2);
+  RequireNonNegative(e, "split_cover_m", split_cover_m);
   RequireInRange(e, "crop_size_fraction", crop_size_fraction, 0.0, 1.0);
   if (crop_size_window < 1) e.push_back({"crop_size_window", "must be >= 1"});
   if (crop_size_min_samples < 1 || crop_size_min_samples > crop_size_window) {
@@ -146,6 +147,7 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
   const double r2 = options_.split_radius_m * options_.split_radius_m;
   std::vector<double> area(predictions.size(), 0.0);
   std::vector<Eigen::Vector2d> moment(predictions.size(), Eigen::Vector2d::Zero());
+  std::vector<double> nearest2(predictions.size(), std::numeric_limits<double>::infinity());
   for (size_t i = 0; i < ground_m.size(); ++i) {
     double best = r2;
     for (size_t k = 0; k < predictions.size(); ++k) {
@@ -156,8 +158,10 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
       }
     }
     if (part[i] < 0) continue;
-    area[static_cast<size_t>(part[i])] += pixel_area_m2[i];
-    moment[static_cast<size_t>(part[i])] += pixel_area_m2[i] * ground_m[i];
+    const auto k = static_cast<size_t>(part[i]);
+    area[k] += pixel_area_m2[i];
+    moment[k] += pixel_area_m2[i] * ground_m[i];
+    nearest2[k] = std::min(nearest2[k], best);
   }
   std::vector<uint8_t> part_crop(predictions.size(), 0);
   int parts = 0;
@@ -168,6 +172,10 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
     const double g2 = nu.dot(s.ldlt().solve(nu));
     part_crop[k] = IsCrop(area[k], clipped, g2, size_filter_m2_,
                           options_.split_assoc_chi2, options_.sure_crop_area_m2);
+    if (!part_crop[k] && (clipped || area[k] >= size_filter_m2_) &&
+        nearest2[k] <= options_.split_cover_m * options_.split_cover_m) {
+      part_crop[k] = 1;
+    }
     parts += part_crop[k];
   }
   for (size_t i = 0; i < ground_m.size(); ++i) {

@@ -63,6 +63,13 @@ struct ClassifierOptions {
   // neighbour's leaves reach past the halfway line the cut moves its centroid
   // off the plant's by more than a blob's would be.
   double split_assoc_chi2 = 9.21;
+  // SplitMerged: a part (of at least the size filter) with plant matter this
+  // close to its prediction is that crop whatever its centroid: the cut
+  // takes a big plant's leaves from one side and gives it a neighbour's, so
+  // its centroid strays by more than a plant's spread (preset A, 2 seeds:
+  // crop pixels labelled C 87.6 → 91.2 %). 0: the gate alone. About one
+  // plant_sd_m.
+  double split_cover_m = 0.02;
 
   OptionErrors Validate() const;
 };
@@ -124,8 +131,9 @@ class CropClassifier {
   // `pixel_area_m2[i]`) are split among the predicted crops, each pixel to
   // the nearest prediction within `split_radius_m`, and every part is then
   // classified as a blob of its own (size filter, then its centroid against
-  // its prediction's association region with `split_assoc_chi2`; `clipped`
-  // as the whole blob's).
+  // its prediction's association region with `split_assoc_chi2`, or plant
+  // matter within `split_cover_m` of the prediction; `clipped` as the whole
+  // blob's).
   // Writes 1 (crop) or 0 (weed) per pixel into `crop`; pixels beyond every
   // prediction's radius are weed. Returns the number of crop parts. With
   // `part`, also writes each pixel's part: the index of its prediction in
