@@ -74,8 +74,9 @@ vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
   // blocks); the 2 px of the product default were set on 640×480 frames.
   o.smoothing_px = 1.0;
   // Soil seen between a real plant's leaves is soil: a photograph's mask
-  // keeps its holes (the simulator's holes are shaded leaf, holes.h).
+  // keeps its holes and notches (the simulator's are shaded leaf, holes.h).
   o.fill_holes_max_fraction = 0.0;
+  o.close_notches_px = 0;
   std::string method = r.method == "auto" ? (colour ? "exg" : "nir") : r.method;
   if (method == "nir" && colour) {
     throw DataError("--method nir needs a near-infrared (single-channel) image; this one is "

@@ -173,6 +173,7 @@ void BM_StageFillHolesOfDefaultMask(benchmark::State& state) {
   SetUp();
   SegmenterOptions options;
   options.fill_holes_max_fraction = 0.0;
+  options.close_notches_px = 0;
   Segmenter segmenter(options);
   const cv::Mat unfilled = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
   cv::Mat mask = unfilled.clone();
@@ -187,6 +188,26 @@ void BM_StageFillHolesOfDefaultMask(benchmark::State& state) {
   state.counters["filled_px"] = filled;
 }
 BENCHMARK(BM_StageFillHolesOfDefaultMask);
+// Notch closing of the thresholded mask (holes.h), restored as above.
+void BM_StageCloseNotchesOfDefaultMask(benchmark::State& state) {
+  SetUp();
+  SegmenterOptions options;
+  options.fill_holes_max_fraction = 0.0;
+  options.close_notches_px = 0;
+  Segmenter segmenter(options);
+  const cv::Mat unclosed = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
+  cv::Mat mask = unclosed.clone();
+  NotchCloser notches;
+  int added = 0;
+  for (auto _ : state) {
+    added = notches.Close(mask, 4);
+    state.PauseTiming();
+    unclosed.copyTo(mask);
+    state.ResumeTiming();
+  }
+  state.counters["added_px"] = added;
+}
+BENCHMARK(BM_StageCloseNotchesOfDefaultMask);
 
 void BM_BlobsOnly(benchmark::State& state) {
   SetUp();

@@ -1,6 +1,8 @@
 #include "engine/vision/holes.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <cstring>
 
 #include "engine/common/check.h"
@@ -67,6 +69,183 @@ int HoleFiller::Fill(cv::Mat& mask, int max_area_px) {
     filled += r.u_end - r.u_begin;
   }
   return filled;
+}
+
+namespace {
+
+int FindRoot(std::vector<int>& p, int i) {
+  while (p[static_cast<size_t>(i)] != i) {
+    p[static_cast<size_t>(i)] = p[static_cast<size_t>(p[static_cast<size_t>(i)])];
+    i = p[static_cast<size_t>(i)];
+  }
+  return i;
+}
+
+// out = in dilated (kDilate) or eroded by one pixel along u; `in` holds
+// rows of `words` words one after the other. One flat pass over every word
+// (vectorised), then the first and last word of each row are redone
+// without their neighbour across the row's ends (pixels beyond the image
+// are soil); bits past `width` are cleared.
+template <bool kDilate>
+void StepAlongU(const std::vector<uint64_t>& in, int words, int rows, int width,
+                std::vector<uint64_t>& out) {
+  out.resize(in.size());
+  const size_t n = in.size();
+  const uint64_t* __restrict x = in.data();
+  uint64_t* __restrict o = out.data();
+  for (size_t i = 1; i + 1 < n; ++i) {
+    const uint64_t up = (x[i] << 1) | (x[i - 1] >> 63), down = (x[i] >> 1) | (x[i + 1] << 63);
+    o[i] = kDilate ? (x[i] | up | down) : (x[i] & up & down);
+  }
+  const uint64_t last = width % 64 == 0 ? ~uint64_t{0} : (uint64_t{1} << (width % 64)) - 1;
+  const auto one = [&](size_t i, bool first, bool final) {
+    const uint64_t up = (x[i] << 1) | (first ? 0 : x[i - 1] >> 63);
+    const uint64_t down = (x[i] >> 1) | (final ? 0 : x[i + 1] << 63);
+    o[i] = kDilate ? (x[i] | up | down) : (x[i] & up & down);
+  };
+  for (int v = 0; v < rows; ++v) {
+    const size_t begin = static_cast<size_t>(v) * static_cast<size_t>(words);
+    const size_t end = begin + static_cast<size_t>(words) - 1;
+    one(begin, true, begin == end);
+    if (end != begin) one(end, false, true);
+    o[end] &= last;
+  }
+}
+
+}  // namespace
+
+void NotchCloser::Label(const std::vector<uint64_t>& bits, int width, int height,
+                        std::vector<Run>& runs, std::vector<int>& parent,
+                        std::vector<int>& row_start) {
+  runs.clear();
+  parent.clear();
+  row_start.assign(static_cast<size_t>(height) + 1, 0);
+  int prev_begin = 0, prev_end = 0;
+  for (int v = 0; v < height; ++v) {
+    const int cur_begin = static_cast<int>(runs.size());
+    row_start[static_cast<size_t>(v)] = cur_begin;
+    detail::ForEachRun(bits.data() + static_cast<size_t>(v) * static_cast<size_t>(words_), width,
+                       [&](int begin, int end) {
+                         parent.push_back(static_cast<int>(runs.size()));
+                         runs.push_back({v, begin, end});
+                       });
+    const int cur_end = static_cast<int>(runs.size());
+    // 8-connectivity: overlapping or meeting at a corner.
+    int j = prev_begin;
+    for (int i = cur_begin; i < cur_end; ++i) {
+      const Run& cur = runs[static_cast<size_t>(i)];
+      while (j < prev_end && runs[static_cast<size_t>(j)].u_end < cur.u_begin) ++j;
+      for (int k = j; k < prev_end && runs[static_cast<size_t>(k)].u_begin <= cur.u_end; ++k) {
+        const int a = FindRoot(parent, i), b = FindRoot(parent, k);
+        if (a < b) parent[static_cast<size_t>(b)] = a;
+        if (b < a) parent[static_cast<size_t>(a)] = b;
+      }
+    }
+    prev_begin = cur_begin;
+    prev_end = cur_end;
+  }
+  row_start[static_cast<size_t>(height)] = static_cast<int>(runs.size());
+  // A root is the smallest index of its set, so every parent precedes its
+  // child: one pass in order leaves each run pointing at its root.
+  for (size_t i = 0; i < runs.size(); ++i) parent[i] = parent[static_cast<size_t>(parent[i])];
+}
+
+int NotchCloser::DiskHalfWidth(int radius_px, int dv) {
+  return static_cast<int>(std::floor(std::sqrt(radius_px * radius_px - dv * dv + 0.5)));
+}
+
+int NotchCloser::Close(cv::Mat& mask, int radius_px) {
+  PLANTSCALE_CHECK(mask.type() == CV_8UC1, "mask must be CV_8UC1");
+  const int width = mask.cols, height = mask.rows, r = radius_px;
+  if (mask.empty() || r <= 0 || 2 * r >= height) return 0;
+  words_ = (width + 63) / 64;
+  const auto words = static_cast<size_t>(words_);
+  mask_bits_.resize(words * static_cast<size_t>(height));
+  for (int v = 0; v < height; ++v) {
+    detail::RowBits(mask.ptr<uint8_t>(v), width, mask_bits_.data() + static_cast<size_t>(v) * words);
+  }
+  half_.resize(static_cast<size_t>(2 * r + 1));
+  for (int dv = -r; dv <= r; ++dv) half_[static_cast<size_t>(dv + r)] = DiskHalfWidth(r, dv);
+  const auto half = [&](int dv) { return half_[static_cast<size_t>(dv + r)]; };
+  steps_.resize(static_cast<size_t>(r) + 1);
+  // Dilation: OR over the disk's rows of each row dilated by its half-width.
+  steps_[0] = mask_bits_;
+  for (int k = 1; k <= r; ++k) {
+    StepAlongU<true>(steps_[static_cast<size_t>(k - 1)], words_, height, width, steps_[static_cast<size_t>(k)]);
+  }
+  scratch_.assign(mask_bits_.size(), 0);
+  for (int v = 0; v < height; ++v) {
+    uint64_t* o = scratch_.data() + static_cast<size_t>(v) * words;
+    for (int dv = -r; dv <= r; ++dv) {
+      if (v + dv < 0 || v + dv >= height) continue;
+      const uint64_t* in = steps_[static_cast<size_t>(half(dv))].data() +
+                           static_cast<size_t>(v + dv) * words;
+      for (size_t w = 0; w < words; ++w) o[w] |= in[w];
+    }
+  }
+  // Erosion: AND over the disk's rows of each row eroded by its half-width;
+  // rows beyond the image count as soil.
+  steps_[0] = scratch_;
+  for (int k = 1; k <= r; ++k) {
+    StepAlongU<false>(steps_[static_cast<size_t>(k - 1)], words_, height, width, steps_[static_cast<size_t>(k)]);
+  }
+  closed_bits_.assign(mask_bits_.size(), 0);
+  for (int v = r; v < height - r; ++v) {
+    uint64_t* o = closed_bits_.data() + static_cast<size_t>(v) * words;
+    std::fill(o, o + words, ~uint64_t{0});
+    for (int dv = -r; dv <= r; ++dv) {
+      const uint64_t* in = steps_[static_cast<size_t>(half(dv))].data() +
+                           static_cast<size_t>(v + dv) * words;
+      for (size_t w = 0; w < words; ++w) o[w] &= in[w];
+    }
+  }
+  for (size_t i = 0; i < closed_bits_.size(); ++i) closed_bits_[i] |= mask_bits_[i];
+  // Blobs before and after: a closed region keeps its new pixels only when it
+  // holds one blob of the mask.
+  Label(mask_bits_, width, height, mask_runs_, mask_parent_, mask_row_start_);
+  Label(closed_bits_, width, height, closed_runs_, closed_parent_, closed_row_start_);
+  first_blob_.assign(closed_runs_.size(), -1);
+  joins_.assign(closed_runs_.size(), 0);
+  for (int v = 0; v < height; ++v) {
+    int c = closed_row_start_[static_cast<size_t>(v)];
+    const int c_end = closed_row_start_[static_cast<size_t>(v) + 1];
+    for (int m = mask_row_start_[static_cast<size_t>(v)];
+         m < mask_row_start_[static_cast<size_t>(v) + 1]; ++m) {
+      // The closed run containing mask run m (the closing contains the mask).
+      while (c < c_end && closed_runs_[static_cast<size_t>(c)].u_end <= mask_runs_[static_cast<size_t>(m)].u_begin) ++c;
+      PLANTSCALE_CHECK(c < c_end, "closing lost a pixel of the mask");
+      const auto root = static_cast<size_t>(closed_parent_[static_cast<size_t>(c)]);
+      const int blob = mask_parent_[static_cast<size_t>(m)];
+      if (first_blob_[root] < 0) {
+        first_blob_[root] = blob;
+      } else if (first_blob_[root] != blob) {
+        joins_[root] = 1;
+      }
+    }
+  }
+  // New pixels: closed bits that were soil, in runs of regions that join
+  // nothing.
+  int added = 0;
+  for (size_t i = 0; i < closed_runs_.size(); ++i) {
+    if (joins_[static_cast<size_t>(closed_parent_[i])]) continue;
+    const Run& run = closed_runs_[i];
+    const size_t base = static_cast<size_t>(run.v) * words;
+    uint8_t* row = mask.ptr<uint8_t>(run.v);
+    for (int w = run.u_begin / 64; w <= (run.u_end - 1) / 64; ++w) {
+      uint64_t fresh = closed_bits_[base + static_cast<size_t>(w)] &
+                       ~mask_bits_[base + static_cast<size_t>(w)];
+      // Only this run's span of the word.
+      const int lo = std::max(run.u_begin - 64 * w, 0), hi = std::min(run.u_end - 64 * w, 64);
+      if (lo > 0) fresh &= ~uint64_t{0} << lo;
+      if (hi < 64) fresh &= (uint64_t{1} << hi) - 1;
+      while (fresh != 0) {
+        row[64 * w + std::countr_zero(fresh)] = 255;
+        fresh &= fresh - 1;
+        ++added;
+      }
+    }
+  }
+  return added;
 }
 
 }  // namespace plantscale::vision

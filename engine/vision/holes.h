@@ -39,4 +39,39 @@ class HoleFiller {
   std::vector<uint8_t> border_;  // per root run: reaches the image border
 };
 
+// Notches: a shaded leaf at a plant's edge cuts a notch into its blob rather
+// than a hole. The mask is closed (dilation, then erosion, by a disk of
+// `radius_px`), which fills notches narrower than the disk, and the closing
+// is kept only where it joins no two blobs: a closed region holding two or
+// more of the mask's blobs (touching plants, a weed beside a crop) keeps
+// its pixels as they were. Pixels within `radius_px` of the image border are
+// never added. Bit-packed rows (64 pixels a word), so the morphology costs
+// a few operations per word, and run-length union-find for the blobs;
+// buffers are kept.
+class NotchCloser {
+ public:
+  // Returns the number of pixels added to `mask` (CV_8UC1, 0 soil).
+  int Close(cv::Mat& mask, int radius_px);
+  // The disk: pixels (du, dv) with |du| <= DiskHalfWidth(r, dv), |dv| <= r.
+  static int DiskHalfWidth(int radius_px, int dv);
+
+ private:
+  struct Run {
+    int v, u_begin, u_end;
+  };
+  // 8-connected runs of the bit rows `bits` (words_ per row) into `runs`,
+  // united in `parent`; `row_start[v]` indexes row v's first run.
+  void Label(const std::vector<uint64_t>& bits, int width, int height, std::vector<Run>& runs,
+             std::vector<int>& parent, std::vector<int>& row_start);
+
+  int words_ = 0;
+  std::vector<uint64_t> mask_bits_, closed_bits_, scratch_;
+  std::vector<std::vector<uint64_t>> steps_;  // a row set dilated / eroded by 0..r pixels along u
+  std::vector<Run> mask_runs_, closed_runs_;
+  std::vector<int> mask_parent_, closed_parent_, mask_row_start_, closed_row_start_;
+  std::vector<int> first_blob_;   // per closed root: a mask blob root inside it, −1 before
+  std::vector<uint8_t> joins_;    // per closed root: holds two or more mask blobs
+  std::vector<int> half_;         // DiskHalfWidth per row offset
+};
+
 }  // namespace plantscale::vision

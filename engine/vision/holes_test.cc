@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "engine/common/rng.h"
 #include "engine/vision/segmenter.h"
@@ -114,6 +116,61 @@ TEST(Holes, SegmenterFillsAShadedPatchInsideAPlantButNotTheThesisBaseline) {
   thesis.smoothing_px = 0.0;
   Segmenter baseline(thesis);
   EXPECT_EQ(baseline.Process(image).mask.at<uint8_t>(60, 80), 0);
+}
+
+cv::Mat Disk(int r) {
+  cv::Mat k(2 * r + 1, 2 * r + 1, CV_8UC1, cv::Scalar(0));
+  for (int dv = -r; dv <= r; ++dv) {
+    const int h = NotchCloser::DiskHalfWidth(r, dv);
+    k.row(dv + r).colRange(r - h, r + h + 1).setTo(1);
+  }
+  return k;
+}
+
+TEST(Notches, ANotchNarrowerThanTheDiskIsClosedAndTwoBlobsAreNotJoined) {
+  cv::Mat mask(60, 80, CV_8UC1, cv::Scalar(0));
+  cv::circle(mask, {30, 30}, 15, cv::Scalar(255), cv::FILLED);
+  mask(cv::Rect(28, 15, 5, 10)).setTo(0);  // a notch 5 px wide, 10 deep, from the top
+  cv::Mat before = mask.clone();
+  NotchCloser closer;
+  const int added = closer.Close(mask, 4);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(28, 19, 5, 6))), 30);  // the notch below its mouth
+  EXPECT_EQ(added, cv::countNonZero(mask) - cv::countNonZero(before));
+  EXPECT_EQ(cv::countNonZero(before & ~mask), 0);  // nothing removed
+  // Two discs 3 px apart: closing would bridge them, so neither changes.
+  cv::Mat pair(60, 80, CV_8UC1, cv::Scalar(0));
+  cv::rectangle(pair, cv::Rect(10, 20, 20, 20), cv::Scalar(255), cv::FILLED);
+  cv::rectangle(pair, cv::Rect(33, 20, 20, 20), cv::Scalar(255), cv::FILLED);
+  before = pair.clone();
+  EXPECT_EQ(closer.Close(pair, 4), 0);
+  EXPECT_EQ(cv::countNonZero(pair != before), 0);
+}
+
+// One blob at a time, the result is OpenCV's closing with the same disk
+// (borders as soil), OR the mask.
+TEST(Notches, MatchesOpenCvClosingOfASingleBlob) {
+  Rng rng(11);
+  NotchCloser closer;
+  for (int trial = 0; trial < 30; ++trial) {
+    const int w = 40 + trial * 13 % 140, h = 30 + trial * 7 % 50, r = 1 + trial % 5;
+    cv::Mat mask(h, w, CV_8UC1, cv::Scalar(0));
+    // A random star-shaped blob: one connected piece with notches.
+    const cv::Point c(w / 2, h / 2);
+    std::vector<cv::Point> poly;
+    for (int k = 0; k < 24; ++k) {
+      const double a = 2.0 * M_PI * k / 24.0, rad = (0.15 + 0.3 * rng.Uniform()) * std::min(w, h);
+      poly.emplace_back(c.x + static_cast<int>(rad * std::cos(a)), c.y + static_cast<int>(rad * std::sin(a)));
+    }
+    cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{poly}, cv::Scalar(255));
+    cv::Mat expected;
+    cv::morphologyEx(mask, expected, cv::MORPH_CLOSE, Disk(r), cv::Point(-1, -1), 1,
+                     cv::BORDER_CONSTANT, cv::Scalar(0));
+    expected |= mask;
+    const int before = cv::countNonZero(mask);
+    const int added = closer.Close(mask, r);
+    EXPECT_EQ(cv::countNonZero(mask != expected), 0) << "trial " << trial << " r " << r;
+    EXPECT_EQ(added, cv::countNonZero(mask) - before) << "trial " << trial;
+  }
 }
 
 }  // namespace

@@ -35,6 +35,9 @@ OptionErrors SegmenterOptions::Validate() const {
   RequirePositive(e, "adaptive_gain", adaptive_gain);
   RequireInRange(e, "smoothing_px", smoothing_px, 0.0, 20.0);
   RequireInRange(e, "fill_holes_max_fraction", fill_holes_max_fraction, 0.0, 1.0);
+  if (close_notches_px < 0 || close_notches_px > 30) {
+    e.push_back({"close_notches_px", "must be in [0, 30]"});
+  }
   for (OptionError& b : Prefixed("blobs", blobs.Validate())) e.push_back(std::move(b));
   for (OptionError& l : Prefixed("local", local.Validate())) e.push_back(std::move(l));
   return e;
@@ -44,6 +47,7 @@ SegmenterOptions ThesisSegmenterOptions() {
   SegmenterOptions o;
   o.method = ThresholdMethod::kAdaptive;
   o.fill_holes_max_fraction = 0.0;
+  o.close_notches_px = 0;
   return o;
 }
 
@@ -119,6 +123,7 @@ void Segmenter::Threshold(const cv::Mat& image) {
       break;
     }
   }
+  if (options_.close_notches_px > 0) notches_.Close(result_.mask, options_.close_notches_px);
   if (options_.fill_holes_max_fraction > 0.0) {
     holes_.Fill(result_.mask, static_cast<int>(options_.fill_holes_max_fraction *
                                                static_cast<double>(result_.mask.total())));
