@@ -26,6 +26,8 @@ struct EvaluateArgs {
   std::string index;  // colour index for rgb frames (default: the segmenter's)
   double gain = 0.0;
   double smoothing_px = -1.0;
+  double fill_holes_max_fraction = -1.0;
+  int close_notches_px = -1;
 };
 
 nlohmann::json MethodJson(const MethodEvaluation& m) {
@@ -120,6 +122,8 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
     o.segmenter.fixed_threshold = a.gain;
   }
   if (a.smoothing_px >= 0) o.segmenter.smoothing_px = a.smoothing_px;
+  if (a.fill_holes_max_fraction >= 0) o.segmenter.fill_holes_max_fraction = a.fill_holes_max_fraction;
+  if (a.close_notches_px >= 0) o.segmenter.close_notches_px = a.close_notches_px;
   if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
@@ -201,6 +205,12 @@ void AddSegmentCommands(CommandRegistry& registry) {
       ->check(CLI::IsMember({"exg", "exgr", "cive"}));
   cmd->add_option("--gain", ev.gain, "its operating parameter (α, or τ for fixed)");
   cmd->add_option("--smoothing-px", ev.smoothing_px, "its smoothing sigma, pixels");
+  cmd->add_option("--fill-holes-max-fraction", ev.fill_holes_max_fraction,
+                  "holes up to this fraction of the image are filled (0: none)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--close-notches-px", ev.close_notches_px,
+                  "notches narrower than a disk of this radius are closed (0: none)")
+      ->check(CLI::Range(0, 30));
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
   cmd->add_option("--baseline", ev.baseline, "also report the thesis's baselines")
       ->check(CLI::IsMember({"thesis"}));

@@ -34,6 +34,8 @@ struct TreatmentArgs {
   std::optional<double> split_radius_m;
   std::optional<double> split_chi2;
   std::optional<double> split_cover_m;
+  std::optional<double> fill_holes_max_fraction;
+  std::optional<int> close_notches_px;
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
@@ -154,6 +156,8 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   if (a.split_chi2) o.treatment.classifier.split_assoc_chi2 = *a.split_chi2;
   if (a.split_cover_m) o.treatment.classifier.split_cover_m = *a.split_cover_m;
+  if (a.fill_holes_max_fraction) o.segmenter.fill_holes_max_fraction = *a.fill_holes_max_fraction;
+  if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
@@ -244,6 +248,12 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--split-chi2", args.split_chi2,
                   "merged blobs: association gate of each part's centroid (chi2)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--fill-holes-max-fraction", args.fill_holes_max_fraction,
+                  "segmentation: holes up to this fraction of the image are filled (0: none)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--close-notches-px", args.close_notches_px,
+                  "segmentation: notches narrower than a disk of this radius are closed (0: none)")
+      ->check(CLI::Range(0, 30));
   cmd->add_option("--split-cover-m", args.split_cover_m,
                   "merged blobs: a part with plant matter this close to its predicted crop is "
                   "that crop (0: the gate alone)")

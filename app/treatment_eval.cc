@@ -224,6 +224,8 @@ OptionErrors TreatmentEvalOptions::Validate() const {
   OptionErrors e = Prefixed("sim", sim.Validate());
   const OptionErrors t = Prefixed("treatment", treatment.Validate());
   e.insert(e.end(), t.begin(), t.end());
+  const OptionErrors g = Prefixed("segmenter", segmenter.Validate());
+  e.insert(e.end(), g.begin(), g.end());
   if (seeds < 1) e.push_back({"seeds", "must be >= 1"});
   if (true_valve_latency_s > 1.0) e.push_back({"true_valve_latency_s", "must be <= 1 s"});
   RequirePositive(e, "costs_ratio", costs_ratio);
@@ -283,7 +285,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
     sim::Simulator simulator(so);
     const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);
-    Chain ours(simulator, vision::SegmenterOptions{}, ProductTrackerOptions(so), options.treatment,
+    Chain ours(simulator, options.segmenter, ProductTrackerOptions(so), options.treatment,
                latency);
     ours.collect_samples = options.mrroc;
     std::optional<Chain> thesis;

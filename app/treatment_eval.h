@@ -16,12 +16,14 @@
 #include "engine/classify/mrroc.h"
 #include "engine/sim/simulator.h"
 #include "engine/treatment/treatment_system.h"
+#include "engine/vision/segmenter.h"
 
 namespace plantscale::app {
 
 struct TreatmentEvalOptions {
   sim::SimulatorOptions sim;
   int seeds = 5;
+  vision::SegmenterOptions segmenter;  // ours (the thesis's chain: ThesisSegmenterOptions)
   treatment::TreatmentOptions treatment;
   double true_valve_latency_s = -1.0;  // the simulated valves' latency; < 0: as scheduled
   bool baseline_thesis = false;
