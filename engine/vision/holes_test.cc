@@ -101,8 +101,9 @@ TEST(Holes, MatchesConnectedComponentsOfTheSoilOnRandomMasks) {
 
 TEST(Holes, SegmenterFillsAShadedPatchInsideAPlantButNotTheThesisBaseline) {
   // A bright plant on dark soil with a shaded patch in the middle, darker
-  // than the plant threshold.
-  cv::Mat image(120, 160, CV_8UC1, cv::Scalar(40));
+  // than the plant threshold: 113 pixels, under 0.5 % of the 240×320 image
+  // (384).
+  cv::Mat image(240, 320, CV_8UC1, cv::Scalar(40));
   cv::circle(image, {80, 60}, 25, cv::Scalar(200), cv::FILLED);
   cv::circle(image, {80, 60}, 6, cv::Scalar(60), cv::FILLED);
   SegmenterOptions ours;
@@ -116,6 +117,9 @@ TEST(Holes, SegmenterFillsAShadedPatchInsideAPlantButNotTheThesisBaseline) {
   thesis.smoothing_px = 0.0;
   Segmenter baseline(thesis);
   EXPECT_EQ(baseline.Process(image).mask.at<uint8_t>(60, 80), 0);
+  // The same patch in a 120×160 image is over 0.5 % of it (96): kept.
+  Segmenter small(ours);
+  EXPECT_EQ(small.Process(image(cv::Rect(0, 0, 160, 120))).mask.at<uint8_t>(60, 80), 0);
 }
 
 cv::Mat Disk(int r) {
