@@ -64,35 +64,11 @@ void BlobExtractor::FindRuns(const cv::Mat& mask) {
     const int cur_end = static_cast<int>(runs_.size());
     parent_.resize(runs_.size());
     for (int i = cur_begin; i < cur_end; ++i) parent_[static_cast<size_t>(i)] = i;
-    UniteRows(prev_begin, prev_end, cur_begin, cur_end);
+    // 8-connectivity: overlapping or meeting at a corner.
+    detail::UniteAdjacentRows(runs_, parent_, prev_begin, prev_end, cur_begin, cur_end, true);
     prev_begin = cur_begin;
     prev_end = cur_end;
   }
-}
-
-// 8-connectivity: runs of adjacent rows touch when they overlap or meet at a
-// corner. Two pointers, since both rows' runs are sorted by u.
-void BlobExtractor::UniteRows(int prev_begin, int prev_end, int cur_begin, int cur_end) {
-  int j = prev_begin;
-  for (int i = cur_begin; i < cur_end; ++i) {
-    const Run& cur = runs_[static_cast<size_t>(i)];
-    while (j < prev_end && runs_[static_cast<size_t>(j)].u_end < cur.u_begin) ++j;
-    for (int k = j; k < prev_end && runs_[static_cast<size_t>(k)].u_begin <= cur.u_end; ++k) {
-      const int a = Find(i), b = Find(k);
-      // The smaller run index stays the root: roots are first runs in raster order.
-      if (a < b) parent_[static_cast<size_t>(b)] = a;
-      if (b < a) parent_[static_cast<size_t>(a)] = b;
-    }
-  }
-}
-
-int BlobExtractor::Find(int i) {
-  auto& p = parent_;
-  while (p[static_cast<size_t>(i)] != i) {
-    p[static_cast<size_t>(i)] = p[static_cast<size_t>(p[static_cast<size_t>(i)])];
-    i = p[static_cast<size_t>(i)];
-  }
-  return i;
 }
 
 void BlobExtractor::Accumulate(const cv::Mat& mask) {

@@ -18,6 +18,7 @@
 
 #include "engine/common/options.h"
 #include "engine/geometry/camera_model.h"
+#include "engine/vision/row_bits.h"
 
 namespace plantscale::vision {
 
@@ -56,12 +57,9 @@ class BlobExtractor {
   const BlobOptions& options() const { return options_; }
 
  private:
-  struct Run {
-    int v, u_begin, u_end;  // pixels [u_begin, u_end) of image row v
-  };
+  using Run = detail::RowRun;  // pixels [u_begin, u_end) of image row v
   void FindRuns(const cv::Mat& mask);
-  void UniteRows(int prev_begin, int prev_end, int cur_begin, int cur_end);
-  int Find(int i);
+  int Find(int i) { return detail::FindRoot(parent_, i); }
   void Accumulate(const cv::Mat& mask);
 
   BlobOptions options_;

@@ -10,15 +10,6 @@
 
 namespace plantscale::vision {
 
-int HoleFiller::Find(int i) {
-  auto& p = parent_;
-  while (p[static_cast<size_t>(i)] != i) {
-    p[static_cast<size_t>(i)] = p[static_cast<size_t>(p[static_cast<size_t>(i)])];
-    i = p[static_cast<size_t>(i)];
-  }
-  return i;
-}
-
 int HoleFiller::Fill(cv::Mat& mask, int max_area_px) {
   PLANTSCALE_CHECK(mask.type() == CV_8UC1, "mask must be CV_8UC1");
   if (mask.empty() || max_area_px <= 0) return 0;
@@ -39,32 +30,24 @@ int HoleFiller::Fill(cv::Mat& mask, int max_area_px) {
     });
     const int cur_end = static_cast<int>(runs_.size());
     // 4-connectivity: runs of adjacent rows join when they share a column.
-    int j = prev_begin;
-    for (int i = cur_begin; i < cur_end; ++i) {
-      const Run& cur = runs_[static_cast<size_t>(i)];
-      while (j < prev_end && runs_[static_cast<size_t>(j)].u_end <= cur.u_begin) ++j;
-      for (int k = j; k < prev_end && runs_[static_cast<size_t>(k)].u_begin < cur.u_end; ++k) {
-        const int a = Find(i), b = Find(k);
-        if (a < b) parent_[static_cast<size_t>(b)] = a;
-        if (b < a) parent_[static_cast<size_t>(a)] = b;
-      }
-    }
+    detail::UniteAdjacentRows(runs_, parent_, prev_begin, prev_end, cur_begin, cur_end, false);
     prev_begin = cur_begin;
     prev_end = cur_end;
   }
+  detail::ResolveRoots(parent_);
   area_.assign(runs_.size(), 0);
   border_.assign(runs_.size(), 0);
   for (size_t i = 0; i < runs_.size(); ++i) {
-    const Run& r = runs_[i];
-    const auto root = static_cast<size_t>(Find(static_cast<int>(i)));
+    const detail::RowRun& r = runs_[i];
+    const auto root = static_cast<size_t>(parent_[i]);
     area_[root] += r.u_end - r.u_begin;
     if (r.v == 0 || r.v == height - 1 || r.u_begin == 0 || r.u_end == width) border_[root] = 1;
   }
   int filled = 0;
   for (size_t i = 0; i < runs_.size(); ++i) {
-    const auto root = static_cast<size_t>(parent_[i]);  // compressed by the pass above
+    const auto root = static_cast<size_t>(parent_[i]);
     if (border_[root] || area_[root] > max_area_px) continue;
-    const Run& r = runs_[i];
+    const detail::RowRun& r = runs_[i];
     std::memset(mask.ptr<uint8_t>(r.v) + r.u_begin, 255, static_cast<size_t>(r.u_end - r.u_begin));
     filled += r.u_end - r.u_begin;
   }
@@ -72,14 +55,6 @@ int HoleFiller::Fill(cv::Mat& mask, int max_area_px) {
 }
 
 namespace {
-
-int FindRoot(std::vector<int>& p, int i) {
-  while (p[static_cast<size_t>(i)] != i) {
-    p[static_cast<size_t>(i)] = p[static_cast<size_t>(p[static_cast<size_t>(i)])];
-    i = p[static_cast<size_t>(i)];
-  }
-  return i;
-}
 
 // out = in dilated (kDilate) or eroded by one pixel along u; `in` holds
 // rows of `words` words one after the other. One flat pass over every word
@@ -115,7 +90,7 @@ void StepAlongU(const std::vector<uint64_t>& in, int words, int rows, int width,
 }  // namespace
 
 void NotchCloser::Label(const std::vector<uint64_t>& bits, int width, int height,
-                        std::vector<Run>& runs, std::vector<int>& parent,
+                        std::vector<detail::RowRun>& runs, std::vector<int>& parent,
                         std::vector<int>& row_start) {
   runs.clear();
   parent.clear();
@@ -130,24 +105,12 @@ void NotchCloser::Label(const std::vector<uint64_t>& bits, int width, int height
                          runs.push_back({v, begin, end});
                        });
     const int cur_end = static_cast<int>(runs.size());
-    // 8-connectivity: overlapping or meeting at a corner.
-    int j = prev_begin;
-    for (int i = cur_begin; i < cur_end; ++i) {
-      const Run& cur = runs[static_cast<size_t>(i)];
-      while (j < prev_end && runs[static_cast<size_t>(j)].u_end < cur.u_begin) ++j;
-      for (int k = j; k < prev_end && runs[static_cast<size_t>(k)].u_begin <= cur.u_end; ++k) {
-        const int a = FindRoot(parent, i), b = FindRoot(parent, k);
-        if (a < b) parent[static_cast<size_t>(b)] = a;
-        if (b < a) parent[static_cast<size_t>(a)] = b;
-      }
-    }
+    detail::UniteAdjacentRows(runs, parent, prev_begin, prev_end, cur_begin, cur_end, true);
     prev_begin = cur_begin;
     prev_end = cur_end;
   }
   row_start[static_cast<size_t>(height)] = static_cast<int>(runs.size());
-  // A root is the smallest index of its set, so every parent precedes its
-  // child: one pass in order leaves each run pointing at its root.
-  for (size_t i = 0; i < runs.size(); ++i) parent[i] = parent[static_cast<size_t>(parent[i])];
+  detail::ResolveRoots(parent);
 }
 
 int NotchCloser::DiskHalfWidth(int radius_px, int dv) {
@@ -228,7 +191,7 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   int added = 0;
   for (size_t i = 0; i < closed_runs_.size(); ++i) {
     if (joins_[static_cast<size_t>(closed_parent_[i])]) continue;
-    const Run& run = closed_runs_[i];
+    const detail::RowRun& run = closed_runs_[i];
     const size_t base = static_cast<size_t>(run.v) * words;
     uint8_t* row = mask.ptr<uint8_t>(run.v);
     for (int w = run.u_begin / 64; w <= (run.u_end - 1) / 64; ++w) {

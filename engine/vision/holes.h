@@ -18,6 +18,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/vision/row_bits.h"
+
 namespace plantscale::vision {
 
 class HoleFiller {
@@ -27,12 +29,7 @@ class HoleFiller {
   int Fill(cv::Mat& mask, int max_area_px);
 
  private:
-  struct Run {
-    int v, u_begin, u_end;  // soil pixels [u_begin, u_end) of image row v
-  };
-  int Find(int i);
-
-  std::vector<Run> runs_;
+  std::vector<detail::RowRun> runs_;  // soil runs
   std::vector<int> parent_;
   std::vector<uint64_t> bits_;
   std::vector<int> area_;        // per root run
@@ -56,18 +53,16 @@ class NotchCloser {
   static int DiskHalfWidth(int radius_px, int dv);
 
  private:
-  struct Run {
-    int v, u_begin, u_end;
-  };
   // 8-connected runs of the bit rows `bits` (words_ per row) into `runs`,
   // united in `parent`; `row_start[v]` indexes row v's first run.
-  void Label(const std::vector<uint64_t>& bits, int width, int height, std::vector<Run>& runs,
-             std::vector<int>& parent, std::vector<int>& row_start);
+  void Label(const std::vector<uint64_t>& bits, int width, int height,
+             std::vector<detail::RowRun>& runs, std::vector<int>& parent,
+             std::vector<int>& row_start);
 
   int words_ = 0;
   std::vector<uint64_t> mask_bits_, closed_bits_, scratch_;
   std::vector<std::vector<uint64_t>> steps_;  // a row set dilated / eroded by 0..r pixels along u
-  std::vector<Run> mask_runs_, closed_runs_;
+  std::vector<detail::RowRun> mask_runs_, closed_runs_;
   std::vector<int> mask_parent_, closed_parent_, mask_row_start_, closed_row_start_;
   std::vector<int> first_blob_;   // per closed root: a mask blob root inside it, −1 before
   std::vector<uint8_t> joins_;    // per closed root: holds two or more mask blobs

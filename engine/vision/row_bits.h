@@ -4,7 +4,9 @@
 // compare with SSE2 (baseline x86-64).
 
 #include <bit>
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -56,6 +58,48 @@ void ForEachRun(const uint64_t* words, int width, F&& run) {
     }
   }
   if (begin >= 0) run(begin, width);
+}
+
+// Runs of set pixels and their connected sets (holes.cc): pixels
+// [u_begin, u_end) of image row v; `parent` holds, per run, a run of the
+// same set with a smaller index (the set's root is its first run).
+struct RowRun {
+  int v, u_begin, u_end;
+};
+
+inline int FindRoot(std::vector<int>& parent, int i) {
+  while (parent[static_cast<size_t>(i)] != i) {
+    parent[static_cast<size_t>(i)] = parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];
+    i = parent[static_cast<size_t>(i)];
+  }
+  return i;
+}
+
+// Joins the runs [cur_begin, cur_end) of a row with those [prev_begin,
+// prev_end) of the row above that touch them: sharing a column, or with
+// `diagonal` also meeting at a corner (8-connectivity). Two pointers, since
+// both rows' runs are sorted by u.
+inline void UniteAdjacentRows(const std::vector<RowRun>& runs, std::vector<int>& parent,
+                              int prev_begin, int prev_end, int cur_begin, int cur_end,
+                              bool diagonal) {
+  const int reach = diagonal ? 1 : 0;
+  int j = prev_begin;
+  for (int i = cur_begin; i < cur_end; ++i) {
+    const RowRun& cur = runs[static_cast<size_t>(i)];
+    while (j < prev_end && runs[static_cast<size_t>(j)].u_end + reach <= cur.u_begin) ++j;
+    for (int k = j; k < prev_end && runs[static_cast<size_t>(k)].u_begin < cur.u_end + reach;
+         ++k) {
+      const int a = FindRoot(parent, i), b = FindRoot(parent, k);
+      if (a < b) parent[static_cast<size_t>(b)] = a;
+      if (b < a) parent[static_cast<size_t>(a)] = b;
+    }
+  }
+}
+
+// Every run's parent becomes its set's root: parents precede their children,
+// so one pass in order suffices.
+inline void ResolveRoots(std::vector<int>& parent) {
+  for (size_t i = 0; i < parent.size(); ++i) parent[i] = parent[static_cast<size_t>(parent[i])];
 }
 
 }  // namespace plantscale::vision::detail
