@@ -3,6 +3,7 @@
 // listed in station.h). Separate from the event loop so tests can drive it.
 
 #include <chrono>
+#include <iterator>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -17,7 +18,7 @@ namespace plantscale::ui {
 inline std::string WhyName(int why) {
   static const char* names[] = {"undecided", "crop in its region", "outside crop region", "too small",
                                 "too large", "failsafe", "spray mode", "run ended before the bar"};
-  return why >= 0 && why < 8 ? names[why] : "?";
+  return why >= 0 && why < static_cast<int>(std::size(names)) ? names[why] : "?";
 }
 
 class StationController {

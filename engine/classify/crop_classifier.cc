@@ -167,15 +167,14 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
   int parts = 0;
   for (size_t k = 0; k < predictions.size(); ++k) {
     if (!(area[k] > 0.0)) continue;
+    // A part with plant matter on its prediction is inside its region
+    // (γ² = 0) whatever its cut centroid; the size filter still applies.
+    const bool covers = nearest2[k] <= options_.split_cover_m * options_.split_cover_m;
     const Eigen::Vector2d nu = moment[k] / area[k] - predictions[k].ground_m;
     const Eigen::Matrix2d s = AssociationCovariance(predictions[k], covariance, options_);
-    const double g2 = nu.dot(s.ldlt().solve(nu));
-    part_crop[k] = IsCrop(area[k], clipped, g2, size_filter_m2_,
-                          options_.split_assoc_chi2, options_.sure_crop_area_m2);
-    if (!part_crop[k] && (clipped || area[k] >= size_filter_m2_) &&
-        nearest2[k] <= options_.split_cover_m * options_.split_cover_m) {
-      part_crop[k] = 1;
-    }
+    const double g2 = covers ? 0.0 : nu.dot(s.ldlt().solve(nu));
+    part_crop[k] = IsCrop(area[k], clipped, g2, size_filter_m2_, options_.split_assoc_chi2,
+                          options_.sure_crop_area_m2);
     parts += part_crop[k];
   }
   for (size_t i = 0; i < ground_m.size(); ++i) {

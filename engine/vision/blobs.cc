@@ -52,23 +52,14 @@ BlobExtractor::BlobExtractor(const BlobOptions& options) : options_(options) {
 }
 
 void BlobExtractor::FindRuns(const cv::Mat& mask) {
-  runs_.clear();
-  const int words = (mask.cols + 63) / 64;
-  row_bits_.resize(static_cast<size_t>(words));
-  int prev_begin = 0, prev_end = 0;
-  for (int v = 0; v < mask.rows; ++v) {
-    detail::RowBits(mask.ptr<uint8_t>(v), mask.cols, row_bits_.data());
-    const int cur_begin = static_cast<int>(runs_.size());
-    detail::ForEachRun(row_bits_.data(), mask.cols,
-                       [&](int begin, int end) { runs_.push_back({v, begin, end}); });
-    const int cur_end = static_cast<int>(runs_.size());
-    parent_.resize(runs_.size());
-    for (int i = cur_begin; i < cur_end; ++i) parent_[static_cast<size_t>(i)] = i;
-    // 8-connectivity: overlapping or meeting at a corner.
-    detail::UniteAdjacentRows(runs_, parent_, prev_begin, prev_end, cur_begin, cur_end, true);
-    prev_begin = cur_begin;
-    prev_end = cur_end;
-  }
+  row_bits_.resize(static_cast<size_t>((mask.cols + 63) / 64));
+  detail::LabelRuns(
+      mask.cols, mask.rows, true,
+      [&](int v) {
+        detail::RowBits(mask.ptr<uint8_t>(v), mask.cols, row_bits_.data());
+        return row_bits_.data();
+      },
+      runs_, parent_);
 }
 
 void BlobExtractor::Accumulate(const cv::Mat& mask) {
@@ -79,7 +70,7 @@ void BlobExtractor::Accumulate(const cv::Mat& mask) {
   int slots = 0;
   for (size_t i = 0; i < runs_.size(); ++i) {
     const Run& r = runs_[i];
-    const auto root = static_cast<size_t>(Find(static_cast<int>(i)));
+    const auto root = static_cast<size_t>(parent_[i]);  // FindRuns resolved the roots
     if (run_blob_[root] < 0) {
       run_blob_[root] = slots++;
       moments_.insert(moments_.end(), 6, 0.0);

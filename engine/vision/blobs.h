@@ -59,7 +59,6 @@ class BlobExtractor {
  private:
   using Run = detail::RowRun;  // pixels [u_begin, u_end) of image row v
   void FindRuns(const cv::Mat& mask);
-  int Find(int i) { return detail::FindRoot(parent_, i); }
   void Accumulate(const cv::Mat& mask);
 
   BlobOptions options_;

@@ -15,26 +15,16 @@ int HoleFiller::Fill(cv::Mat& mask, int max_area_px) {
   if (mask.empty() || max_area_px <= 0) return 0;
   const int width = mask.cols, height = mask.rows, words = (width + 63) / 64;
   bits_.resize(static_cast<size_t>(words));
-  runs_.clear();
-  parent_.clear();
-  int prev_begin = 0, prev_end = 0;
-  for (int v = 0; v < height; ++v) {
-    detail::RowBits(mask.ptr<uint8_t>(v), width, bits_.data());
-    // Soil bits: the complement within the row.
-    for (int w = 0; w < words; ++w) bits_[static_cast<size_t>(w)] = ~bits_[static_cast<size_t>(w)];
-    if (width % 64 != 0) bits_.back() &= (uint64_t{1} << (width % 64)) - 1;
-    const int cur_begin = static_cast<int>(runs_.size());
-    detail::ForEachRun(bits_.data(), width, [&](int begin, int end) {
-      parent_.push_back(static_cast<int>(runs_.size()));
-      runs_.push_back({v, begin, end});
-    });
-    const int cur_end = static_cast<int>(runs_.size());
-    // 4-connectivity: runs of adjacent rows join when they share a column.
-    detail::UniteAdjacentRows(runs_, parent_, prev_begin, prev_end, cur_begin, cur_end, false);
-    prev_begin = cur_begin;
-    prev_end = cur_end;
-  }
-  detail::ResolveRoots(parent_);
+  // Soil: the complement of each row within the image, 4-connected.
+  detail::LabelRuns(
+      width, height, false,
+      [&](int v) {
+        detail::RowBits(mask.ptr<uint8_t>(v), width, bits_.data());
+        for (uint64_t& w : bits_) w = ~w;
+        if (width % 64 != 0) bits_.back() &= (uint64_t{1} << (width % 64)) - 1;
+        return bits_.data();
+      },
+      runs_, parent_);
   area_.assign(runs_.size(), 0);
   border_.assign(runs_.size(), 0);
   for (size_t i = 0; i < runs_.size(); ++i) {
@@ -89,30 +79,6 @@ void StepAlongU(const std::vector<uint64_t>& in, int words, int rows, int width,
 
 }  // namespace
 
-void NotchCloser::Label(const std::vector<uint64_t>& bits, int width, int height,
-                        std::vector<detail::RowRun>& runs, std::vector<int>& parent,
-                        std::vector<int>& row_start) {
-  runs.clear();
-  parent.clear();
-  row_start.assign(static_cast<size_t>(height) + 1, 0);
-  int prev_begin = 0, prev_end = 0;
-  for (int v = 0; v < height; ++v) {
-    const int cur_begin = static_cast<int>(runs.size());
-    row_start[static_cast<size_t>(v)] = cur_begin;
-    detail::ForEachRun(bits.data() + static_cast<size_t>(v) * static_cast<size_t>(words_), width,
-                       [&](int begin, int end) {
-                         parent.push_back(static_cast<int>(runs.size()));
-                         runs.push_back({v, begin, end});
-                       });
-    const int cur_end = static_cast<int>(runs.size());
-    detail::UniteAdjacentRows(runs, parent, prev_begin, prev_end, cur_begin, cur_end, true);
-    prev_begin = cur_begin;
-    prev_end = cur_end;
-  }
-  row_start[static_cast<size_t>(height)] = static_cast<int>(runs.size());
-  detail::ResolveRoots(parent);
-}
-
 int NotchCloser::DiskHalfWidth(int radius_px, int dv) {
   return static_cast<int>(std::floor(std::sqrt(radius_px * radius_px - dv * dv + 0.5)));
 }
@@ -121,8 +87,8 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   PLANTSCALE_CHECK(mask.type() == CV_8UC1, "mask must be CV_8UC1");
   const int width = mask.cols, height = mask.rows, r = radius_px;
   if (mask.empty() || r <= 0 || 2 * r >= height) return 0;
-  words_ = (width + 63) / 64;
-  const auto words = static_cast<size_t>(words_);
+  const int words_per_row = (width + 63) / 64;
+  const auto words = static_cast<size_t>(words_per_row);
   mask_bits_.resize(words * static_cast<size_t>(height));
   for (int v = 0; v < height; ++v) {
     detail::RowBits(mask.ptr<uint8_t>(v), width, mask_bits_.data() + static_cast<size_t>(v) * words);
@@ -134,7 +100,7 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   // Dilation: OR over the disk's rows of each row dilated by its half-width.
   steps_[0] = mask_bits_;
   for (int k = 1; k <= r; ++k) {
-    StepAlongU<true>(steps_[static_cast<size_t>(k - 1)], words_, height, width, steps_[static_cast<size_t>(k)]);
+    StepAlongU<true>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
   }
   scratch_.assign(mask_bits_.size(), 0);
   for (int v = 0; v < height; ++v) {
@@ -150,7 +116,7 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   // rows beyond the image count as soil.
   steps_[0] = scratch_;
   for (int k = 1; k <= r; ++k) {
-    StepAlongU<false>(steps_[static_cast<size_t>(k - 1)], words_, height, width, steps_[static_cast<size_t>(k)]);
+    StepAlongU<false>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
   }
   closed_bits_.assign(mask_bits_.size(), 0);
   for (int v = r; v < height - r; ++v) {
@@ -165,8 +131,14 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   for (size_t i = 0; i < closed_bits_.size(); ++i) closed_bits_[i] |= mask_bits_[i];
   // Blobs before and after: a closed region keeps its new pixels only when it
   // holds one blob of the mask.
-  Label(mask_bits_, width, height, mask_runs_, mask_parent_, mask_row_start_);
-  Label(closed_bits_, width, height, closed_runs_, closed_parent_, closed_row_start_);
+  const auto label = [&](const std::vector<uint64_t>& bits, std::vector<detail::RowRun>& runs,
+                         std::vector<int>& parent, std::vector<int>& row_start) {
+    detail::LabelRuns(
+        width, height, true, [&](int v) { return bits.data() + static_cast<size_t>(v) * words; },
+        runs, parent, &row_start);
+  };
+  label(mask_bits_, mask_runs_, mask_parent_, mask_row_start_);
+  label(closed_bits_, closed_runs_, closed_parent_, closed_row_start_);
   first_blob_.assign(closed_runs_.size(), -1);
   joins_.assign(closed_runs_.size(), 0);
   for (int v = 0; v < height; ++v) {

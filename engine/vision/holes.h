@@ -53,13 +53,6 @@ class NotchCloser {
   static int DiskHalfWidth(int radius_px, int dv);
 
  private:
-  // 8-connected runs of the bit rows `bits` (words_ per row) into `runs`,
-  // united in `parent`; `row_start[v]` indexes row v's first run.
-  void Label(const std::vector<uint64_t>& bits, int width, int height,
-             std::vector<detail::RowRun>& runs, std::vector<int>& parent,
-             std::vector<int>& row_start);
-
-  int words_ = 0;
   std::vector<uint64_t> mask_bits_, closed_bits_, scratch_;
   std::vector<std::vector<uint64_t>> steps_;  // a row set dilated / eroded by 0..r pixels along u
   std::vector<detail::RowRun> mask_runs_, closed_runs_;

@@ -102,4 +102,33 @@ inline void ResolveRoots(std::vector<int>& parent) {
   for (size_t i = 0; i < parent.size(); ++i) parent[i] = parent[static_cast<size_t>(parent[i])];
 }
 
+// The runs of set bits of `height` rows of `width` pixels, row_words(v)
+// giving row v's words, into `runs` (raster order) and their connected sets
+// into `parent`, each run pointing at its set's root (`diagonal`: 8-, else
+// 4-connectivity). With `row_start`, row v's runs are [row_start[v],
+// row_start[v + 1]).
+template <typename RowWords>
+void LabelRuns(int width, int height, bool diagonal, RowWords&& row_words,
+               std::vector<RowRun>& runs, std::vector<int>& parent,
+               std::vector<int>* row_start = nullptr) {
+  runs.clear();
+  parent.clear();
+  if (row_start) row_start->assign(static_cast<size_t>(height) + 1, 0);
+  int prev_begin = 0, prev_end = 0;
+  for (int v = 0; v < height; ++v) {
+    const int cur_begin = static_cast<int>(runs.size());
+    if (row_start) (*row_start)[static_cast<size_t>(v)] = cur_begin;
+    ForEachRun(row_words(v), width, [&](int begin, int end) {
+      parent.push_back(static_cast<int>(runs.size()));
+      runs.push_back({v, begin, end});
+    });
+    const int cur_end = static_cast<int>(runs.size());
+    UniteAdjacentRows(runs, parent, prev_begin, prev_end, cur_begin, cur_end, diagonal);
+    prev_begin = cur_begin;
+    prev_end = cur_end;
+  }
+  if (row_start) (*row_start)[static_cast<size_t>(height)] = static_cast<int>(runs.size());
+  ResolveRoots(parent);
+}
+
 }  // namespace plantscale::vision::detail
