@@ -28,6 +28,7 @@ struct EvaluateArgs {
   double smoothing_px = -1.0;
   double fill_holes_max_fraction = -1.0;
   int close_notches_px = -1;
+  double hull_gain = -1.0;
 };
 
 nlohmann::json MethodJson(const MethodEvaluation& m) {
@@ -124,6 +125,7 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.smoothing_px >= 0) o.segmenter.smoothing_px = a.smoothing_px;
   if (a.fill_holes_max_fraction >= 0) o.segmenter.fill_holes_max_fraction = a.fill_holes_max_fraction;
   if (a.close_notches_px >= 0) o.segmenter.close_notches_px = a.close_notches_px;
+  if (a.hull_gain >= 0) o.segmenter.hull_gain = a.hull_gain;
   if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
@@ -211,6 +213,9 @@ void AddSegmentCommands(CommandRegistry& registry) {
   cmd->add_option("--close-notches-px", ev.close_notches_px,
                   "notches narrower than a disk of this radius are closed (0: none)")
       ->check(CLI::Range(0, 30));
+  cmd->add_option("--hull-gain", ev.hull_gain,
+                  "inside a blob's convex hull, plant at this lower local gain (0: off)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
   cmd->add_option("--baseline", ev.baseline, "also report the thesis's baselines")
       ->check(CLI::IsMember({"thesis"}));

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <opencv2/imgproc.hpp>
 
 #include "engine/common/check.h"
 #include "engine/vision/row_bits.h"
@@ -178,6 +179,96 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
         fresh &= fresh - 1;
         ++added;
       }
+    }
+  }
+  return added;
+}
+
+int HullGrower::Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px, double min_solidity) {
+  PLANTSCALE_CHECK(mask.type() == CV_8UC1 && low.type() == CV_8UC1 && low.size() == mask.size(),
+                   "hull growth needs two CV_8UC1 masks of one size");
+  if (mask.empty()) return 0;
+  const int width = mask.cols, height = mask.rows;
+  bits_.resize(static_cast<size_t>((width + 63) / 64));
+  detail::LabelRuns(
+      width, height, true,
+      [&](int v) {
+        detail::RowBits(mask.ptr<uint8_t>(v), width, bits_.data());
+        return bits_.data();
+      },
+      runs_, parent_);
+  // Each blob's area, and its runs' end points chained per root.
+  area_.assign(runs_.size(), 0);
+  first_point_.assign(runs_.size(), -1);
+  ends_.clear();
+  next_point_.clear();
+  for (size_t i = 0; i < runs_.size(); ++i) {
+    const detail::RowRun& r = runs_[i];
+    const auto root = static_cast<size_t>(parent_[i]);
+    area_[root] += r.u_end - r.u_begin;
+    for (const int u : {r.u_begin, r.u_end - 1}) {
+      next_point_.push_back(first_point_[root]);
+      first_point_[root] = static_cast<int>(ends_.size());
+      ends_.push_back({u, r.v});
+    }
+  }
+  hull_.create(mask.size(), CV_8UC1);
+  hull_.setTo(0);
+  bool any = false;
+  for (size_t i = 0; i < runs_.size(); ++i) {
+    if (static_cast<size_t>(parent_[i]) != i || area_[i] < min_area_px) continue;
+    points_.clear();
+    for (int k = first_point_[i]; k >= 0; k = next_point_[static_cast<size_t>(k)]) {
+      points_.push_back(ends_[static_cast<size_t>(k)]);
+    }
+    cv::convexHull(points_, hull_points_);
+    if (area_[i] < min_solidity * (cv::contourArea(hull_points_) + 0.5 * cv::arcLength(hull_points_, true) + 1.0)) continue;
+    cv::fillConvexPoly(hull_, hull_points_, cv::Scalar(255), cv::LINE_8);
+    any = true;
+  }
+  if (!any) return 0;
+  // The grown mask, labelled; a grown region holding two or more blobs of
+  // the mask (of the size that gets a hull) keeps its pixels as they were.
+  grown_.create(mask.size(), CV_8UC1);
+  for (int v = 0; v < height; ++v) {
+    const uint8_t* m = mask.ptr<uint8_t>(v);
+    const uint8_t* l = low.ptr<uint8_t>(v);
+    const uint8_t* h = hull_.ptr<uint8_t>(v);
+    uint8_t* g = grown_.ptr<uint8_t>(v);
+    for (int u = 0; u < width; ++u) g[u] = m[u] | (l[u] & h[u]);
+  }
+  detail::LabelRuns(
+      width, height, true,
+      [&](int v) {
+        detail::RowBits(grown_.ptr<uint8_t>(v), width, bits_.data());
+        return bits_.data();
+      },
+      grown_runs_, grown_parent_, &grown_row_start_);
+  first_blob_.assign(grown_runs_.size(), -1);
+  joins_.assign(grown_runs_.size(), 0);
+  for (size_t i = 0; i < runs_.size(); ++i) {
+    if (static_cast<size_t>(parent_[i]) != i || area_[i] < min_area_px) continue;
+    const detail::RowRun& r = runs_[i];
+    // The grown run holding this blob's first run: the last one starting at or before it.
+    const auto row_begin = grown_runs_.begin() + grown_row_start_[static_cast<size_t>(r.v)];
+    const auto row_end = grown_runs_.begin() + grown_row_start_[static_cast<size_t>(r.v) + 1];
+    const auto it = std::upper_bound(row_begin, row_end, r.u_begin,
+                                     [](int u, const detail::RowRun& g) { return u < g.u_begin; });
+    const auto g = static_cast<size_t>(grown_parent_[static_cast<size_t>(it - 1 - grown_runs_.begin())]);
+    if (first_blob_[g] < 0) {
+      first_blob_[g] = static_cast<int>(i);
+    } else if (first_blob_[g] != static_cast<int>(i)) {
+      joins_[g] = 1;
+    }
+  }
+  int added = 0;
+  for (size_t i = 0; i < grown_runs_.size(); ++i) {
+    if (joins_[static_cast<size_t>(grown_parent_[i])]) continue;
+    const detail::RowRun& r = grown_runs_[i];
+    uint8_t* m = mask.ptr<uint8_t>(r.v);
+    for (int u = r.u_begin; u < r.u_end; ++u) {
+      added += m[u] == 0;
+      m[u] = 255;
     }
   }
   return added;

@@ -62,4 +62,36 @@ class NotchCloser {
   std::vector<int> half_;         // DiskHalfWidth per row offset
 };
 
+// Shaded leaf at a plant's edge, wider than a notch the closing fills: it
+// lies inside the plant's outline, so inside the convex hull of the blob
+// its bright leaves make, at a brightness (about half a lit leaf's) that
+// soil away from plants does not reach but the global gain misses. Inside
+// the hull of every blob of at least `min_area_px` pixels, the pixels of a
+// second, lower-gain mask are added. Soil outside every hull is never
+// touched, so a glint or the smoothing's halo beside a plant stays soil;
+// soil between a plant's lobes that the hull takes in is added only where
+// it is brighter than the lower gain (the halo's core). As with notches,
+// growth that would join two blobs (touching plants, preset A) is not kept:
+// a grown region holding two or more of the mask's blobs of that size keeps
+// its pixels as they were. Hull of each blob
+// from its runs' end points (run-length union-find as BlobExtractor's),
+// filled with cv::fillConvexPoly; buffers are kept.
+class HullGrower {
+ public:
+  // Sets to 255 the pixels of `mask` (CV_8UC1, 0 soil) that are set in
+  // `low` (CV_8UC1, same size) and lie inside the convex hull of a blob of
+  // `mask` (8-connected) of at least `min_area_px` pixels, unless the grown
+  // region joins two such blobs. Returns the number of pixels added.
+  int Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px, double min_solidity = 0.0);
+
+ private:
+  std::vector<uint64_t> bits_;
+  std::vector<detail::RowRun> runs_, grown_runs_;
+  std::vector<int> parent_, area_, first_point_, next_point_;
+  std::vector<int> grown_parent_, grown_row_start_, first_blob_;
+  std::vector<uint8_t> joins_;  // per grown root: holds two or more blobs
+  std::vector<cv::Point> ends_, points_, hull_points_;
+  cv::Mat hull_, grown_;
+};
+
 }  // namespace plantscale::vision

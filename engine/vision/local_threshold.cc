@@ -19,17 +19,16 @@ OptionErrors LocalThresholdOptions::Validate() const {
   return e;
 }
 
-LocalThreshold::LocalThreshold(const LocalThresholdOptions& options) : options_(options) {
-  ThrowIfInvalid("local threshold options", options_.Validate());
-  // α·max(B, min_level) for every byte B, by the same OpenCV calls
-  // (cv::max, convertTo) the cell image would take.
-  cv::Mat ramp(1, 256, CV_8UC1), lut;
-  for (int b = 0; b < 256; ++b) ramp.at<uint8_t>(0, b) = static_cast<uint8_t>(b);
-  cv::max(ramp, options_.min_level, lut);
-  lut.convertTo(gain_lut_, CV_8U, options_.gain);
-}
-
 namespace {
+
+// α·max(B, min_level) for every byte B, by the same OpenCV calls (cv::max,
+// convertTo) the cell image would take.
+void GainLut(double gain, double min_level, cv::Mat& lut) {
+  cv::Mat ramp(1, 256, CV_8UC1), floored;
+  for (int b = 0; b < 256; ++b) ramp.at<uint8_t>(0, b) = static_cast<uint8_t>(b);
+  cv::max(ramp, min_level, floored);
+  floored.convertTo(lut, CV_8U, gain);
+}
 
 // sums[u] += row[u] over one row (a cell row's column sums, 16 bits hold
 // up to 257 rows of 255).
@@ -143,6 +142,11 @@ void ExpandRow(const uint8_t* __restrict t, int cells, uint8_t* __restrict out) 
 
 }  // namespace
 
+LocalThreshold::LocalThreshold(const LocalThresholdOptions& options) : options_(options) {
+  ThrowIfInvalid("local threshold options", options_.Validate());
+  GainLut(options_.gain, options_.min_level, gain_lut_);
+}
+
 // Block means of `grey` on the cell grid: whole cells rounded as INTER_AREA
 // rounds them for an integer factor (the same bytes), INTER_AREA itself
 // otherwise.
@@ -188,9 +192,10 @@ void LocalThreshold::Estimate(const cv::Mat& grey) {
 }
 
 // α·B of every cell row, linearly interpolated along u to full width.
-void LocalThreshold::ExpandThresholdRows(int width) {
-  cv::LUT(opened_, gain_lut_, threshold_cells_);
-  const int cells = threshold_cells_.cols;
+void LocalThreshold::ExpandThresholdRows(int width, const cv::Mat& gain_lut, cv::Mat& cells_out,
+                                         cv::Mat& expanded) {
+  cv::LUT(opened_, gain_lut, cells_out);
+  const int cells = cells_out.cols;
   if (columns_.size() != static_cast<size_t>(width) || columns_cells_ != cells) {
     columns_.resize(static_cast<size_t>(width));
     for (int u = 0; u < width; ++u) {
@@ -199,10 +204,10 @@ void LocalThreshold::ExpandThresholdRows(int width) {
     }
     columns_cells_ = cells;
   }
-  expanded_.create(threshold_cells_.rows, width, CV_8UC1);
-  for (int r = 0; r < threshold_cells_.rows; ++r) {
-    const auto* t = threshold_cells_.ptr<uint8_t>(r);
-    auto* out = expanded_.ptr<uint8_t>(r);
+  expanded.create(cells_out.rows, width, CV_8UC1);
+  for (int r = 0; r < cells_out.rows; ++r) {
+    const auto* t = cells_out.ptr<uint8_t>(r);
+    auto* out = expanded.ptr<uint8_t>(r);
     if (width == cells * options_.cell_px) {
       switch (options_.cell_px) {
         case 4: ExpandRow<4>(t, cells, out); continue;
@@ -218,16 +223,29 @@ void LocalThreshold::ExpandThresholdRows(int width) {
   }
 }
 
-void LocalThreshold::Apply(const cv::Mat& grey, cv::Mat& mask) {
-  Estimate(grey);
-  ExpandThresholdRows(grey.cols);
+void LocalThreshold::CompareRows(const cv::Mat& grey, const cv::Mat& expanded,
+                                 cv::Mat& mask) const {
   mask.create(grey.size(), CV_8UC1);
   for (int v = 0; v < grey.rows; ++v) {
     int r0, r1, w;
-    CellCoordinate(v, options_.cell_px, expanded_.rows, r0, r1, w);
-    CompareRow(grey.ptr<uint8_t>(v), expanded_.ptr<uint8_t>(r0), expanded_.ptr<uint8_t>(r1), w,
+    CellCoordinate(v, options_.cell_px, expanded.rows, r0, r1, w);
+    CompareRow(grey.ptr<uint8_t>(v), expanded.ptr<uint8_t>(r0), expanded.ptr<uint8_t>(r1), w,
                mask.ptr<uint8_t>(v), grey.cols);
   }
+}
+
+void LocalThreshold::Apply(const cv::Mat& grey, cv::Mat& mask) {
+  Estimate(grey);
+  ExpandThresholdRows(grey.cols, gain_lut_, threshold_cells_, expanded_);
+  CompareRows(grey, expanded_, mask);
+}
+
+void LocalThreshold::ApplyAtGain(const cv::Mat& grey, double gain, cv::Mat& mask) {
+  PLANTSCALE_CHECK(!opened_.empty(), "ApplyAtGain after Apply");
+  PLANTSCALE_CHECK(gain > 0.0, "gain must be > 0");
+  GainLut(gain, options_.min_level, other_lut_);
+  ExpandThresholdRows(grey.cols, other_lut_, other_cells_, other_expanded_);
+  CompareRows(grey, other_expanded_, mask);
 }
 
 void LocalThreshold::Score(const cv::Mat& grey, cv::Mat& score) {

@@ -39,6 +39,9 @@ class LocalThreshold {
 
   // Estimates B for `grey` (CV_8UC1) and writes the 255/0 mask.
   void Apply(const cv::Mat& grey, cv::Mat& mask);
+  // The mask at another gain over the soil level of the last Apply or
+  // Estimate (of the same image). cell_thresholds() stays the last Apply's.
+  void ApplyAtGain(const cv::Mat& grey, double gain, cv::Mat& mask);
   // Estimates the soil level B (on the cell grid) of `grey`.
   void Estimate(const cv::Mat& grey);
   // Score I / B (CV_32FC1) of the last estimated image: thresholding it at
@@ -51,10 +54,14 @@ class LocalThreshold {
  private:
   LocalThresholdOptions options_;
   void CellMeans(const cv::Mat& grey);
-  void ExpandThresholdRows(int width);
+  // α·B of every cell row (gain_lut: α·max(B, min_level) per byte B) into
+  // `cells`, interpolated along u to full width into `expanded`.
+  void ExpandThresholdRows(int width, const cv::Mat& gain_lut, cv::Mat& cells, cv::Mat& expanded);
+  void CompareRows(const cv::Mat& grey, const cv::Mat& expanded, cv::Mat& mask) const;
 
   cv::Mat cells_, eroded_, opened_, level_, threshold_cells_;
   cv::Mat gain_lut_;  // 1×256: α·max(B, min_level) as a byte
+  cv::Mat other_lut_, other_cells_, other_expanded_;  // ApplyAtGain's
   std::vector<uint16_t> column_sums_;
   std::vector<uint8_t> extremum_buffer_;
   cv::Mat expanded_;  // CV_8UC1: α·B per cell row, interpolated along u

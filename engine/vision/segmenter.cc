@@ -35,6 +35,10 @@ OptionErrors SegmenterOptions::Validate() const {
   RequirePositive(e, "adaptive_gain", adaptive_gain);
   RequireInRange(e, "smoothing_px", smoothing_px, 0.0, 20.0);
   RequireInRange(e, "fill_holes_max_fraction", fill_holes_max_fraction, 0.0, 1.0);
+  if (hull_gain < 0.0 || hull_gain > local.gain) {
+    e.push_back({"hull_gain", "must be 0 (off) or in (0, local.gain]"});
+  }
+  if (hull_min_area_px < 1) e.push_back({"hull_min_area_px", "must be >= 1"});
   if (close_notches_px < 0 || close_notches_px > 30) {
     e.push_back({"close_notches_px", "must be in [0, 30]"});
   }
@@ -120,6 +124,10 @@ void Segmenter::Threshold(const cv::Mat& image) {
       const cv::Mat& t = local_.cell_thresholds();
       result_.threshold_at_top = cv::mean(t.row(0))[0];
       result_.threshold_at_bottom = cv::mean(t.row(t.rows - 1))[0];
+      if (options_.hull_gain > 0.0) {
+        local_.ApplyAtGain(grey, options_.hull_gain, low_mask_);
+        hull_.Grow(result_.mask, low_mask_, options_.hull_min_area_px, options_.hull_min_solidity);
+      }
       break;
     }
   }

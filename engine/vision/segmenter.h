@@ -60,6 +60,13 @@ struct SegmenterOptions {
   // between a plant's lobes, which the doubt band mostly covers). A 6-px
   // disk added under 0.01 more.
   int close_notches_px = 4;
+  // Local method only: inside the convex hull of every blob of at least
+  // hull_min_area_px pixels, plant where I >= hull_gain·B (holes.h,
+  // HullGrower), for shaded leaf at a plant's edge wider than a notch.
+  // 0: off. Must not exceed local.gain.
+  double hull_gain = 0.0;
+  int hull_min_area_px = 30;
+  double hull_min_solidity = 0.0;
   BlobOptions blobs;
 
   OptionErrors Validate() const;
@@ -105,6 +112,8 @@ class Segmenter {
   ThresholdMethod used_ = ThresholdMethod::kLocal;  // by the last frame
   HoleFiller holes_;
   NotchCloser notches_;
+  HullGrower hull_;
+  cv::Mat low_mask_;
   Segmentation result_;
 };
 
