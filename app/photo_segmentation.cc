@@ -74,9 +74,11 @@ vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
   // blocks); the 2 px of the product default were set on 640×480 frames.
   o.smoothing_px = 1.0;
   // Soil seen between a real plant's leaves is soil: a photograph's mask
-  // keeps its holes and notches (the simulator's are shaded leaf, holes.h).
+  // keeps its holes, notches and what lies between its lobes (the
+  // simulator's are shaded leaf, holes.h).
   o.fill_holes_max_fraction = 0.0;
   o.close_notches_px = 0;
+  o.hull_gain = 0.0;
   std::string method = r.method == "auto" ? (colour ? "exg" : "nir") : r.method;
   if (method == "nir" && colour) {
     throw DataError("--method nir needs a near-infrared (single-channel) image; this one is "

@@ -47,7 +47,7 @@ struct Scorer {
 
   void Frame(const sim::SimFrame& frame, int index, const geometry::CameraModel& camera) {
     const auto& seg = segmenter.Process(frame.rendered.image, camera);
-    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features,
+    tracking::FeaturesFromBlobs(seg.track_blobs, camera.width(), camera.height(), features,
                                 tracker.centroid_heights());
     const bool was_tracking = tracker.mode() == tracking::TrackerMode::kTracking;
     const tracking::FrameReport r = tracker.ProcessFrame(

@@ -37,7 +37,6 @@ struct TreatmentArgs {
   std::optional<double> fill_holes_max_fraction;
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
-  std::optional<double> hull_min_solidity;
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
@@ -161,7 +160,6 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.fill_holes_max_fraction) o.segmenter.fill_holes_max_fraction = *a.fill_holes_max_fraction;
   if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
-  if (a.hull_min_solidity) o.segmenter.hull_min_solidity = *a.hull_min_solidity;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
@@ -261,8 +259,6 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--hull-gain", args.hull_gain,
                   "segmentation: inside a blob's convex hull, plant at this lower local gain (0: off)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--hull-min-solidity", args.hull_min_solidity,
-                  "segmentation: only blobs filling at least this fraction of their hull grow");
   cmd->add_option("--split-cover-m", args.split_cover_m,
                   "merged blobs: a part with plant matter this close to its predicted crop is "
                   "that crop (0: the gate alone)")

@@ -59,11 +59,13 @@ struct Chain {
 
   void Frame(const sim::SimFrame& frame, const geometry::CameraModel& camera, const cv::Mat& roi) {
     const vision::Segmentation& seg = segmenter.Process(frame.rendered.image, camera);
+    tracking::FeaturesFromBlobs(seg.track_blobs, camera.width(), camera.height(), features,
+                                tracker.centroid_heights());
+    const tracking::FrameReport report = tracker.ProcessFrame(
+        frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
     tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features,
                                 tracker.centroid_heights());
     treatment::FeatureBlobIndices(seg.blobs, blob_of_feature);
-    const tracking::FrameReport report = tracker.ProcessFrame(
-        frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
     const treatment::FrameTreatment& t =
         system.OnFrame(frame.truth.utime, tracker, report, seg.blobs, features, blob_of_feature,
                        seg.mask);

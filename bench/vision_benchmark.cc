@@ -179,6 +179,7 @@ void ShapeStep(benchmark::State& state, Step step) {
   SegmenterOptions options;
   options.fill_holes_max_fraction = 0.0;
   options.close_notches_px = 0;
+  options.hull_gain = 0.0;
   Segmenter segmenter(options);
   const cv::Mat before = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
   cv::Mat mask = before.clone();

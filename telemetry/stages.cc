@@ -45,12 +45,14 @@ SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options,
 
 void SegmentationStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher&) {
   blobs_ = {};
+  track_blobs_ = {};
   mask_ = cv::Mat();
   if (frame.image.empty()) return;
   try {
     const vision::Segmentation& seg =
         camera_ ? segmenter_.Process(frame.image, *camera_) : segmenter_.Process(frame.image);
     blobs_ = seg.blobs;
+    track_blobs_ = seg.track_blobs;
     mask_ = seg.mask;
   } catch (const DataError& e) {
     status.faults.push_back(std::string("segmentation: ") + e.what());
@@ -130,7 +132,7 @@ void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publish
     if (!in.accepted) status.faults.push_back("tracker: " + in.reason);
   }
   if (frame.image.empty()) return;
-  tracking::FeaturesFromBlobs(segmentation_.blobs(), frame.image.cols, frame.image.rows,
+  tracking::FeaturesFromBlobs(segmentation_.track_blobs(), frame.image.cols, frame.image.rows,
                               features_, tracker_.centroid_heights());
   const tracking::FrameReport r =
       tracker_.ProcessFrame(frame.utime, frame.image.cols, frame.image.rows, features_);

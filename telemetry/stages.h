@@ -43,12 +43,14 @@ class SegmentationStage : public Stage {
   std::string name() const override { return "segmentation"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
   std::span<const vision::Blob> blobs() const { return blobs_; }
+  // The blobs the tracker measures (vision::Segmentation::track_blobs).
+  std::span<const vision::Blob> track_blobs() const { return track_blobs_; }
   const cv::Mat& mask() const { return mask_; }  // the blobs' plant mask (empty: none)
 
  private:
   vision::Segmenter segmenter_;
   const geometry::CameraModel* camera_;
-  std::span<const vision::Blob> blobs_;
+  std::span<const vision::Blob> blobs_, track_blobs_;
   cv::Mat mask_;
 };
 

@@ -184,7 +184,7 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   return added;
 }
 
-int HullGrower::Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px, double min_solidity) {
+int HullGrower::Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px) {
   PLANTSCALE_CHECK(mask.type() == CV_8UC1 && low.type() == CV_8UC1 && low.size() == mask.size(),
                    "hull growth needs two CV_8UC1 masks of one size");
   if (mask.empty()) return 0;
@@ -222,7 +222,6 @@ int HullGrower::Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px, double 
       points_.push_back(ends_[static_cast<size_t>(k)]);
     }
     cv::convexHull(points_, hull_points_);
-    if (area_[i] < min_solidity * (cv::contourArea(hull_points_) + 0.5 * cv::arcLength(hull_points_, true) + 1.0)) continue;
     cv::fillConvexPoly(hull_, hull_points_, cv::Scalar(255), cv::LINE_8);
     any = true;
   }

@@ -82,7 +82,7 @@ class HullGrower {
   // `low` (CV_8UC1, same size) and lie inside the convex hull of a blob of
   // `mask` (8-connected) of at least `min_area_px` pixels, unless the grown
   // region joins two such blobs. Returns the number of pixels added.
-  int Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px, double min_solidity = 0.0);
+  int Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px);
 
  private:
   std::vector<uint64_t> bits_;

@@ -177,5 +177,71 @@ TEST(Notches, MatchesOpenCvClosingOfASingleBlob) {
   }
 }
 
+// A plant whose right lobe is shaded: the lobe is in the low mask only.
+// Inside the lit part's hull it is added; the low mask's pixels outside
+// every hull (a glint) stay soil.
+TEST(HullGrower, AddsTheLowMaskInsideTheBlobsHullOnly) {
+  cv::Mat mask(60, 80, CV_8UC1, cv::Scalar(0)), low(60, 80, CV_8UC1, cv::Scalar(0));
+  // Lit: an L of two arms; its hull is the triangle they span.
+  mask(cv::Rect(10, 10, 6, 30)).setTo(255);
+  mask(cv::Rect(10, 34, 30, 6)).setTo(255);
+  // Shaded: the triangle between the arms, and a glint far away.
+  cv::rectangle(low, cv::Rect(16, 12, 14, 22), cv::Scalar(255), cv::FILLED);
+  cv::rectangle(low, cv::Rect(60, 5, 6, 6), cv::Scalar(255), cv::FILLED);
+  low |= mask;
+  const cv::Mat before = mask.clone();
+  HullGrower grower;
+  const int added = grower.Grow(mask, low, 30);
+  EXPECT_EQ(added, cv::countNonZero(mask) - cv::countNonZero(before));
+  EXPECT_EQ(cv::countNonZero(before & ~mask), 0);  // nothing removed
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(60, 5, 6, 6))), 0);  // the glint
+  // The shaded block's part inside the hull (below the diagonal from
+  // (15, 10) to (39, 34), u − v = 5, by more than a pixel) is added, the
+  // part above it is not.
+  int inside = 0, outside = 0, inside_added = 0, outside_added = 0;
+  for (int v = 12; v < 34; ++v) {
+    for (int u = 16; u < 30; ++u) {
+      const int side = u - v - 5;
+      const bool set = mask.at<uint8_t>(v, u) != 0;
+      if (side < -1) inside += 1, inside_added += set;
+      if (side > 1) outside += 1, outside_added += set;
+    }
+  }
+  ASSERT_GT(inside, 20);
+  ASSERT_GT(outside, 5);
+  EXPECT_EQ(inside_added, inside);
+  EXPECT_EQ(outside_added, 0);
+  // Blobs under the area limit get no hull.
+  cv::Mat small = before.clone();
+  EXPECT_EQ(grower.Grow(small, low, 1000), 0);
+}
+
+// Two plants whose grown regions would touch stay as they were; a third,
+// alone, grows.
+TEST(HullGrower, GrowthJoiningTwoBlobsIsNotKept) {
+  cv::Mat mask(50, 120, CV_8UC1, cv::Scalar(0)), low(50, 120, CV_8UC1, cv::Scalar(0));
+  for (const int x : {10, 40, 80}) {
+    // A U-shaped plant (open upwards) with shaded matter between its arms.
+    mask(cv::Rect(x, 10, 4, 25)).setTo(255);
+    mask(cv::Rect(x + 20, 10, 4, 25)).setTo(255);
+    mask(cv::Rect(x, 31, 24, 4)).setTo(255);
+    low(cv::Rect(x + 4, 10, 16, 21)).setTo(255);
+  }
+  // The second plant's leaves reach left above and below the first plant
+  // (not touching it), so its hull takes in column 34, beside the first's
+  // right arm (columns 30–33); shaded leaf there would join the two.
+  mask(cv::Rect(40, 4, 4, 6)).setTo(255);
+  mask(cv::Rect(34, 4, 6, 3)).setTo(255);
+  mask(cv::Rect(40, 35, 4, 6)).setTo(255);
+  mask(cv::Rect(34, 38, 6, 3)).setTo(255);
+  low(cv::Rect(34, 15, 6, 6)).setTo(255);
+  const cv::Mat before = mask.clone();
+  HullGrower grower;
+  const int added = grower.Grow(mask, low, 30);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(0, 0, 70, 50)) != before(cv::Rect(0, 0, 70, 50))), 0);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(84, 10, 16, 21))), 16 * 21);  // the third grew
+  EXPECT_EQ(added, 16 * 21);
+}
+
 }  // namespace
 }  // namespace plantscale::vision

@@ -52,6 +52,7 @@ SegmenterOptions ThesisSegmenterOptions() {
   o.method = ThresholdMethod::kAdaptive;
   o.fill_holes_max_fraction = 0.0;
   o.close_notches_px = 0;
+  o.hull_gain = 0.0;
   return o;
 }
 
@@ -64,7 +65,10 @@ const SegmenterOptions& Validated(const SegmenterOptions& options) {
 }  // namespace
 
 Segmenter::Segmenter(const SegmenterOptions& options)
-    : options_(Validated(options)), blobs_(options.blobs), local_(options.local) {
+    : options_(Validated(options)),
+      blobs_(options.blobs),
+      track_blobs_(options.blobs),
+      local_(options.local) {
   if (options_.smoothing_px > 0.0) smoother_.emplace(options_.smoothing_px);
 }
 
@@ -124,10 +128,6 @@ void Segmenter::Threshold(const cv::Mat& image) {
       const cv::Mat& t = local_.cell_thresholds();
       result_.threshold_at_top = cv::mean(t.row(0))[0];
       result_.threshold_at_bottom = cv::mean(t.row(t.rows - 1))[0];
-      if (options_.hull_gain > 0.0) {
-        local_.ApplyAtGain(grey, options_.hull_gain, low_mask_);
-        hull_.Grow(result_.mask, low_mask_, options_.hull_min_area_px, options_.hull_min_solidity);
-      }
       break;
     }
   }
@@ -156,16 +156,35 @@ double Segmenter::Score(cv::Mat& score) {
   return 0.0;
 }
 
+bool Segmenter::GrowsInHulls() const {
+  return options_.hull_gain > 0.0 && used_ == ThresholdMethod::kLocal;
+}
+
+void Segmenter::GrowInHulls() {
+  local_.ApplyAtGain(result_.plant_image, options_.hull_gain, low_mask_);
+  hull_.Grow(result_.mask, low_mask_, options_.hull_min_area_px);
+}
+
 const Segmentation& Segmenter::Process(const cv::Mat& image) {
   Threshold(image);
+  if (GrowsInHulls()) {
+    result_.track_blobs = track_blobs_.Extract(result_.mask);
+    GrowInHulls();
+  }
   result_.blobs = blobs_.Extract(result_.mask);
+  if (!GrowsInHulls()) result_.track_blobs = result_.blobs;
   return result_;
 }
 
 const Segmentation& Segmenter::Process(const cv::Mat& image,
                                        const geometry::CameraModel& camera) {
   Threshold(image);
+  if (GrowsInHulls()) {
+    result_.track_blobs = track_blobs_.Extract(result_.mask, camera);
+    GrowInHulls();
+  }
   result_.blobs = blobs_.Extract(result_.mask, camera);
+  if (!GrowsInHulls()) result_.track_blobs = result_.blobs;
   return result_;
 }
 

@@ -60,13 +60,16 @@ struct SegmenterOptions {
   // between a plant's lobes, which the doubt band mostly covers). A 6-px
   // disk added under 0.01 more.
   int close_notches_px = 4;
-  // Local method only: inside the convex hull of every blob of at least
-  // hull_min_area_px pixels, plant where I >= hull_gain·B (holes.h,
-  // HullGrower), for shaded leaf at a plant's edge wider than a notch.
-  // 0: off. Must not exceed local.gain.
-  double hull_gain = 0.0;
+  // Local method only, after notches and holes: inside the convex hull of
+  // every blob of at least hull_min_area_px pixels, plant where
+  // I >= hull_gain·B (holes.h, HullGrower), for shaded leaf at a plant's
+  // edge wider than a notch. 0: off; at most local.gain. Presets, 3 seeds,
+  // plant pixel recall / precision at 1.8: B 0.887 → 0.923 / 0.980 → 0.969,
+  // D 0.916 → 0.945 / 0.869 → 0.851, A 0.957 → 0.972 / 0.999 → 0.994
+  // (1.6 added under 0.004 recall for 0.004–0.012 precision). The tracker
+  // measures the blobs before it (Segmentation::track_blobs).
+  double hull_gain = 1.8;
   int hull_min_area_px = 30;
-  double hull_min_solidity = 0.0;
   BlobOptions blobs;
 
   OptionErrors Validate() const;
@@ -78,6 +81,12 @@ struct Segmentation {
   double threshold_at_top = 0.0;     // grey-level threshold used at the top row
   double threshold_at_bottom = 0.0;  // ... and at the bottom row (differ for kAdaptive)
   std::span<const Blob> blobs;
+  // The blobs before hull growth (SegmenterOptions::hull_gain; the same as
+  // `blobs` without it): what the grid tracker measures. On preset A
+  // (touching plants) the tracker fed grown blobs lost the grid 14 times in
+  // 5 seeds instead of 9 and hit 84 % of crops instead of 95 %; the
+  // classifier and the pixel labels take the grown ones.
+  std::span<const Blob> track_blobs;
 };
 
 class Segmenter {
@@ -103,9 +112,12 @@ class Segmenter {
 
  private:
   void Threshold(const cv::Mat& image);
+  bool GrowsInHulls() const;
+  void GrowInHulls();
 
   SegmenterOptions options_;
   BlobExtractor blobs_;
+  BlobExtractor track_blobs_;  // before hull growth
   LocalThreshold local_;
   std::optional<Smoother> smoother_;  // when smoothing_px > 0
   cv::Mat index_;

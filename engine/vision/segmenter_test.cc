@@ -16,13 +16,15 @@ TEST(Segmenter, RejectsImagesItCannotSegment) {
   SegmenterOptions bad;
   bad.adaptive_gain = -1.0;
   bad.local.opening_cells = 4;
+  bad.hull_gain = bad.local.gain + 0.1;
   try {
     Segmenter s(bad);
     FAIL() << "invalid options accepted";
   } catch (const InvalidOptionsError& e) {
-    ASSERT_EQ(e.errors().size(), 2u);
+    ASSERT_EQ(e.errors().size(), 3u);
     EXPECT_EQ(e.errors()[0].key, "adaptive_gain");
-    EXPECT_EQ(e.errors()[1].key, "local.opening_cells");
+    EXPECT_EQ(e.errors()[1].key, "hull_gain");
+    EXPECT_EQ(e.errors()[2].key, "local.opening_cells");
   }
 }
 
@@ -46,8 +48,10 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
   const double fp = cv::countNonZero(s.mask & ~plant);
   const double recall = tp / cv::countNonZero(plant);
   const double precision = tp / (tp + fp);
-  EXPECT_GT(recall, 0.85);
-  EXPECT_GT(precision, 0.95);
+  // Hull growth (SegmenterOptions::hull_gain) trades a little precision
+  // for recall: 0.969 / 0.943 measured on this frame.
+  EXPECT_GT(recall, 0.95);
+  EXPECT_GT(precision, 0.93);
   int big_crops = 0;
   for (const sim::PlantTruth& p : frame.truth.plants) {
     if (p.cls == sim::PlantClass::kCrop && p.area_px > 400) ++big_crops;
@@ -58,6 +62,23 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
     EXPECT_TRUE(b.on_ground);
   }
   EXPECT_NEAR(big_blobs, big_crops, 2);
+  // The tracker's blobs are those before hull growth: a segmenter without
+  // it gives the same; with it, the final blobs hold more plant pixels.
+  SegmenterOptions no_growth;
+  no_growth.hull_gain = 0.0;
+  Segmenter plain(no_growth);
+  const Segmentation& p = plain.Process(frame.rendered.image, simulator.camera());
+  ASSERT_EQ(p.track_blobs.size(), p.blobs.size());
+  const Segmentation& g = segmenter.Process(frame.rendered.image, simulator.camera());
+  ASSERT_EQ(g.track_blobs.size(), p.blobs.size());
+  int grown_area = 0, plain_area = 0;
+  for (size_t i = 0; i < p.blobs.size(); ++i) {
+    EXPECT_EQ(g.track_blobs[i].area_px, p.blobs[i].area_px);
+    EXPECT_EQ(g.track_blobs[i].bbox_px, p.blobs[i].bbox_px);
+    plain_area += p.blobs[i].area_px;
+  }
+  for (const Blob& b : g.blobs) grown_area += b.area_px;
+  EXPECT_GT(grown_area, plain_area + plain_area / 100);
 }
 
 // A colour camera with the product's default options: the local soil-level

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
 
+#include "engine/common/rng.h"
 #include "engine/vision/colour_index.h"
 #include "engine/vision/local_threshold.h"
 
@@ -144,6 +145,34 @@ TEST(LocalThreshold, CellLevelsEqualOpenCvsAreaResizeAndOpening) {
       EXPECT_EQ(wrong, 0) << size << ", cell " << cell;
     }
   }
+}
+
+// ApplyAtGain over the last Apply's soil level is the mask a threshold of
+// that gain would give.
+TEST(LocalThreshold, ApplyAtGainEqualsAThresholdOfThatGain) {
+  Rng rng(5);
+  cv::Mat grey(96, 128, CV_8UC1);
+  for (int v = 0; v < grey.rows; ++v) {
+    for (int u = 0; u < grey.cols; ++u) {
+      grey.at<uint8_t>(v, u) = static_cast<uint8_t>(40 + 30 * ((u / 20 + v / 16) % 2) +
+                                                    120 * rng.Uniform() * ((u * v) % 7 == 0));
+    }
+  }
+  LocalThresholdOptions high;
+  high.gain = 2.3;
+  LocalThreshold at_high(high);
+  cv::Mat mask_high, mask_low_again;
+  at_high.Apply(grey, mask_high);
+  const cv::Mat cells = at_high.cell_thresholds().clone();
+  at_high.ApplyAtGain(grey, 1.6, mask_low_again);
+  LocalThresholdOptions low = high;
+  low.gain = 1.6;
+  LocalThreshold at_low(low);
+  cv::Mat mask_low;
+  at_low.Apply(grey, mask_low);
+  EXPECT_EQ(cv::countNonZero(mask_low != mask_low_again), 0);
+  EXPECT_GT(cv::countNonZero(mask_low), cv::countNonZero(mask_high));
+  EXPECT_EQ(cv::countNonZero(cells != at_high.cell_thresholds()), 0);  // the Apply's stay
 }
 
 TEST(ColourIndex, GreenIsBrightSoilIsDarkGreyIsNeutral) {
