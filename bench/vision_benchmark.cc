@@ -70,6 +70,14 @@ SegmenterOptions With(ThresholdMethod method, double smoothing_px) {
 // The product's default: local soil level, smoothing, blobs.
 void BM_SegmentNirDefault(benchmark::State& s) { Segment(s, {}, sim::ImageKind::kNir); }
 BENCHMARK(BM_SegmentNirDefault);
+// The default without growth into the blobs' hulls (hull_gain 0): what the
+// growth and the second labelling for the tracker cost.
+void BM_SegmentNirWithoutHullGrowth(benchmark::State& s) {
+  SegmenterOptions o;
+  o.hull_gain = 0.0;
+  Segment(s, o, sim::ImageKind::kNir);
+}
+BENCHMARK(BM_SegmentNirWithoutHullGrowth);
 void BM_SegmentNirLocalUnsmoothed(benchmark::State& s) {
   Segment(s, With(ThresholdMethod::kLocal, 0.0), sim::ImageKind::kNir);
 }
@@ -202,6 +210,30 @@ void BM_StageCloseNotchesOfDefaultMask(benchmark::State& state) {
   ShapeStep(state, [&](cv::Mat& m) { return notches.Close(m, 4); });
 }
 BENCHMARK(BM_StageCloseNotchesOfDefaultMask);
+// Hull growth alone: the default mask before growth, and the low-gain mask
+// (LocalThreshold::ApplyAtGain at the default hull_gain) made once.
+void BM_StageGrowInHullsOfDefaultMask(benchmark::State& state) {
+  SetUp();
+  SegmenterOptions options;
+  options.hull_gain = 0.0;
+  Segmenter segmenter(options);
+  const cv::Mat before = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
+  LocalThreshold local;
+  cv::Mat high, low;
+  local.Apply(SmoothedNir(), high);
+  local.ApplyAtGain(SmoothedNir(), SegmenterOptions{}.hull_gain, low);
+  HullGrower hull;
+  cv::Mat mask = before.clone();
+  int changed = 0;
+  for (auto _ : state) {
+    changed = hull.Grow(mask, low, SegmenterOptions{}.hull_min_area_px);
+    state.PauseTiming();
+    before.copyTo(mask);
+    state.ResumeTiming();
+  }
+  state.counters["changed_px"] = changed;
+}
+BENCHMARK(BM_StageGrowInHullsOfDefaultMask);
 
 void BM_BlobsOnly(benchmark::State& state) {
   SetUp();

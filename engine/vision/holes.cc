@@ -1,6 +1,7 @@
 #include "engine/vision/holes.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -78,6 +79,38 @@ void StepAlongU(const std::vector<uint64_t>& in, int words, int rows, int width,
   }
 }
 
+// The lower (sign 1) or upper (sign −1) convex envelope of the points
+// (v, rows[.][column]) of `rows` (v descending), as points (x = v, y = u)
+// in ascending v: Andrew's monotone chain, the points already sorted.
+void Envelope(const std::vector<std::array<int, 3>>& rows, int column, int sign,
+              std::vector<cv::Point>& hull) {
+  hull.clear();
+  for (auto it = rows.rbegin(); it != rows.rend(); ++it) {
+    const cv::Point p((*it)[0], (*it)[static_cast<size_t>(column)]);
+    while (hull.size() >= 2) {
+      const cv::Point o = hull[hull.size() - 2], a = hull.back();
+      const long cross = static_cast<long>(a.x - o.x) * (p.y - o.y) -
+                         static_cast<long>(a.y - o.y) * (p.x - o.x);
+      if (sign * cross > 0) break;
+      hull.pop_back();
+    }
+    hull.push_back(p);
+  }
+}
+
+// The envelope's u at each row from its first vertex's to its last's.
+void Interpolate(const std::vector<cv::Point>& hull, std::vector<double>& u) {
+  const int v0 = hull.front().x;
+  u.assign(static_cast<size_t>(hull.back().x - v0 + 1), 0.0);
+  u[0] = hull.front().y;
+  for (size_t k = 0; k + 1 < hull.size(); ++k) {
+    const cv::Point a = hull[k], b = hull[k + 1];
+    for (int v = a.x + 1; v <= b.x; ++v) {
+      u[static_cast<size_t>(v - v0)] = a.y + (b.y - a.y) * static_cast<double>(v - a.x) / (b.x - a.x);
+    }
+  }
+}
+
 }  // namespace
 
 int NotchCloser::DiskHalfWidth(int radius_px, int dv) {
@@ -130,28 +163,44 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
     }
   }
   for (size_t i = 0; i < closed_bits_.size(); ++i) closed_bits_[i] |= mask_bits_[i];
-  // Blobs before and after: a closed region keeps its new pixels only when it
-  // holds one blob of the mask.
-  const auto label = [&](const std::vector<uint64_t>& bits, std::vector<detail::RowRun>& runs,
-                         std::vector<int>& parent, std::vector<int>& row_start) {
-    detail::LabelRuns(
-        width, height, true, [&](int v) { return bits.data() + static_cast<size_t>(v) * words; },
-        runs, parent, &row_start);
-  };
-  label(mask_bits_, mask_runs_, mask_parent_, mask_row_start_);
-  label(closed_bits_, closed_runs_, closed_parent_, closed_row_start_);
-  first_blob_.assign(closed_runs_.size(), -1);
-  joins_.assign(closed_runs_.size(), 0);
+  // A closed region keeps its new pixels only when it holds one blob.
+  keep_.LabelMask(mask_bits_, width, height);
+  return keep_.Add(mask_bits_, closed_bits_, nullptr, mask);
+}
+
+namespace detail {
+
+void GrowthWithoutJoins::LabelMask(const std::vector<uint64_t>& mask_bits, int width,
+                                   int height) {
+  width_ = width;
+  height_ = height;
+  const auto words = static_cast<size_t>((width + 63) / 64);
+  LabelRuns(
+      width, height, true, [&](int v) { return mask_bits.data() + static_cast<size_t>(v) * words; },
+      mask_runs_, mask_parent_, &mask_row_start_);
+}
+
+int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
+                            const std::vector<uint64_t>& grown_bits,
+                            const std::vector<uint8_t>* counted, cv::Mat& mask) {
+  const int width = width_, height = height_;
+  const auto words = static_cast<size_t>((width + 63) / 64);
+  LabelRuns(
+      width, height, true, [&](int v) { return grown_bits.data() + static_cast<size_t>(v) * words; },
+      grown_runs_, grown_parent_, &grown_row_start_);
+  first_blob_.assign(grown_runs_.size(), -1);
+  joins_.assign(grown_runs_.size(), 0);
   for (int v = 0; v < height; ++v) {
-    int c = closed_row_start_[static_cast<size_t>(v)];
-    const int c_end = closed_row_start_[static_cast<size_t>(v) + 1];
+    int g = grown_row_start_[static_cast<size_t>(v)];
+    const int g_end = grown_row_start_[static_cast<size_t>(v) + 1];
     for (int m = mask_row_start_[static_cast<size_t>(v)];
          m < mask_row_start_[static_cast<size_t>(v) + 1]; ++m) {
-      // The closed run containing mask run m (the closing contains the mask).
-      while (c < c_end && closed_runs_[static_cast<size_t>(c)].u_end <= mask_runs_[static_cast<size_t>(m)].u_begin) ++c;
-      PLANTSCALE_CHECK(c < c_end, "closing lost a pixel of the mask");
-      const auto root = static_cast<size_t>(closed_parent_[static_cast<size_t>(c)]);
       const int blob = mask_parent_[static_cast<size_t>(m)];
+      if (counted && !(*counted)[static_cast<size_t>(blob)]) continue;
+      // The grown run containing mask run m (the growth contains the mask).
+      while (g < g_end && grown_runs_[static_cast<size_t>(g)].u_end <= mask_runs_[static_cast<size_t>(m)].u_begin) ++g;
+      PLANTSCALE_CHECK(g < g_end, "growth lost a pixel of the mask");
+      const auto root = static_cast<size_t>(grown_parent_[static_cast<size_t>(g)]);
       if (first_blob_[root] < 0) {
         first_blob_[root] = blob;
       } else if (first_blob_[root] != blob) {
@@ -159,17 +208,17 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
       }
     }
   }
-  // New pixels: closed bits that were soil, in runs of regions that join
+  // New pixels: grown bits that were soil, in runs of regions that join
   // nothing.
   int added = 0;
-  for (size_t i = 0; i < closed_runs_.size(); ++i) {
-    if (joins_[static_cast<size_t>(closed_parent_[i])]) continue;
-    const detail::RowRun& run = closed_runs_[i];
+  for (size_t i = 0; i < grown_runs_.size(); ++i) {
+    if (joins_[static_cast<size_t>(grown_parent_[i])]) continue;
+    const RowRun& run = grown_runs_[i];
     const size_t base = static_cast<size_t>(run.v) * words;
     uint8_t* row = mask.ptr<uint8_t>(run.v);
     for (int w = run.u_begin / 64; w <= (run.u_end - 1) / 64; ++w) {
-      uint64_t fresh = closed_bits_[base + static_cast<size_t>(w)] &
-                       ~mask_bits_[base + static_cast<size_t>(w)];
+      uint64_t fresh = grown_bits[base + static_cast<size_t>(w)] &
+                       ~mask_bits[base + static_cast<size_t>(w)];
       // Only this run's span of the word.
       const int lo = std::max(run.u_begin - 64 * w, 0), hi = std::min(run.u_end - 64 * w, 64);
       if (lo > 0) fresh &= ~uint64_t{0} << lo;
@@ -184,93 +233,79 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   return added;
 }
 
+}  // namespace detail
+
 int HullGrower::Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px) {
   PLANTSCALE_CHECK(mask.type() == CV_8UC1 && low.type() == CV_8UC1 && low.size() == mask.size(),
                    "hull growth needs two CV_8UC1 masks of one size");
   if (mask.empty()) return 0;
   const int width = mask.cols, height = mask.rows;
-  bits_.resize(static_cast<size_t>((width + 63) / 64));
-  detail::LabelRuns(
-      width, height, true,
-      [&](int v) {
-        detail::RowBits(mask.ptr<uint8_t>(v), width, bits_.data());
-        return bits_.data();
-      },
-      runs_, parent_);
-  // Each blob's area, and its runs' end points chained per root.
-  area_.assign(runs_.size(), 0);
-  first_point_.assign(runs_.size(), -1);
-  ends_.clear();
-  next_point_.clear();
-  for (size_t i = 0; i < runs_.size(); ++i) {
-    const detail::RowRun& r = runs_[i];
-    const auto root = static_cast<size_t>(parent_[i]);
-    area_[root] += r.u_end - r.u_begin;
-    for (const int u : {r.u_begin, r.u_end - 1}) {
-      next_point_.push_back(first_point_[root]);
-      first_point_[root] = static_cast<int>(ends_.size());
-      ends_.push_back({u, r.v});
-    }
+  const auto words = static_cast<size_t>((width + 63) / 64);
+  mask_bits_.resize(words * static_cast<size_t>(height));
+  for (int v = 0; v < height; ++v) {
+    detail::RowBits(mask.ptr<uint8_t>(v), width, mask_bits_.data() + static_cast<size_t>(v) * words);
   }
-  hull_.create(mask.size(), CV_8UC1);
-  hull_.setTo(0);
+  keep_.LabelMask(mask_bits_, width, height);
+  const std::vector<detail::RowRun>& runs = keep_.runs();
+  const std::vector<int>& parent = keep_.parent();
+  // Each blob's area, and its runs chained per root (last run first).
+  area_.assign(runs.size(), 0);
+  first_run_.assign(runs.size(), -1);
+  next_run_.resize(runs.size());
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const auto root = static_cast<size_t>(parent[i]);
+    area_[root] += runs[i].u_end - runs[i].u_begin;
+    next_run_[i] = first_run_[root];
+    first_run_[root] = static_cast<int>(i);
+  }
+  // The hulls' rows as bits. A blob's convex hull is that of its rows'
+  // extreme pixels; at row v it spans [L(v), R(v)], L the lower convex
+  // envelope of the rows' first pixels (u as a function of v) and R the
+  // upper concave envelope of their last ones (monotone chains, the rows
+  // already in order). Pixels whose centres are within half a pixel of the
+  // span are set, as a filled polygon with its edges drawn.
+  hull_bits_.assign(mask_bits_.size(), 0);
+  counted_.assign(runs.size(), 0);
   bool any = false;
-  for (size_t i = 0; i < runs_.size(); ++i) {
-    if (static_cast<size_t>(parent_[i]) != i || area_[i] < min_area_px) continue;
-    points_.clear();
-    for (int k = first_point_[i]; k >= 0; k = next_point_[static_cast<size_t>(k)]) {
-      points_.push_back(ends_[static_cast<size_t>(k)]);
-    }
-    cv::convexHull(points_, hull_points_);
-    cv::fillConvexPoly(hull_, hull_points_, cv::Scalar(255), cv::LINE_8);
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (static_cast<size_t>(parent[i]) != i || area_[i] < min_area_px) continue;
+    counted_[i] = 1;
     any = true;
+    rows_.clear();  // (v, first u, last u), v descending
+    for (int k = first_run_[i]; k >= 0; k = next_run_[static_cast<size_t>(k)]) {
+      const detail::RowRun& r = runs[static_cast<size_t>(k)];
+      if (!rows_.empty() && rows_.back()[0] == r.v) {
+        rows_.back()[1] = std::min(rows_.back()[1], r.u_begin);
+        rows_.back()[2] = std::max(rows_.back()[2], r.u_end - 1);
+      } else {
+        rows_.push_back({r.v, r.u_begin, r.u_end - 1});
+      }
+    }
+    Envelope(rows_, 1, 1, left_);
+    Envelope(rows_, 2, -1, right_);
+    Interpolate(left_, left_u_);
+    Interpolate(right_, right_u_);
+    const int v0 = left_.front().x;
+    for (size_t k = 0; k < left_u_.size(); ++k) {
+      const int begin = static_cast<int>(std::ceil(left_u_[k] - 0.5));
+      const int end = static_cast<int>(std::floor(right_u_[k] + 0.5)) + 1;
+      detail::SetBits(hull_bits_.data() + (static_cast<size_t>(v0) + k) * words, begin, end);
+    }
   }
   if (!any) return 0;
-  // The grown mask, labelled; a grown region holding two or more blobs of
-  // the mask (of the size that gets a hull) keeps its pixels as they were.
-  grown_.create(mask.size(), CV_8UC1);
+  // The grown mask: the mask, and the low mask inside the hulls.
+  grown_bits_ = mask_bits_;
+  low_bits_.resize(words);
   for (int v = 0; v < height; ++v) {
-    const uint8_t* m = mask.ptr<uint8_t>(v);
-    const uint8_t* l = low.ptr<uint8_t>(v);
-    const uint8_t* h = hull_.ptr<uint8_t>(v);
-    uint8_t* g = grown_.ptr<uint8_t>(v);
-    for (int u = 0; u < width; ++u) g[u] = m[u] | (l[u] & h[u]);
+    const uint64_t* h = hull_bits_.data() + static_cast<size_t>(v) * words;
+    if (std::all_of(h, h + words, [](uint64_t w) { return w == 0; })) continue;
+    detail::RowBits(low.ptr<uint8_t>(v), width, low_bits_.data());
+    uint64_t* g = grown_bits_.data() + static_cast<size_t>(v) * words;
+    for (size_t w = 0; w < words; ++w) g[w] |= low_bits_[w] & h[w];
   }
-  detail::LabelRuns(
-      width, height, true,
-      [&](int v) {
-        detail::RowBits(grown_.ptr<uint8_t>(v), width, bits_.data());
-        return bits_.data();
-      },
-      grown_runs_, grown_parent_, &grown_row_start_);
-  first_blob_.assign(grown_runs_.size(), -1);
-  joins_.assign(grown_runs_.size(), 0);
-  for (size_t i = 0; i < runs_.size(); ++i) {
-    if (static_cast<size_t>(parent_[i]) != i || area_[i] < min_area_px) continue;
-    const detail::RowRun& r = runs_[i];
-    // The grown run holding this blob's first run: the last one starting at or before it.
-    const auto row_begin = grown_runs_.begin() + grown_row_start_[static_cast<size_t>(r.v)];
-    const auto row_end = grown_runs_.begin() + grown_row_start_[static_cast<size_t>(r.v) + 1];
-    const auto it = std::upper_bound(row_begin, row_end, r.u_begin,
-                                     [](int u, const detail::RowRun& g) { return u < g.u_begin; });
-    const auto g = static_cast<size_t>(grown_parent_[static_cast<size_t>(it - 1 - grown_runs_.begin())]);
-    if (first_blob_[g] < 0) {
-      first_blob_[g] = static_cast<int>(i);
-    } else if (first_blob_[g] != static_cast<int>(i)) {
-      joins_[g] = 1;
-    }
-  }
-  int added = 0;
-  for (size_t i = 0; i < grown_runs_.size(); ++i) {
-    if (joins_[static_cast<size_t>(grown_parent_[i])]) continue;
-    const detail::RowRun& r = grown_runs_[i];
-    uint8_t* m = mask.ptr<uint8_t>(r.v);
-    for (int u = r.u_begin; u < r.u_end; ++u) {
-      added += m[u] == 0;
-      m[u] = 255;
-    }
-  }
-  return added;
+  // A grown region holding two or more blobs of the mask (of the size that
+  // gets a hull) keeps its pixels as they were.
+  return keep_.Add(mask_bits_, grown_bits_, &counted_, mask);
 }
 
 }  // namespace plantscale::vision

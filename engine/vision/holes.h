@@ -15,12 +15,43 @@
 // nothing.
 
 #include <opencv2/core.hpp>
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "engine/vision/row_bits.h"
 
 namespace plantscale::vision {
+
+namespace detail {
+
+// The step NotchCloser and HullGrower share: a grown mask (a superset of
+// the mask, both as bit rows of `words` words, row_bits.h) is kept only in
+// its 8-connected regions that hold at most one of the mask's blobs.
+class GrowthWithoutJoins {
+ public:
+  // Labels the mask's bits (8-connected); runs() and parent() then hold its
+  // runs, each pointing at its blob's root run, and row_start() row v's
+  // first run.
+  void LabelMask(const std::vector<uint64_t>& mask_bits, int width, int height);
+  const std::vector<RowRun>& runs() const { return mask_runs_; }
+  const std::vector<int>& parent() const { return mask_parent_; }
+  // Sets to 255 the pixels of `mask` (the image of the labelled bits) that
+  // are in `grown_bits` but not the mask's bits, in regions of the grown
+  // bits holding at most one counted blob; `counted` (per mask root run,
+  // null: all) says which blobs count. Returns the number of pixels set.
+  int Add(const std::vector<uint64_t>& mask_bits, const std::vector<uint64_t>& grown_bits,
+          const std::vector<uint8_t>* counted, cv::Mat& mask);
+
+ private:
+  int width_ = 0, height_ = 0;
+  std::vector<RowRun> mask_runs_, grown_runs_;
+  std::vector<int> mask_parent_, grown_parent_, mask_row_start_, grown_row_start_;
+  std::vector<int> first_blob_;  // per grown root: a counted blob's root inside it, −1 before
+  std::vector<uint8_t> joins_;   // per grown root: holds two or more counted blobs
+};
+
+}  // namespace detail
 
 class HoleFiller {
  public:
@@ -55,11 +86,8 @@ class NotchCloser {
  private:
   std::vector<uint64_t> mask_bits_, closed_bits_, scratch_;
   std::vector<std::vector<uint64_t>> steps_;  // a row set dilated / eroded by 0..r pixels along u
-  std::vector<detail::RowRun> mask_runs_, closed_runs_;
-  std::vector<int> mask_parent_, closed_parent_, mask_row_start_, closed_row_start_;
-  std::vector<int> first_blob_;   // per closed root: a mask blob root inside it, −1 before
-  std::vector<uint8_t> joins_;    // per closed root: holds two or more mask blobs
-  std::vector<int> half_;         // DiskHalfWidth per row offset
+  std::vector<int> half_;                     // DiskHalfWidth per row offset
+  detail::GrowthWithoutJoins keep_;
 };
 
 // Shaded leaf at a plant's edge, wider than a notch the closing fills: it
@@ -73,9 +101,9 @@ class NotchCloser {
 // it is brighter than the lower gain (the halo's core). As with notches,
 // growth that would join two blobs (touching plants, preset A) is not kept:
 // a grown region holding two or more of the mask's blobs of that size keeps
-// its pixels as they were. Hull of each blob
-// from its runs' end points (run-length union-find as BlobExtractor's),
-// filled with cv::fillConvexPoly; buffers are kept.
+// its pixels as they were. All in bit rows (64 pixels a word, as
+// NotchCloser): each blob's hull from its rows' extreme pixels, its spans
+// set as bits and ANDed with the low mask's; buffers are kept.
 class HullGrower {
  public:
   // Sets to 255 the pixels of `mask` (CV_8UC1, 0 soil) that are set in
@@ -85,13 +113,13 @@ class HullGrower {
   int Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px);
 
  private:
-  std::vector<uint64_t> bits_;
-  std::vector<detail::RowRun> runs_, grown_runs_;
-  std::vector<int> parent_, area_, first_point_, next_point_;
-  std::vector<int> grown_parent_, grown_row_start_, first_blob_;
-  std::vector<uint8_t> joins_;  // per grown root: holds two or more blobs
-  std::vector<cv::Point> ends_, points_, hull_points_;
-  cv::Mat hull_, grown_;
+  std::vector<uint64_t> mask_bits_, hull_bits_, grown_bits_, low_bits_;
+  std::vector<int> area_, first_run_, next_run_;
+  std::vector<uint8_t> counted_;          // per root run: the blob gets a hull
+  std::vector<std::array<int, 3>> rows_;  // a blob's rows: v, first u, last u
+  std::vector<cv::Point> left_, right_;   // its hull's sides, (v, u) vertices
+  std::vector<double> left_u_, right_u_;  // and their u per row
+  detail::GrowthWithoutJoins keep_;
 };
 
 }  // namespace plantscale::vision

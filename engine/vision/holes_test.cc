@@ -243,5 +243,52 @@ TEST(HullGrower, GrowthJoiningTwoBlobsIsNotKept) {
   EXPECT_EQ(added, 16 * 21);
 }
 
+// The spans HullGrower fills are the blob's convex hull: on random
+// star-shaped blobs with a low mask that is everywhere, every pixel whose
+// centre lies inside cv::convexHull's polygon (or on it) is added, and none
+// more than half a pixel outside it along u (within 0.5 px of the polygon).
+TEST(HullGrower, SpansAreTheBlobsConvexHull) {
+  Rng rng(23);
+  HullGrower grower;
+  for (int trial = 0; trial < 20; ++trial) {
+    const int w = 90 + trial, h = 70 + trial % 7;
+    cv::Mat mask(h, w, CV_8UC1, cv::Scalar(0));
+    std::vector<cv::Point> star;
+    for (int k = 0; k < 9; ++k) {
+      const double a = 2.0 * M_PI * k / 9.0, r = rng.Uniform(8.0, 30.0);
+      star.emplace_back(static_cast<int>(w / 2 + r * std::cos(a)), static_cast<int>(h / 2 + r * std::sin(a)));
+    }
+    cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{star}, cv::Scalar(255));
+    const cv::Mat low(h, w, CV_8UC1, cv::Scalar(255));
+    std::vector<cv::Point> pixels, hull;
+    cv::findNonZero(mask, pixels);
+    cv::convexHull(pixels, hull);
+    grower.Grow(mask, low, 30);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const double d = cv::pointPolygonTest(hull, cv::Point2f(u, v), true);
+        const bool set = mask.at<uint8_t>(v, u) != 0;
+        if (d >= 0.0) {
+          EXPECT_TRUE(set) << "trial " << trial << " inside at " << u << "," << v;
+        }
+        if (d < -0.5) {
+          EXPECT_FALSE(set) << "trial " << trial << " outside at " << u << "," << v << " by " << -d;
+        }
+      }
+    }
+  }
+}
+
+TEST(RowBits, SetBitsSetsExactlyTheRange) {
+  for (const auto& [begin, end] : std::vector<std::pair<int, int>>{{0, 1}, {3, 64}, {0, 128}, {63, 65}, {10, 10}, {70, 190}, {127, 128}}) {
+    std::vector<uint64_t> words(3, 0);
+    detail::SetBits(words.data(), begin, end);
+    for (int u = 0; u < 192; ++u) {
+      const bool set = (words[static_cast<size_t>(u / 64)] >> (u % 64)) & 1;
+      EXPECT_EQ(set, u >= begin && u < end) << begin << ".." << end << " at " << u;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace plantscale::vision

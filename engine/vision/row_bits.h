@@ -34,6 +34,21 @@ inline void RowBits(const uint8_t* row, int width, uint64_t* words) {
   }
 }
 
+// Sets bits [begin, end) of a row's words (begin < end).
+inline void SetBits(uint64_t* words, int begin, int end) {
+  if (begin >= end) return;
+  const int first = begin / 64, last = (end - 1) / 64;
+  const uint64_t head = ~uint64_t{0} << (begin % 64);
+  const uint64_t tail = ~uint64_t{0} >> (63 - (end - 1) % 64);
+  if (first == last) {
+    words[first] |= head & tail;
+    return;
+  }
+  words[first] |= head;
+  for (int w = first + 1; w < last; ++w) words[w] = ~uint64_t{0};
+  words[last] |= tail;
+}
+
 // Calls run(begin, end) for every run of set bits [begin, end) of a row of
 // `width` pixels held in `words`, left to right.
 template <typename F>
