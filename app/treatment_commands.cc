@@ -34,6 +34,7 @@ struct TreatmentArgs {
   std::optional<double> split_radius_m;
   std::optional<double> split_chi2;
   std::optional<double> split_cover_m;
+  std::optional<double> split_clipped_reach;
   std::optional<double> fill_holes_max_fraction;
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
@@ -72,7 +73,14 @@ nlohmann::json MetricsJson(const TreatmentMetrics& m) {
       {"weed_pixel_fpr_of_plant", m.weed_pixel_fpr_of_plant},
       {"pixels", {{"crop_as_crop", m.crop_as_crop}, {"crop_as_weed", m.crop_as_weed},
                   {"crop_as_soil", m.crop_as_soil}, {"weed_as_crop", m.weed_as_crop},
-                  {"weed_as_weed", m.weed_as_weed}, {"weed_as_soil", m.weed_as_soil}}},
+                  {"weed_as_weed", m.weed_as_weed}, {"weed_as_soil", m.weed_as_soil},
+                  {"crop_as_weed_by",
+                   {{"no_decision", m.crop_as_weed_no_decision},
+                    {"small", m.crop_as_weed_small},
+                    {"unassociated", m.crop_as_weed_unassociated},
+                    {"other", m.crop_as_weed_other},
+                    {"split_part", m.crop_as_weed_split_part},
+                    {"split_clipped", m.crop_as_weed_split_clipped}}}}},
       {"frames_classified", m.frames_classified},
       {"ticks", m.ticks},
       {"ticks_fail_safe", m.ticks_fail_safe},
@@ -157,6 +165,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   if (a.split_chi2) o.treatment.classifier.split_assoc_chi2 = *a.split_chi2;
   if (a.split_cover_m) o.treatment.classifier.split_cover_m = *a.split_cover_m;
+  if (a.split_clipped_reach) o.treatment.classifier.split_clipped_reach = *a.split_clipped_reach;
   if (a.fill_holes_max_fraction) o.segmenter.fill_holes_max_fraction = *a.fill_holes_max_fraction;
   if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
@@ -263,6 +272,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                   "merged blobs: a part with plant matter this close to its predicted crop is "
                   "that crop (0: the gate alone)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--split-clipped-reach", args.split_clipped_reach,
+                  "merged blobs cut by the image border: a part with plant matter within this "
+                  "many crop radii of its predicted crop is that crop (0: as an uncut blob)")
+      ->check(CLI::Range(0.0, 5.0));
   cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
                 "every crop blob its own footprint (not one per predicted plant)");
   cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,

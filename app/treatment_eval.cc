@@ -22,6 +22,16 @@ namespace {
 
 // Confusion of true pixel class (soil, crop, weed) × labelled (S, C, W).
 using Confusion = std::array<std::array<double, 3>, 3>;
+// Why a blob's pixels are labelled W (index into CropAsWeed's counts).
+enum WeedReason : uint8_t {
+  kNoDecision,    // no feature (the blob was not classified)
+  kSmall,         // under the size filter
+  kUnassociated,  // outside every association region
+  kClippedCast,   // cut by the image border, or another rule
+  kSplitPart,     // the part of a merged blob left to no crop
+  kSplitClipped,  // the same of a blob cut by the image border
+  kReasons
+};
 
 // One treatment chain under test on one run.
 struct Chain {
@@ -32,6 +42,7 @@ struct Chain {
   std::vector<tracking::Feature> features;
   std::vector<int> blob_of_feature;
   Confusion confusion{};
+  std::array<double, kReasons> crop_as_weed_by{};
   std::vector<classify::ClassifierSample> samples;
   bool collect_samples = false;
   int frames_classified = 0, ticks = 0, ticks_fail_safe = 0;
@@ -89,6 +100,7 @@ struct Chain {
               stats.at<int>(k, cv::CC_STAT_AREA)}] = k;
     }
     std::vector<uint8_t> label_of(static_cast<size_t>(n), 2);  // unmatched plant matter: W
+    std::vector<uint8_t> reason_of(static_cast<size_t>(n), kNoDecision);
     label_of[0] = 0;
     std::vector<int> feature_of(static_cast<size_t>(n), -1);
     for (size_t i = 0; i < t.decisions.size(); ++i) {
@@ -96,20 +108,31 @@ struct Chain {
       const auto it = by_box.find({b.bbox_px.x, b.bbox_px.y, b.bbox_px.width, b.bbox_px.height,
                                    b.area_px});
       if (it == by_box.end()) continue;
-      label_of[static_cast<size_t>(it->second)] = t.decisions[i].crop ? 1 : 2;
-      feature_of[static_cast<size_t>(it->second)] = static_cast<int>(i);
+      const classify::BlobDecision& d = t.decisions[i];
+      const auto k = static_cast<size_t>(it->second);
+      label_of[k] = d.crop ? 1 : 2;
+      reason_of[k] = d.area_m2 < d.size_filter_m2 ? kSmall
+                     : !d.associated             ? kUnassociated
+                                                 : kClippedCast;
+      feature_of[k] = static_cast<int>(i);
     }
-    cv::Mat label_px(components.size(), CV_8UC1);
+    cv::Mat label_px(components.size(), CV_8UC1), reason_px(components.size(), CV_8UC1);
     for (int v = 0; v < components.rows; ++v) {
       const int* comp = components.ptr<int>(v);
       uint8_t* out = label_px.ptr<uint8_t>(v);
-      for (int u = 0; u < components.cols; ++u) out[u] = label_of[static_cast<size_t>(comp[u])];
+      uint8_t* why = reason_px.ptr<uint8_t>(v);
+      for (int u = 0; u < components.cols; ++u) {
+        out[u] = label_of[static_cast<size_t>(comp[u])];
+        why[u] = reason_of[static_cast<size_t>(comp[u])];
+      }
     }
     // Blobs the treatment system split among the predicted crops (merged
     // plants): labelled pixel by pixel as it mapped them.
     for (const treatment::SplitBlob& b : t.split) {
       for (size_t q = 0; q < b.pixels.size(); ++q) {
         label_px.at<uint8_t>(b.pixels[q]) = b.crop[q] ? 1 : 2;
+        reason_px.at<uint8_t>(b.pixels[q]) =
+            t.decisions[static_cast<size_t>(b.feature)].clipped ? kSplitClipped : kSplitPart;
       }
     }
     cv::Mat valid;
@@ -122,7 +145,9 @@ struct Chain {
       for (int u = 0; u < labels.cols; ++u) {
         if (!ok[u] || truth[u] > 2) continue;
         const size_t k = static_cast<size_t>(comp[u]);
-        confusion[truth[u]][label_px.at<uint8_t>(v, u)] += 1.0;
+        const uint8_t label = label_px.at<uint8_t>(v, u);
+        confusion[truth[u]][label] += 1.0;
+        if (truth[u] == 1 && label == 2) crop_as_weed_by[reason_px.at<uint8_t>(v, u)] += 1.0;
         per_component[k][truth[u]] += 1.0;
       }
     }
@@ -140,6 +165,7 @@ struct Chain {
 struct Sums {
   SprayScore spray;
   Confusion confusion{};
+  std::array<double, kReasons> crop_as_weed_by{};
   int frames_classified = 0, ticks = 0, ticks_fail_safe = 0, shots = 0, map_resets = 0,
       plants = 0, confirmed = 0;
 };
@@ -149,6 +175,7 @@ void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) sums.confusion[i][j] += c.confusion[i][j];
   }
+  for (size_t k = 0; k < kReasons; ++k) sums.crop_as_weed_by[k] += c.crop_as_weed_by[k];
   sums.frames_classified += c.frames_classified;
   sums.ticks += c.ticks;
   sums.ticks_fail_safe += c.ticks_fail_safe;
@@ -188,6 +215,12 @@ TreatmentMetrics Finish(const Sums& s) {
   m.crop_as_soil = Ratio(c[1][0], crop);
   m.crop_as_crop = Ratio(c[1][1], crop);
   m.crop_as_weed = Ratio(c[1][2], crop);
+  m.crop_as_weed_no_decision = Ratio(s.crop_as_weed_by[kNoDecision], crop);
+  m.crop_as_weed_small = Ratio(s.crop_as_weed_by[kSmall], crop);
+  m.crop_as_weed_unassociated = Ratio(s.crop_as_weed_by[kUnassociated], crop);
+  m.crop_as_weed_other = Ratio(s.crop_as_weed_by[kClippedCast], crop);
+  m.crop_as_weed_split_part = Ratio(s.crop_as_weed_by[kSplitPart], crop);
+  m.crop_as_weed_split_clipped = Ratio(s.crop_as_weed_by[kSplitClipped], crop);
   m.weed_as_soil = Ratio(c[2][0], weed);
   m.weed_as_crop = Ratio(c[2][1], weed);
   m.weed_as_weed = Ratio(c[2][2], weed);

@@ -55,6 +55,14 @@ struct TreatmentMetrics {
   // fraction of true crop / weed pixels labelled C, W or S.
   double crop_as_crop = 0.0, crop_as_weed = 0.0, crop_as_soil = 0.0;
   double weed_as_crop = 0.0, weed_as_weed = 0.0, weed_as_soil = 0.0;
+  // crop_as_weed by why the pixel's blob was labelled W: not classified (no
+  // feature), under the size filter, outside every association region,
+  // another rule, or a merged blob's part left to no crop (split_part;
+  // split_clipped when the blob was cut by the image border). They sum to
+  // crop_as_weed.
+  double crop_as_weed_no_decision = 0.0, crop_as_weed_small = 0.0,
+         crop_as_weed_unassociated = 0.0, crop_as_weed_other = 0.0,
+         crop_as_weed_split_part = 0.0, crop_as_weed_split_clipped = 0.0;
   double crop_pixel_rate = 0.0;  // = crop_as_crop
   // Of the true crop / weed pixels segmented as plant (C or W), the fraction
   // labelled C: thesis table 7.9's TPR and FPR, which leave out what

@@ -324,5 +324,49 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   for (uint8_t c : crop) EXPECT_EQ(c, 0);
 }
 
+// A crop entering the view: the image border cuts its leaves 5 cm from
+// its root, which lies beyond the border. Its visible part neither reaches
+// the prediction (2 cm cover) nor centres on it; cut by the border, it is
+// that crop once plant matter lies within the crops' typical radius
+// (learnt from whole crops: 0.01 m², r = 5.6 cm) of the prediction.
+TEST(CropClassifier, ACutBlobWithinACropsReachOfItsPredictionIsThatCrop) {
+  ClassifierOptions o = SizeAndGate();
+  o.crop_size_min_samples = 5;
+  CropClassifier classifier(o);
+  const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0)};
+  std::vector<Eigen::Vector2d> ground;
+  std::vector<double> area;
+  for (double x = -0.06; x <= 0.06; x += 0.005) {
+    for (double y = 1.05; y <= 1.12; y += 0.005) {
+      ground.emplace_back(x, y);
+      area.push_back(0.005 * 0.005);
+    }
+  }
+  std::vector<uint8_t> crop;
+  // Before any whole crop was seen there is no reach: weed either way.
+  EXPECT_DOUBLE_EQ(classifier.crop_reach_m(), 0.0);
+  EXPECT_EQ(classifier.SplitMerged(ground, area, true, crops, geometry::Matrix5d::Zero(), crop), 0);
+  std::vector<BlobDecision> d;
+  for (int i = 0; i < 5; ++i) {
+    classifier.Classify(std::vector<tracking::Feature>{FeatureAt(0.0, 1.0, 0.01)}, crops,
+                        geometry::Matrix5d::Zero(), d);
+  }
+  EXPECT_NEAR(classifier.median_crop_area_m2(), 0.01, 1e-12);
+  EXPECT_NEAR(classifier.crop_reach_m(), std::sqrt(0.01 / M_PI), 1e-12);
+  EXPECT_EQ(classifier.SplitMerged(ground, area, true, crops, geometry::Matrix5d::Zero(), crop), 1);
+  for (const uint8_t c : crop) EXPECT_EQ(c, 1);
+  // Not cut by the border: as before, weed (its centroid is 8.5 cm off).
+  EXPECT_EQ(classifier.SplitMerged(ground, area, false, crops, geometry::Matrix5d::Zero(), crop), 0);
+  // Beyond the reach (the part starts 5 cm from the root; 0.8 × 5.6 cm
+  // = 4.5 cm): weed.
+  o.split_clipped_reach = 0.8;
+  CropClassifier shorter(o);
+  for (int i = 0; i < 5; ++i) {
+    shorter.Classify(std::vector<tracking::Feature>{FeatureAt(0.0, 1.0, 0.01)}, crops,
+                     geometry::Matrix5d::Zero(), d);
+  }
+  EXPECT_EQ(shorter.SplitMerged(ground, area, true, crops, geometry::Matrix5d::Zero(), crop), 0);
+}
+
 }  // namespace
 }  // namespace plantscale::classify

@@ -23,6 +23,7 @@ OptionErrors ClassifierOptions::Validate() const {
   RequirePositive(e, "split_radius_m", split_radius_m);
   RequirePositive(e, "split_assoc_chi2", split_assoc_chi2);
   RequireNonNegative(e, "split_cover_m", split_cover_m);
+  RequireNonNegative(e, "split_clipped_reach", split_clipped_reach);
   RequireInRange(e, "crop_size_fraction", crop_size_fraction, 0.0, 1.0);
   if (crop_size_window < 1) e.push_back({"crop_size_window", "must be >= 1"});
   if (crop_size_min_samples < 1 || crop_size_min_samples > crop_size_window) {
@@ -32,11 +33,12 @@ OptionErrors ClassifierOptions::Validate() const {
 }
 
 std::vector<PredictedCrop> PredictCrops(const geometry::GridModel& model,
-                                        const geometry::GridState& state) {
+                                        const geometry::GridState& state, double reach_m) {
   std::vector<PredictedCrop> out;
   const auto& cam = model.camera().options();
   const double above_plane_m = cam.height_m - cam.virtual_plane_height_m;
-  for (const geometry::GridPlant& g : model.PlantsInView(state)) {
+  for (const geometry::GridPlant& g :
+       reach_m > 0.0 ? model.PlantsReachingView(state, reach_m) : model.PlantsInView(state)) {
     PredictedCrop c;
     c.m = g.m;
     c.n = g.n;
@@ -81,11 +83,16 @@ void CropClassifier::RememberCropArea(double area_m2) {
   }
 }
 
+double CropClassifier::crop_reach_m() const {
+  return options_.split_clipped_reach * std::sqrt(median_crop_area_m2_ / M_PI);
+}
+
 void CropClassifier::UpdateSizeFilter() {
   if (crop_areas_.size() < static_cast<size_t>(options_.crop_size_min_samples)) return;
   scratch_.assign(crop_areas_.begin(), crop_areas_.end());
   const auto mid = scratch_.begin() + static_cast<std::ptrdiff_t>(scratch_.size() / 2);
   std::nth_element(scratch_.begin(), mid, scratch_.end());
+  median_crop_area_m2_ = *mid;
   size_filter_m2_ = std::min(options_.min_crop_area_m2, options_.crop_size_fraction * *mid);
 }
 
@@ -163,13 +170,16 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
     moment[k] += pixel_area_m2[i] * ground_m[i];
     nearest2[k] = std::min(nearest2[k], best);
   }
+  // Plant matter this close to a prediction covers it.
+  const double cover_m =
+      clipped ? std::max(options_.split_cover_m, crop_reach_m()) : options_.split_cover_m;
   std::vector<uint8_t> part_crop(predictions.size(), 0);
   int parts = 0;
   for (size_t k = 0; k < predictions.size(); ++k) {
     if (!(area[k] > 0.0)) continue;
     // A part with plant matter on its prediction is inside its region
     // (γ² = 0) whatever its cut centroid; the size filter still applies.
-    const bool covers = nearest2[k] <= options_.split_cover_m * options_.split_cover_m;
+    const bool covers = nearest2[k] <= cover_m * cover_m;
     const Eigen::Vector2d nu = moment[k] / area[k] - predictions[k].ground_m;
     const Eigen::Matrix2d s = AssociationCovariance(predictions[k], covariance, options_);
     const double g2 = covers ? 0.0 : nu.dot(s.ldlt().solve(nu));

@@ -70,6 +70,14 @@ struct ClassifierOptions {
   // crop pixels labelled C 87.6 → 91.2 %). 0: the gate alone. About one
   // plant_sd_m.
   double split_cover_m = 0.02;
+  // SplitMerged, a blob cut by the image border: its part is that crop when
+  // it has plant matter within this many of the crops' typical radius
+  // (sqrt(median whole crop area / π), learnt as the size filter) of its
+  // prediction. Such a blob is mostly a crop entering or leaving the view
+  // with its root beyond the border: its visible leaves neither reach the
+  // prediction nor centre on it, so the plants beyond the border within
+  // this reach are predicted too (PredictCrops). 0: as an uncut blob.
+  double split_clipped_reach = 1.0;
 
   OptionErrors Validate() const;
 };
@@ -84,9 +92,11 @@ struct PredictedCrop {
   Eigen::Matrix<double, 2, 3> bounce_jacobian = Eigen::Matrix<double, 2, 3>::Zero();
 };
 
-// Predictions of every grid plant in view from the tracker's state.
+// Predictions of every grid plant in view from the tracker's state; with
+// `reach_m` > 0 also of those beyond the view's border whose leaves may
+// reach into it (GridModel::PlantsReachingView).
 std::vector<PredictedCrop> PredictCrops(const geometry::GridModel& model,
-                                        const geometry::GridState& state);
+                                        const geometry::GridState& state, double reach_m = 0.0);
 
 // S_assoc of eq. 7.4 for one prediction.
 Eigen::Matrix2d AssociationCovariance(const PredictedCrop& crop, const geometry::Matrix5d& p,
@@ -124,6 +134,11 @@ class CropClassifier {
   // The size filter in force: min(ς, crop_size_fraction × the crops' median
   // area) once enough crops were seen, else ς.
   double size_filter_m2() const { return size_filter_m2_; }
+  // The median ground area of the last whole crops (0 before enough seen).
+  double median_crop_area_m2() const { return median_crop_area_m2_; }
+  // How far a crop's leaves reach from its root: split_clipped_reach × the
+  // radius of a disk of the median area (0 before enough crops were seen).
+  double crop_reach_m() const;
 
   // Merged plants (thesis fig. 2.17): a blob whose centroid missed every
   // association region may be several touching plants, its centroid between
@@ -132,8 +147,9 @@ class CropClassifier {
   // the nearest prediction within `split_radius_m`, and every part is then
   // classified as a blob of its own (size filter, then its centroid against
   // its prediction's association region with `split_assoc_chi2`, or plant
-  // matter within `split_cover_m` of the prediction; `clipped` as the whole
-  // blob's).
+  // matter within `split_cover_m` of the prediction, or when `clipped`
+  // within split_clipped_reach × the crops' typical radius; `clipped` as the
+  // whole blob's).
   // Writes 1 (crop) or 0 (weed) per pixel into `crop`; pixels beyond every
   // prediction's radius are weed. Returns the number of crop parts. With
   // `part`, also writes each pixel's part: the index of its prediction in
@@ -154,6 +170,7 @@ class CropClassifier {
   size_t next_area_ = 0;
   std::vector<double> scratch_;
   double size_filter_m2_ = 0.0;
+  double median_crop_area_m2_ = 0.0;
 };
 
 }  // namespace plantscale::classify

@@ -86,6 +86,34 @@ std::vector<GridPlant> GridModel::PlantsInView(const GridState& state) const {
   return plants;
 }
 
+std::vector<GridPlant> GridModel::PlantsReachingView(const GridState& state,
+                                                     double reach_m) const {
+  std::vector<GridPlant> plants;
+  const double h = camera_.options().virtual_plane_height_m;
+  const auto in_image = [&](const Eigen::Vector2d& g) {
+    const auto uv = camera_.Project({g.x(), g.y(), h});
+    return uv && camera_.InImage(*uv, options_.in_view_margin_px);
+  };
+  // Line 0 is the first not below the image (ShiftReference); a line
+  // further back may still reach into it.
+  const int back = static_cast<int>(std::ceil(reach_m / std::max(state.plant_spacing_m, 1e-3)));
+  for (int m = -back;; ++m) {
+    const Eigen::Vector2d centre = PlantInVehicle(state, m, 0);
+    if (centre.y() - reach_m > options_.max_range_m || m > 1000) break;
+    for (int n = -options_.rows_each_side; n <= options_.rows_each_side; ++n) {
+      const Eigen::Vector2d g = PlantInVehicle(state, m, n);
+      const auto uv = ImageOfPlant(state, m, n);
+      bool near = uv && camera_.InImage(*uv, options_.in_view_margin_px);
+      for (const Eigen::Vector2d& d : {Eigen::Vector2d(reach_m, 0.0), Eigen::Vector2d(-reach_m, 0.0),
+                                      Eigen::Vector2d(0.0, reach_m), Eigen::Vector2d(0.0, -reach_m)}) {
+        near = near || (reach_m > 0.0 && in_image(g + d));
+      }
+      if (near) plants.push_back({m, n, g, uv ? *uv : Eigen::Vector2d(std::nan(""), std::nan(""))});
+    }
+  }
+  return plants;
+}
+
 bool GridModel::BelowImage(const GridState& state, int m) const {
   // Thesis §4.1.3 footnote 3: project the line's central-row plant and test
   // it against the image bounds.

@@ -72,6 +72,11 @@ class GridModel {
   Eigen::Matrix<double, 2, 5> ImageOfPlantJacobian(const GridState& state, int m, int n) const;
   // Every grid plant whose projection lies inside the image, line by line.
   std::vector<GridPlant> PlantsInView(const GridState& state) const;
+  // Those and the plants whose leaves may reach into the view from beyond
+  // its border: the root, or a point `reach_m` from it along x or y on the
+  // virtual plane, projects into the image (uv: the root's image, which may
+  // lie outside it).
+  std::vector<GridPlant> PlantsReachingView(const GridState& state, double reach_m) const;
   bool LineInView(const GridState& state, int m) const;
 
   // The change of reference of thesis eq. 4.6: while line 0 has left the

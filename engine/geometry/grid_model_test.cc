@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <cmath>
 
 #include "engine/geometry/test_cameras.h"
@@ -93,6 +95,51 @@ TEST(GridModel, PlantsInViewAreInsideTheImageAndIncludeThreeRows) {
     rows[p.n + 1] = true;
   }
   EXPECT_TRUE(rows[0] && rows[1] && rows[2]);
+}
+
+// Plants whose leaves reach into the view: those in view, and those beyond
+// its border with a point within the reach (along x or y) in the image;
+// every other plant of the lines about the view is left out.
+TEST(GridModel, PlantsReachingViewAddsThoseJustBeyondTheBorder) {
+  const GridModel model(CameraModel(ObliqueCamera()), GridModelOptions{});
+  const CameraModel& camera = model.camera();
+  const double h = camera.options().virtual_plane_height_m, reach = 0.1;
+  const auto in_image = [&](const Eigen::Vector2d& g) {
+    const auto uv = camera.Project({g.x(), g.y(), h});
+    return uv && camera.InImage(*uv);
+  };
+  int beyond = 0;
+  // The vehicle at 20 places along one plant spacing.
+  for (int step = 0; step < 20; ++step) {
+    GridState s = SomeState();
+    s.forward_m += step * s.plant_spacing_m / 20.0;
+    model.ShiftReference(s);
+    const auto in_view = model.PlantsInView(s);
+    EXPECT_EQ(model.PlantsReachingView(s, 0.0).size(), in_view.size());
+    const auto reaching = model.PlantsReachingView(s, reach);
+    std::set<std::pair<int, int>> got;
+    for (const GridPlant& p : reaching) got.insert({p.m, p.n});
+    for (const GridPlant& p : in_view) EXPECT_TRUE(got.count({p.m, p.n})) << p.m << "," << p.n;
+    int beyond_here = 0, near_here = 0;
+    for (int m = -3; m < 60; ++m) {
+      for (int n = -1; n <= 1; ++n) {
+        const Eigen::Vector2d g = PlantInVehicle(s, m, n);
+        if (g.y() - reach > GridModelOptions{}.max_range_m) continue;
+        bool near = in_image(g);
+        for (const Eigen::Vector2d& d : {Eigen::Vector2d(reach, 0), Eigen::Vector2d(-reach, 0),
+                                         Eigen::Vector2d(0, reach), Eigen::Vector2d(0, -reach)}) {
+          near = near || in_image(g + d);
+        }
+        EXPECT_EQ(got.count({m, n}) == 1, near) << "step " << step << " plant " << m << "," << n;
+        beyond_here += near && !in_image(g);
+        near_here += near;
+      }
+    }
+    EXPECT_EQ(got.size(), reaching.size()) << step;  // no plant twice
+    EXPECT_EQ(reaching.size(), static_cast<size_t>(near_here)) << step;
+    beyond += beyond_here;
+  }
+  EXPECT_GT(beyond, 10);  // line −1 below the image, the far line above it, the outer rows
 }
 
 TEST(GridModel, ReferenceShiftKeepsLineZeroBottomMostAndPlantsFixed) {

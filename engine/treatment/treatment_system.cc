@@ -165,7 +165,8 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   }
   if (tracker.mode() != tracking::TrackerMode::kTracking) return frame_;
   const geometry::GridState state = tracker.state();
-  const std::vector<classify::PredictedCrop> crops = classify::PredictCrops(tracker.model(), state);
+  const std::vector<classify::PredictedCrop> crops =
+      classify::PredictCrops(tracker.model(), state, classifier_.crop_reach_m());
   classifier_.Classify(features, crops, tracker.covariance(), frame_.decisions);
   frame_.classified = true;
   const BedPose pose = BedPoseFromGrid(utime, state, tracker.forward_distance_m(), 0.0);
