@@ -29,6 +29,7 @@ struct EvaluateArgs {
   double fill_holes_max_fraction = -1.0;
   int close_notches_px = -1;
   double hull_gain = -1.0;
+  std::string errors_dir;
 };
 
 nlohmann::json MethodJson(const MethodEvaluation& m) {
@@ -126,6 +127,7 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.fill_holes_max_fraction >= 0) o.segmenter.fill_holes_max_fraction = a.fill_holes_max_fraction;
   if (a.close_notches_px >= 0) o.segmenter.close_notches_px = a.close_notches_px;
   if (a.hull_gain >= 0) o.segmenter.hull_gain = a.hull_gain;
+  o.errors_dir = a.errors_dir;
   if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
@@ -217,6 +219,8 @@ void AddSegmentCommands(CommandRegistry& registry) {
                   "inside a blob's convex hull, plant at this lower local gain (0: off)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
+  cmd->add_option("--errors-dir", ev.errors_dir,
+                  "write each frame's errors there as PNG (missed plant red, soil taken blue)");
   cmd->add_option("--baseline", ev.baseline, "also report the thesis's baselines")
       ->check(CLI::IsMember({"thesis"}));
 }

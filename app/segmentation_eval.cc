@@ -1,6 +1,10 @@
 #include "app/segmentation_eval.h"
 
 #include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 #include "engine/vision/threshold.h"
 
@@ -98,6 +102,32 @@ MethodEvaluation Baseline(const char* method, const char* parameter,
   return m;
 }
 
+// The frame's errors as an image (SegmentationEvalOptions::errors_dir).
+void WriteErrors(const std::string& path, const cv::Mat& image, const cv::Mat& mask,
+                 const cv::Mat& labels, const cv::Mat& valid) {
+  cv::Mat grey, out;
+  if (image.channels() == 3) {
+    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  } else {
+    grey = image;
+  }
+  cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);
+  for (int v = 0; v < out.rows; ++v) {
+    for (int u = 0; u < out.cols; ++u) {
+      const uint8_t l = labels.at<uint8_t>(v, u);
+      if (!valid.at<uint8_t>(v, u) || l > 2) continue;
+      const bool plant = l != 0, found = mask.at<uint8_t>(v, u) != 0;
+      if (plant && !found) out.at<cv::Vec3b>(v, u) = {0, 0, 255};
+      if (!plant && found) out.at<cv::Vec3b>(v, u) = {255, 64, 0};
+      if (plant && found) {
+        const auto g = static_cast<uint8_t>(grey.at<uint8_t>(v, u) / 3);
+        out.at<cv::Vec3b>(v, u) = {g, 255, g};
+      }
+    }
+  }
+  if (!cv::imwrite(path, out)) throw std::runtime_error("cannot write " + path);
+}
+
 }  // namespace
 
 OptionErrors SegmentationEvalOptions::Validate() const {
@@ -133,6 +163,13 @@ SegmentationEvaluation EvaluateSegmentation(const SegmentationEvalOptions& optio
       cv::Mat valid;
       vision::EvaluationMask(frame.rendered.labels, roi, options.doubt_band_px, valid);
       ScoreFrame(frame.rendered.image, frame.rendered.labels, valid, segmenter, acc);
+      if (!options.errors_dir.empty()) {
+        std::filesystem::create_directories(options.errors_dir);
+        WriteErrors(options.errors_dir + "/seed" + std::to_string(k) + "_frame" +
+                        std::to_string(result.frames) + "_errors.png",
+                    frame.rendered.image, segmenter.Process(frame.rendered.image).mask,
+                    frame.rendered.labels, valid);
+      }
       ++result.frames;
     }
   }

@@ -25,6 +25,11 @@ struct SegmentationEvalOptions {
   int doubt_band_px = 1;      // label border excluded on each side
   double costs_ratio = 3.644; // Φ of eq. 2.23 (the thesis's, set on sequence C)
   vision::SegmenterOptions segmenter;  // the product's method and operating point
+  // When set, each scored frame's errors are written there as
+  // seed<k>_frame<i>_errors.png: the image in grey, plant pixels missed in
+  // red (0, 0, 255 BGR), soil taken for plant in blue (255, 64, 0), plant
+  // found in green (g/3, 255, g/3 of its grey g); valid pixels only.
+  std::string errors_dir;
 
   OptionErrors Validate() const;
 };

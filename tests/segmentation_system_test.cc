@@ -3,6 +3,9 @@
 // must beat the thesis's adaptive threshold's published AUC.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
 #include "app/config_loader.h"
 #include "app/segmentation_eval.h"
 
@@ -38,6 +41,37 @@ INSTANTIATE_TEST_SUITE_P(Presets, SegmentationCalibration,
                                          Published{"C", 0.9816, 0.9846, 0.83421, 0.99},
                                          Published{"D", 0.8835, 0.9241, 0.28627, 0.99}),
                          [](const auto& p) { return std::string(p.param.preset); });
+
+// The error images (--errors-dir) show what the figures count: over the
+// frames, red (plant missed) against red + green (plant) is 1 − recall and
+// green against green + blue (soil taken) is the precision.
+TEST(SegmentationErrors, ImagesAgreeWithTheFigures) {
+  SegmentationEvalOptions o;
+  o.sim = LoadSimulatorPreset("B", DefaultConfigDir());
+  o.seeds = 1;
+  o.frames_per_seed = 2;
+  o.errors_dir = (std::filesystem::temp_directory_path() / "plantscale_seg_errors").string();
+  std::filesystem::remove_all(o.errors_dir);
+  const SegmentationEvaluation e = EvaluateSegmentation(o);
+  ASSERT_EQ(e.frames, 2);
+  double missed = 0, found = 0, taken = 0;
+  for (int i = 0; i < 2; ++i) {
+    const cv::Mat img = cv::imread(o.errors_dir + "/seed0_frame" + std::to_string(i) + "_errors.png");
+    ASSERT_FALSE(img.empty()) << i;
+    for (int v = 0; v < img.rows; ++v) {
+      for (int u = 0; u < img.cols; ++u) {
+        const cv::Vec3b p = img.at<cv::Vec3b>(v, u);
+        missed += p == cv::Vec3b(0, 0, 255);
+        taken += p == cv::Vec3b(255, 64, 0);
+        found += p[1] == 255 && p[0] == p[2] && p[0] <= 85;
+      }
+    }
+  }
+  ASSERT_GT(found, 1000);
+  EXPECT_NEAR(missed / (missed + found), 1.0 - e.ours.rates.recall, 0.01);
+  EXPECT_NEAR(found / (found + taken), e.ours.rates.precision, 0.01);
+  std::filesystem::remove_all(o.errors_dir);
+}
 
 }  // namespace
 }  // namespace plantscale::app
