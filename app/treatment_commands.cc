@@ -35,6 +35,7 @@ struct TreatmentArgs {
   std::optional<double> split_chi2;
   std::optional<double> split_cover_m;
   std::optional<double> split_clipped_reach;
+  std::optional<double> fragment_reach;
   std::optional<double> fill_holes_max_fraction;
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
@@ -166,6 +167,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.split_chi2) o.treatment.classifier.split_assoc_chi2 = *a.split_chi2;
   if (a.split_cover_m) o.treatment.classifier.split_cover_m = *a.split_cover_m;
   if (a.split_clipped_reach) o.treatment.classifier.split_clipped_reach = *a.split_clipped_reach;
+  if (a.fragment_reach) o.treatment.classifier.fragment_reach = *a.fragment_reach;
   if (a.fill_holes_max_fraction) o.segmenter.fill_holes_max_fraction = *a.fill_holes_max_fraction;
   if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
@@ -272,6 +274,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                   "merged blobs: a part with plant matter this close to its predicted crop is "
                   "that crop (0: the gate alone)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--fragment-reach", args.fragment_reach,
+                  "a blob under the size filter within this many crop radii of a crop found in "
+                  "the same frame is that crop's leaf (0: off, weed)")
+      ->check(CLI::Range(0.0, 5.0));
   cmd->add_option("--split-clipped-reach", args.split_clipped_reach,
                   "merged blobs cut by the image border: a part with plant matter within this "
                   "many crop radii of its predicted crop is that crop (0: as an uncut blob)")

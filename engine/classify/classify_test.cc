@@ -324,6 +324,48 @@ TEST(CropClassifier, SplitMergedLabelsEachPlantOfAMergedBlob) {
   for (uint8_t c : crop) EXPECT_EQ(c, 0);
 }
 
+// A leaf cut off a crop by segmentation: under the size filter, it is weed
+// by the thesis's rule; within the crops' typical radius of a prediction a
+// crop blob of the same frame associated with, it is that crop's leaf.
+TEST(CropClassifier, ASmallBlobBesideACropFoundIsItsLeaf) {
+  ClassifierOptions o = SizeAndGate();
+  o.crop_size_min_samples = 3;
+  o.fragment_reach = 1.0;
+  CropClassifier classifier(o);
+  const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.0, 1.5)};
+  std::vector<BlobDecision> d;
+  for (int i = 0; i < 3; ++i) {  // whole crops of 0.01 m²: radius 5.6 cm
+    classifier.Classify(std::vector<tracking::Feature>{FeatureAt(0.0, 1.0, 0.01)}, crops,
+                        geometry::Matrix5d::Zero(), d);
+  }
+  ASSERT_NEAR(classifier.crop_reach_m(), std::sqrt(0.01 / M_PI), 1e-12);
+  const std::vector<tracking::Feature> frame = {
+      FeatureAt(0.0, 1.0, 0.01),            // the crop, found
+      FeatureAt(0.05, 1.0, 0.0005),         // a leaf 5 cm off it: crop
+      FeatureAt(0.07, 1.0, 0.0005),         // 7 cm off: beyond the reach, weed
+      FeatureAt(0.0, 1.54, 0.0005),         // 4 cm off a crop not found: weed
+      FeatureAt(-0.05, 1.0, 0.0005, true),  // cut by the border: as before (weed)
+  };
+  classifier.Classify(frame, crops, geometry::Matrix5d::Zero(), d);
+  ASSERT_EQ(d.size(), 5u);
+  EXPECT_TRUE(d[0].crop && d[0].associated && !d[0].fragment);
+  EXPECT_TRUE(d[1].crop && d[1].fragment);
+  EXPECT_FALSE(d[1].associated);  // marks no map cells
+  EXPECT_EQ(d[1].m, 0);
+  EXPECT_FALSE(d[2].crop);
+  EXPECT_FALSE(d[3].crop);
+  EXPECT_FALSE(d[4].crop);
+  // Off: the thesis's rule.
+  o.fragment_reach = 0.0;
+  CropClassifier thesis(o);
+  for (int i = 0; i < 3; ++i) {
+    thesis.Classify(std::vector<tracking::Feature>{FeatureAt(0.0, 1.0, 0.01)}, crops,
+                    geometry::Matrix5d::Zero(), d);
+  }
+  thesis.Classify(frame, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_FALSE(d[1].crop);
+}
+
 // A crop entering the view: the image border cuts its leaves 5 cm from
 // its root, which lies beyond the border. Its visible part neither reaches
 // the prediction (2 cm cover) nor centres on it; cut by the border, it is

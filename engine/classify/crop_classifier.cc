@@ -24,6 +24,7 @@ OptionErrors ClassifierOptions::Validate() const {
   RequirePositive(e, "split_assoc_chi2", split_assoc_chi2);
   RequireNonNegative(e, "split_cover_m", split_cover_m);
   RequireNonNegative(e, "split_clipped_reach", split_clipped_reach);
+  RequireNonNegative(e, "fragment_reach", fragment_reach);
   RequireInRange(e, "crop_size_fraction", crop_size_fraction, 0.0, 1.0);
   if (crop_size_window < 1) e.push_back({"crop_size_window", "must be >= 1"});
   if (crop_size_min_samples < 1 || crop_size_min_samples > crop_size_window) {
@@ -127,6 +128,23 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
              IsCrop(d.area_m2, d.clipped, d.gamma2, size_filter_m2_, options_.assoc_chi2,
                     options_.sure_crop_area_m2);
     out.push_back(d);
+  }
+  // Leaf fragments of the crops found (ClassifierOptions::fragment_reach).
+  const double reach = options_.fragment_reach * std::sqrt(median_crop_area_m2_ / M_PI);
+  if (reach > 0.0) {
+    for (size_t i = 0; i < out.size(); ++i) {
+      BlobDecision& d = out[i];
+      if (d.crop || d.clipped || !(d.area_m2 < d.size_filter_m2)) continue;
+      for (size_t j = 0; j < out.size() && !d.crop; ++j) {
+        const BlobDecision& c = out[j];
+        if (!c.crop || !c.associated || c.fragment) continue;
+        if ((features[i].ground_m - c.predicted_ground_m).norm() <= reach) {
+          d.crop = d.fragment = true;
+          d.m = c.m;
+          d.n = c.n;
+        }
+      }
+    }
   }
   // Learnt after the frame, so every blob of a frame meets the same filter.
   for (const BlobDecision& d : out) {

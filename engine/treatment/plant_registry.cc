@@ -90,9 +90,10 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
       r.map_class = map.ClassOf(column, row);
     }
     char text[320];
-    const char* reason = r.crop() ? "associated with a predicted crop"
-                         : r.small ? "below the size filter"
-                         : "outside every crop association region";
+    const char* reason = r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
+                         : r.crop()          ? "associated with a predicted crop"
+                         : r.small           ? "below the size filter"
+                                             : "outside every crop association region";
     std::snprintf(text, sizeof text,
                   "%s (%d crop / %d weed votes): %s; area %.4f m2 (filter %.4f), "
                   "gamma2 %.2f (gate %.2f), %.0f mm from the predicted crop; cell counters "

@@ -302,7 +302,10 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   EXPECT_EQ(reg.Observe({0.0, 1.0}, crop), 0);
   EXPECT_EQ(reg.Observe({0.01, 1.01}, crop), 0);
   EXPECT_EQ(reg.Observe({0.2, 1.0}, weed), 1);
-  ASSERT_EQ(reg.records().size(), 2u);
+  classify::BlobDecision leaf = weed;  // under the filter, a crop's cut-off leaf
+  leaf.crop = leaf.fragment = true;
+  EXPECT_EQ(reg.Observe({0.6, 1.0}, leaf), 2);
+  ASSERT_EQ(reg.records().size(), 3u);
   EXPECT_NEAR(reg.records()[0].bed_m.x(), 0.005, 1e-12);
   EXPECT_EQ(reg.records()[0].crop_votes, 2);
   reg.MarkSprayed({0, -0.01, 0.02, 0.99, 1.0});
@@ -321,6 +324,10 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   EXPECT_NE(b.why.find("below the size filter"), std::string::npos) << b.why;
   EXPECT_NE(b.why.find("area 0.0010 m2 (filter 0.0025)"), std::string::npos) << b.why;
   EXPECT_NE(b.why.find("not sprayed"), std::string::npos) << b.why;
+  const PlantRecord& l = reg.records()[2];
+  EXPECT_NE(l.why.find("crop (1 crop / 0 weed votes): below the size filter, a leaf of a crop"),
+            std::string::npos)
+      << l.why;
 }
 
 TEST(PlantRegistry, APlantIsConfirmedByBeingSeenWhereverItWasInView) {
