@@ -121,6 +121,23 @@ std::span<const Blob> BlobExtractor::Extract(const cv::Mat& mask) {
 std::span<const Blob> BlobExtractor::Extract(const cv::Mat& mask,
                                              const geometry::CameraModel& camera) {
   Extract(mask);
+  Project(camera);
+  return {pool_.data(), static_cast<size_t>(count_)};
+}
+
+std::span<const Blob> BlobExtractor::ExtractLabelled(std::span<const detail::RowRun> runs,
+                                                     std::span<const int> parent,
+                                                     const geometry::CameraModel* camera) {
+  PLANTSCALE_CHECK(!options_.trace_contours, "contours need the mask: use Extract");
+  PLANTSCALE_CHECK(runs.size() == parent.size(), "one parent per run");
+  runs_.assign(runs.begin(), runs.end());
+  parent_.assign(parent.begin(), parent.end());
+  Accumulate(cv::Mat());
+  if (camera) Project(*camera);
+  return {pool_.data(), static_cast<size_t>(count_)};
+}
+
+void BlobExtractor::Project(const geometry::CameraModel& camera) {
   const double h = camera.options().virtual_plane_height_m;
   for (int i = 0; i < count_; ++i) {
     Blob& b = pool_[static_cast<size_t>(i)];
@@ -131,7 +148,6 @@ std::span<const Blob> BlobExtractor::Extract(const cv::Mat& mask,
     b.ground_area_m2 = b.area_px * std::abs(camera.ImageToPlaneJacobian(b.centroid_px, h)
                                                 .determinant());
   }
-  return {pool_.data(), static_cast<size_t>(count_)};
 }
 
 void TraceOuterContour(const cv::Mat& mask, cv::Point start, std::vector<cv::Point>& contour) {

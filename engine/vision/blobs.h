@@ -53,6 +53,14 @@ class BlobExtractor {
   std::span<const Blob> Extract(const cv::Mat& mask);
   // Extract, then project every blob onto the camera's virtual ground plane.
   std::span<const Blob> Extract(const cv::Mat& mask, const geometry::CameraModel& camera);
+  // The same from runs already labelled (detail::LabelRuns, 8-connected,
+  // each run's parent its set's root) of a mask of `size`: HullGrower's
+  // labelling of the mask before growth. No contours (the mask they were
+  // found in may have changed since).
+  // Throws InternalError when the options trace contours.
+  std::span<const Blob> ExtractLabelled(std::span<const detail::RowRun> runs,
+                                        std::span<const int> parent,
+                                        const geometry::CameraModel* camera = nullptr);
 
   const BlobOptions& options() const { return options_; }
 
@@ -60,6 +68,7 @@ class BlobExtractor {
   using Run = detail::RowRun;  // pixels [u_begin, u_end) of image row v
   void FindRuns(const cv::Mat& mask);
   void Accumulate(const cv::Mat& mask);
+  void Project(const geometry::CameraModel& camera);
 
   BlobOptions options_;
   std::vector<Run> runs_;

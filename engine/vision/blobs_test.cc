@@ -6,6 +6,7 @@
 
 #include "engine/common/rng.h"
 #include "engine/geometry/test_cameras.h"
+#include "engine/vision/holes.h"
 
 namespace plantscale::vision {
 namespace {
@@ -82,6 +83,38 @@ TEST(Blobs, AgreeWithOpenCvConnectedComponentsOnRandomMasks) {
       EXPECT_GE(matches, 1) << "blob " << b.id << " has no OpenCV twin";
     }
   }
+}
+
+// Blobs from runs labelled elsewhere (the hull grower's labelling of the
+// mask before growth) are those Extract finds in the mask itself.
+TEST(Blobs, ExtractLabelledEqualsExtractOnTheSameMask) {
+  Rng rng(9);
+  const geometry::CameraModel camera(geometry::testing::ThesisCamera());
+  HullGrower grower;
+  for (int trial = 0; trial < 10; ++trial) {
+    cv::Mat mask(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
+    for (int k = 0; k < 40; ++k) {
+      cv::circle(mask, {static_cast<int>(rng.Uniform(0, mask.cols)), static_cast<int>(rng.Uniform(0, mask.rows))},
+                 static_cast<int>(rng.Uniform(1, 25)), cv::Scalar(255), cv::FILLED);
+    }
+    const cv::Mat low(mask.size(), CV_8UC1, cv::Scalar(0));
+    cv::Mat grown = mask.clone();
+    grower.Grow(grown, low, 30);
+    BlobExtractor direct({.min_area_px = 5}), labelled({.min_area_px = 5});
+    const auto a = direct.Extract(mask, camera);
+    const auto b = labelled.ExtractLabelled(grower.mask_runs(), grower.mask_parent(), &camera);
+    ASSERT_EQ(a.size(), b.size()) << trial;
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].area_px, b[i].area_px);
+      EXPECT_EQ(a[i].bbox_px, b[i].bbox_px);
+      EXPECT_NEAR((a[i].centroid_px - b[i].centroid_px).norm(), 0.0, 1e-12);
+      EXPECT_NEAR((a[i].covariance_px2 - b[i].covariance_px2).norm(), 0.0, 1e-9);
+      EXPECT_EQ(a[i].on_ground, b[i].on_ground);
+      EXPECT_NEAR(a[i].ground_area_m2, b[i].ground_area_m2, 1e-15);
+    }
+  }
+  BlobExtractor traced({.min_area_px = 1, .trace_contours = true});
+  EXPECT_ANY_THROW(traced.ExtractLabelled(grower.mask_runs(), grower.mask_parent()));
 }
 
 TEST(Blobs, ContourOfASquareAndItsFreemanCode) {

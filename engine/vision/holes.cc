@@ -238,14 +238,14 @@ int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
 int HullGrower::Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px) {
   PLANTSCALE_CHECK(mask.type() == CV_8UC1 && low.type() == CV_8UC1 && low.size() == mask.size(),
                    "hull growth needs two CV_8UC1 masks of one size");
-  if (mask.empty()) return 0;
   const int width = mask.cols, height = mask.rows;
   const auto words = static_cast<size_t>((width + 63) / 64);
   mask_bits_.resize(words * static_cast<size_t>(height));
   for (int v = 0; v < height; ++v) {
     detail::RowBits(mask.ptr<uint8_t>(v), width, mask_bits_.data() + static_cast<size_t>(v) * words);
   }
-  keep_.LabelMask(mask_bits_, width, height);
+  keep_.LabelMask(mask_bits_, width, height);  // mask_runs() hold this frame's even when empty
+  if (mask.empty()) return 0;
   const std::vector<detail::RowRun>& runs = keep_.runs();
   const std::vector<int>& parent = keep_.parent();
   // Each blob's area, and its runs chained per root (last run first).

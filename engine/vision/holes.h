@@ -111,6 +111,10 @@ class HullGrower {
   // `mask` (8-connected) of at least `min_area_px` pixels, unless the grown
   // region joins two such blobs. Returns the number of pixels added.
   int Grow(cv::Mat& mask, const cv::Mat& low, int min_area_px);
+  // The mask's runs and blobs as they were before the last Grow (its
+  // labelling, for BlobExtractor::ExtractLabelled).
+  const std::vector<detail::RowRun>& mask_runs() const { return keep_.runs(); }
+  const std::vector<int>& mask_parent() const { return keep_.parent(); }
 
  private:
   std::vector<uint64_t> mask_bits_, hull_bits_, grown_bits_, low_bits_;

@@ -166,24 +166,32 @@ void Segmenter::GrowInHulls() {
 }
 
 const Segmentation& Segmenter::Process(const cv::Mat& image) {
-  Threshold(image);
-  if (GrowsInHulls()) {
-    result_.track_blobs = track_blobs_.Extract(result_.mask);
-    GrowInHulls();
-  }
-  result_.blobs = blobs_.Extract(result_.mask);
-  if (!GrowsInHulls()) result_.track_blobs = result_.blobs;
-  return result_;
+  return Process(image, nullptr);
 }
 
 const Segmentation& Segmenter::Process(const cv::Mat& image,
                                        const geometry::CameraModel& camera) {
+  return Process(image, &camera);
+}
+
+const Segmentation& Segmenter::Process(const cv::Mat& image,
+                                       const geometry::CameraModel* camera) {
   Threshold(image);
+  const auto extract = [&](BlobExtractor& e) {
+    return camera ? e.Extract(result_.mask, *camera) : e.Extract(result_.mask);
+  };
   if (GrowsInHulls()) {
-    result_.track_blobs = track_blobs_.Extract(result_.mask, camera);
+    // The tracker's blobs are the mask's before growth: from the hull
+    // grower's own labelling of it, unless contours need that mask.
+    const bool contours = options_.blobs.trace_contours;
+    if (contours) result_.track_blobs = extract(track_blobs_);
     GrowInHulls();
+    if (!contours) {
+      result_.track_blobs =
+          track_blobs_.ExtractLabelled(hull_.mask_runs(), hull_.mask_parent(), camera);
+    }
   }
-  result_.blobs = blobs_.Extract(result_.mask, camera);
+  result_.blobs = extract(blobs_);
   if (!GrowsInHulls()) result_.track_blobs = result_.blobs;
   return result_;
 }

@@ -111,6 +111,7 @@ class Segmenter {
   ThresholdMethod used_method() const { return used_; }
 
  private:
+  const Segmentation& Process(const cv::Mat& image, const geometry::CameraModel* camera);
   void Threshold(const cv::Mat& image);
   bool GrowsInHulls() const;
   void GrowInHulls();

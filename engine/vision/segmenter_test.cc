@@ -75,10 +75,24 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
   for (size_t i = 0; i < p.blobs.size(); ++i) {
     EXPECT_EQ(g.track_blobs[i].area_px, p.blobs[i].area_px);
     EXPECT_EQ(g.track_blobs[i].bbox_px, p.blobs[i].bbox_px);
+    EXPECT_NEAR((g.track_blobs[i].centroid_px - p.blobs[i].centroid_px).norm(), 0.0, 1e-9);
+    EXPECT_EQ(g.track_blobs[i].on_ground, p.blobs[i].on_ground);
+    EXPECT_NEAR((g.track_blobs[i].ground_m - p.blobs[i].ground_m).norm(), 0.0, 1e-12);
     plain_area += p.blobs[i].area_px;
   }
   for (const Blob& b : g.blobs) grown_area += b.area_px;
   EXPECT_GT(grown_area, plain_area + plain_area / 100);
+  // With contours the tracker's blobs come from the mask before growth
+  // itself (the grower's labelling carries none): the same blobs, traced.
+  SegmenterOptions traced;
+  traced.blobs.trace_contours = true;
+  Segmenter tracer(traced);
+  const Segmentation& t = tracer.Process(frame.rendered.image, simulator.camera());
+  ASSERT_EQ(t.track_blobs.size(), p.blobs.size());
+  for (size_t i = 0; i < p.blobs.size(); ++i) {
+    EXPECT_EQ(t.track_blobs[i].bbox_px, p.blobs[i].bbox_px);
+    EXPECT_FALSE(t.track_blobs[i].contour.empty());
+  }
 }
 
 // A colour camera with the product's default options: the local soil-level
