@@ -38,8 +38,7 @@ std::vector<PredictedCrop> PredictCrops(const geometry::GridModel& model,
   std::vector<PredictedCrop> out;
   const auto& cam = model.camera().options();
   const double above_plane_m = cam.height_m - cam.virtual_plane_height_m;
-  for (const geometry::GridPlant& g :
-       reach_m > 0.0 ? model.PlantsReachingView(state, reach_m) : model.PlantsInView(state)) {
+  for (const geometry::GridPlant& g : model.PlantsReachingView(state, reach_m)) {
     PredictedCrop c;
     c.m = g.m;
     c.n = g.n;
@@ -84,8 +83,12 @@ void CropClassifier::RememberCropArea(double area_m2) {
   }
 }
 
+double CropClassifier::typical_crop_radius_m() const {
+  return std::sqrt(median_crop_area_m2_ / M_PI);
+}
+
 double CropClassifier::crop_reach_m() const {
-  return options_.split_clipped_reach * std::sqrt(median_crop_area_m2_ / M_PI);
+  return options_.split_clipped_reach * typical_crop_radius_m();
 }
 
 void CropClassifier::UpdateSizeFilter() {
@@ -130,7 +133,7 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
     out.push_back(d);
   }
   // Leaf fragments of the crops found (ClassifierOptions::fragment_reach).
-  const double reach = options_.fragment_reach * std::sqrt(median_crop_area_m2_ / M_PI);
+  const double reach = options_.fragment_reach * typical_crop_radius_m();
   if (reach > 0.0) {
     for (size_t i = 0; i < out.size(); ++i) {
       BlobDecision& d = out[i];

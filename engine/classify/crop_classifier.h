@@ -147,8 +147,10 @@ class CropClassifier {
   double size_filter_m2() const { return size_filter_m2_; }
   // The median ground area of the last whole crops (0 before enough seen).
   double median_crop_area_m2() const { return median_crop_area_m2_; }
-  // How far a crop's leaves reach from its root: split_clipped_reach × the
-  // radius of a disk of the median area (0 before enough crops were seen).
+  // The radius of a disk of the median area (0 before enough crops were
+  // seen), and how far a crop's leaves reach from its root: that times
+  // split_clipped_reach.
+  double typical_crop_radius_m() const;
   double crop_reach_m() const;
 
   // Merged plants (thesis fig. 2.17): a blob whose centroid missed every

@@ -72,18 +72,7 @@ bool GridModel::LineInView(const GridState& state, int m) const {
 }
 
 std::vector<GridPlant> GridModel::PlantsInView(const GridState& state) const {
-  std::vector<GridPlant> plants;
-  for (int m = 0;; ++m) {
-    const Eigen::Vector2d centre = PlantInVehicle(state, m, 0);
-    if (centre.y() > options_.max_range_m || m > 1000) break;
-    for (int n = -options_.rows_each_side; n <= options_.rows_each_side; ++n) {
-      const auto uv = ImageOfPlant(state, m, n);
-      if (uv && camera_.InImage(*uv, options_.in_view_margin_px)) {
-        plants.push_back({m, n, PlantInVehicle(state, m, n), *uv});
-      }
-    }
-  }
-  return plants;
+  return PlantsReachingView(state, 0.0);
 }
 
 std::vector<GridPlant> GridModel::PlantsReachingView(const GridState& state,
@@ -104,9 +93,11 @@ std::vector<GridPlant> GridModel::PlantsReachingView(const GridState& state,
       const Eigen::Vector2d g = PlantInVehicle(state, m, n);
       const auto uv = ImageOfPlant(state, m, n);
       bool near = uv && camera_.InImage(*uv, options_.in_view_margin_px);
-      for (const Eigen::Vector2d& d : {Eigen::Vector2d(reach_m, 0.0), Eigen::Vector2d(-reach_m, 0.0),
-                                      Eigen::Vector2d(0.0, reach_m), Eigen::Vector2d(0.0, -reach_m)}) {
-        near = near || (reach_m > 0.0 && in_image(g + d));
+      if (!near && reach_m > 0.0) {
+        for (const Eigen::Vector2d& d : {Eigen::Vector2d(reach_m, 0.0), Eigen::Vector2d(-reach_m, 0.0),
+                                        Eigen::Vector2d(0.0, reach_m), Eigen::Vector2d(0.0, -reach_m)}) {
+          near = near || in_image(g + d);
+        }
       }
       if (near) plants.push_back({m, n, g, uv ? *uv : Eigen::Vector2d(std::nan(""), std::nan(""))});
     }

@@ -70,7 +70,8 @@ class GridModel {
   std::optional<Eigen::Vector2d> ImageOfPlant(const GridState& state, int m, int n) const;
   // Thesis eqs. 4.18–4.27: d(u, v) / d(t_x, Y, Ψ, r̄, l̄).
   Eigen::Matrix<double, 2, 5> ImageOfPlantJacobian(const GridState& state, int m, int n) const;
-  // Every grid plant whose projection lies inside the image, line by line.
+  // Every grid plant whose projection lies inside the image, line by line
+  // (PlantsReachingView with no reach).
   std::vector<GridPlant> PlantsInView(const GridState& state) const;
   // Those and the plants whose leaves may reach into the view from beyond
   // its border: the root, or a point `reach_m` from it along x or y on the
