@@ -24,6 +24,7 @@ struct TreatmentArgs {
   std::optional<double> true_latency_ms;
   std::optional<double> footprint_scale;
   std::optional<double> weed_footprint_scale;
+  std::optional<double> footprint_min_half_mm;
   std::optional<double> weed_height_mm;
   std::optional<double> cell_mm;
   std::optional<double> min_crop_area_m2;
@@ -43,6 +44,7 @@ struct TreatmentArgs {
   bool no_split_merged = false;
   bool footprint_per_blob = false;
   bool footprint_at_centroid = false;
+  bool footprints_stay = false;
   bool abstain_merged = false;
   bool clipped_on_crop_votes_weed = false;
   double costs_ratio = 1.0;
@@ -156,6 +158,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
   if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
   if (a.weed_footprint_scale) o.treatment.weed_footprint_scale = *a.weed_footprint_scale;
+  if (a.footprint_min_half_mm) o.treatment.crop_footprint_min_half_m = 1e-3 * *a.footprint_min_half_mm;
   if (a.weed_height_mm) o.treatment.weed_height_m = 1e-3 * *a.weed_height_mm;
   if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
   if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
@@ -176,6 +179,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.no_split_merged) o.treatment.split_merged = false;
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
   if (a.footprint_at_centroid) o.treatment.crop_footprint_at_tracked_plant = false;
+  if (a.footprints_stay) o.treatment.crop_footprint_follows_plant = false;
   if (a.abstain_merged) o.treatment.abstain_merged = true;
   if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
   o.costs_ratio = a.costs_ratio;
@@ -237,6 +241,9 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--weed-footprint-scale", args.weed_footprint_scale,
                   "weed footprint: bounding box scaled about the centroid (default 1)")
       ->check(CLI::Range(0.05, 2.0));
+  cmd->add_option("--footprint-min-half-mm", args.footprint_min_half_mm,
+                  "crop footprint: stretched to at least this half size along and across")
+      ->check(CLI::Range(0.0, 500.0));
   cmd->add_option("--weed-height-mm", args.weed_height_mm,
                   "height at which weed blobs are located (default 5)")
       ->check(CLI::Range(0.0, 500.0));
@@ -286,6 +293,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "every crop blob its own footprint (not one per predicted plant)");
   cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,
                 "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
+  cmd->add_flag("--footprints-stay", args.footprints_stay,
+                "a plant's footprints stay where each frame put them (not moved along with its latest position)");
   cmd->add_flag("--abstain-merged", args.abstain_merged,
                 "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,

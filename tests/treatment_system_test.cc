@@ -39,23 +39,27 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
   // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3):
-  // 16.5 mm along, 10.0 mm across, with each plant's footprint centred
-  // where the tracker holds it (27.0 / 12.2 on each frame's centroid; 28.5
-  // / 12.4 with one virtual plane); thesis 34.4 / 33.6 mm.
-  EXPECT_LE(m.placement_rms_along_m, 0.017);
-  EXPECT_LE(m.placement_rms_across_m, 0.0115);
+  // 12.7 mm along (not met), 9.8 mm across (met), with each plant's
+  // footprints following it along to where the tracker last holds it and
+  // the tracker taking no merged or weed-sized blob for a plant (16.5 /
+  // 10.0 mm before; 27.0 / 12.2 on each frame's centroid; 28.5 / 12.4 with
+  // one virtual plane); thesis 34.4 / 33.6 mm. The plants' lean (10 mm sd
+  // of the rim from the root, hidden under the canopy the camera sees)
+  // alone puts about 7 mm on each axis.
+  EXPECT_LE(m.placement_rms_along_m, 0.0135);
+  EXPECT_LE(m.placement_rms_across_m, 0.0105);
   EXPECT_LE(m.centre_rms_across_m, 0.0115);
-  // Issue target ≤ 15 % of the bed: met, 6.6 % with 0.30 footprints
-  // (10.7 % with 0.40; thesis 33 %).
+  // Issue target ≤ 15 % of the bed: met, 6.9 % with 0.30 footprints
+  // (7.3 % before they followed their plants; thesis 33 %).
   EXPECT_LE(m.treated_area_fraction, 0.15);
   EXPECT_GE(m.treated_area_fraction, 0.04);  // a real spray pattern, not nothing
   // Weeds clear of the crop's leaves are not sprayed (0 of 1115: the
   // thesis's count, which saw weeds on photographs; 2.2 % on each frame's
   // centroid); weeds under a crop's leaves share its spray (12.1 % of all
-  // weeds hit with 0.30 footprints, 18.5 % with 0.40; issue target 0.5 %
-  // not met).
+  // weeds hit with 0.30 footprints, 18.5 % with 0.40; 12.4 % now; issue
+  // target 0.5 % not met: 36 % of the weeds stand under a crop's leaves).
   EXPECT_LE(m.weed_hit_rate_clear, 0.005);
-  EXPECT_LE(m.weed_hit_rate, 0.135);
+  EXPECT_LE(m.weed_hit_rate, 0.13);
   // Crop pixels labelled crop 96.9 %: issue target 95 % met on the field
   // (96.7 % before leaf fragments, 93.6 % before the plants beyond the
   // view's border were predicted, 91.5 % before the hull growth, 85.0 %
@@ -80,6 +84,25 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LT(m.weed_hit_rate, 0.6 * e.thesis->weed_hit_rate);
   EXPECT_GT(m.crop_pixel_rate, e.thesis->crop_pixel_rate);
   EXPECT_LT(m.placement_rms_along_m, e.thesis->placement_rms_along_m);
+}
+
+// A plant's footprints from its far views carry the parallax of its own
+// height: moved along to its latest (nearest) estimate, the spray lands
+// closer to the root. Field, seed 1 (222 crops): along RMS 14.1 mm against
+// 17.1 mm with each footprint left where its frame put it.
+TEST(TreatmentSystem, FootprintsFollowingTheirPlantSprayCloserAlong) {
+  TreatmentEvalOptions o;
+  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
+  o.seeds = 1;
+  o.treatment = OurTreatmentOptions(o.sim);
+  const TreatmentEvaluation follow = EvaluateTreatment(o);
+  o.treatment.crop_footprint_follows_plant = false;
+  const TreatmentEvaluation stay = EvaluateTreatment(o);
+  ASSERT_GT(follow.ours.crop_plants, 200);
+  EXPECT_GE(follow.ours.crop_hit_rate, stay.ours.crop_hit_rate);
+  EXPECT_LT(follow.ours.placement_rms_along_m, stay.ours.placement_rms_along_m - 0.002);
+  EXPECT_LT(follow.ours.placement_rms_across_m, stay.ours.placement_rms_across_m + 0.001);
+  EXPECT_LE(follow.ours.treated_area_fraction, stay.ours.treated_area_fraction);
 }
 
 TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {

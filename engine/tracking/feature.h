@@ -11,6 +11,12 @@ struct Feature {
   Eigen::Vector2d image_px{0.0, 0.0};  // centroid in the image (first pixel's centre 0.5)
   double area_m2 = 0.0;                // ground area
   bool clipped = false;                // touches the image border: centroid biased inward
+  // Image bounding box [u0, u1) × [v0, v1) (all 0: unknown).
+  double box_u0_px = 0.0, box_v0_px = 0.0, box_u1_px = 0.0, box_v1_px = 0.0;
+
+  bool BoxHolds(const Eigen::Vector2d& uv) const {
+    return uv.x() >= box_u0_px && uv.x() < box_u1_px && uv.y() >= box_v0_px && uv.y() < box_v1_px;
+  }
 };
 
 }  // namespace plantscale::tracking

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "engine/tracking/observation_model.h"
@@ -56,6 +57,7 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "frame_bearing_sd_rad", frame_bearing_sd_rad);
   RequirePositive(e, "gate_chi2", gate_chi2);
   RequireNonNegative(e, "edge_margin_px", edge_margin_px);
+  RequireInRange(e, "min_feature_area_fraction", min_feature_area_fraction, 0.0, 1.0);
   RequirePositive(e, "max_wheel_speed_m_s", max_wheel_speed_m_s);
   RequirePositive(e, "max_odometry_gap_s", max_odometry_gap_s);
   RequirePositive(e, "max_frame_lag_s", max_frame_lag_s);
@@ -544,6 +546,23 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     double gamma2;
   };
   std::vector<Candidate> candidates;
+  // Blobs not taken for a plant's centroid: merged plants and weed-sized
+  // blobs, unless too few others are left (touching plants everywhere, as
+  // on preset A, where the merged blobs are what there is to track).
+  skipped_.assign(features.size(), false);
+  const double min_area_m2 = options_.min_feature_area_fraction * std::numbers::pi *
+                             options_.crop_radius_m * options_.crop_radius_m;
+  size_t usable = 0;
+  for (size_t j = 0; j < features.size(); ++j) {
+    const Feature& f = features[j];
+    const bool merged =
+        options_.skip_merged_features &&
+        std::count_if(in_view.begin(), in_view.end(),
+                      [&](const auto& g) { return f.BoxHolds(g.image_px); }) >= 2;
+    skipped_[j] = merged || f.area_m2 < min_area_m2;
+    usable += !skipped_[j] && !f.clipped;
+  }
+  if (2 * usable < in_view.size()) skipped_.assign(features.size(), false);
   for (int i = 0; i < static_cast<int>(in_view.size()); ++i) {
     const auto& g = in_view[static_cast<size_t>(i)];
     const int offset = OffsetIndex(g.m, g.n);
@@ -570,7 +589,10 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     }
     for (int j = 0; j < static_cast<int>(features.size()); ++j) {
       const Feature& f = features[static_cast<size_t>(j)];
-      if (f.clipped || (f.ground_m - g.ground_m).squaredNorm() > 0.16) continue;
+      if (f.clipped || skipped_[static_cast<size_t>(j)] ||
+          (f.ground_m - g.ground_m).squaredNorm() > 0.16) {
+        continue;
+      }
       const Measurement z = h.Measure(f);
       const Eigen::Vector2d nu = z.value - pred.value;
       const Eigen::Matrix2d innovation_cov = hph + z.covariance;

@@ -120,6 +120,20 @@ struct TrackerOptions {
   double frame_bearing_sd_rad = 0.0;
   // Data association and robustness.
   double gate_chi2 = 5.99;  // eq. 6.7, 95 % for 2 dof
+  // A blob whose image box holds the predictions of two or more plants is
+  // plants merged in the image (tall neighbours touch in perspective long
+  // before they touch on the ground): its centroid lies between them, and
+  // inside one's gate it drags that plant's offset by centimetres. Such
+  // blobs are not associated, unless fewer than half as many other blobs
+  // as plants predicted in view would be left (plants touching everywhere,
+  // as on preset A).
+  bool skip_merged_features = true;
+  // A blob smaller than this fraction of the crop's area (π crop_radius_m²,
+  // when the crop's radius is set) is a weed or a leaf cut off by shadow,
+  // not a crop's centroid: associated with a crop whose own blob missed its
+  // gate it drags that plant's offset towards itself, by 10 cm and more on
+  // the field preset. Such blobs are not associated (with the same proviso).
+  double min_feature_area_fraction = 0.1;
   double edge_margin_px = 8.0;  // predictions nearer the image edge than this are not used
   double max_wheel_speed_m_s = 3.0;
   double max_odometry_gap_s = 0.2;
@@ -261,6 +275,7 @@ class GridTracker {
   Eigen::VectorXd x_;  // core state, then (δx, δy) per plant offset
   Eigen::MatrixXd p_;
   std::vector<PlantOffset> offsets_;
+  std::vector<bool> skipped_;  // Update scratch: feature j is not associated
   int64_t utime_ = -1;      // time of the state
   double left_m_s_ = 0.0;   // last accepted wheel speeds
   double right_m_s_ = 0.0;

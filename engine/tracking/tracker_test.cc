@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -315,6 +316,94 @@ TEST(GridTracker, PlantOffsetsWanderByTheirRandomWalkBetweenFrames) {
   ASSERT_TRUE(q1);
   EXPECT_NEAR((*q1)(0, 0), (*q0)(0, 0), 1e-15);
   EXPECT_NEAR((*q1)(1, 1), (*q0)(1, 1), 1e-15);
+}
+
+bool Associated(const FrameReport& r, int feature) {
+  return std::any_of(r.associations.begin(), r.associations.end(),
+                     [&](const Association& a) { return a.feature == feature; });
+}
+
+// Index of the feature of the plant predicted at `g` (the nearest to it).
+int PlantFeature(const std::vector<Feature>& features, const geometry::GridPlant& g) {
+  size_t nearest = 0;
+  for (size_t i = 1; i < features.size(); ++i) {
+    if ((features[i].ground_m - g.ground_m).norm() <
+        (features[nearest].ground_m - g.ground_m).norm()) {
+      nearest = i;
+    }
+  }
+  return static_cast<int>(nearest);
+}
+
+// Replaces that feature by `f`; returns its index.
+int ReplacePlantFeature(std::vector<Feature>& features, const geometry::GridPlant& g,
+                        const Feature& f) {
+  const int i = PlantFeature(features, g);
+  features[static_cast<size_t>(i)] = f;
+  return i;
+}
+
+TEST(GridTracker, AWeedSizedBlobIsNotTakenForACrop) {
+  // A weed 3 cm from a crop whose own blob was lost: within the gate, it
+  // would drag that crop's offset. 0.002 m² is under 10 % of a 0.1 m crop's
+  // π r² = 0.031 m².
+  for (const double fraction : {0.1, 0.0}) {
+    TrackerOptions o;
+    o.crop_radius_m = 0.1;
+    o.crop_height_m = 1e-3;  // centroids on the ground, as the scene puts them
+    o.min_feature_area_fraction = fraction;
+    Drive run(o);
+    run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+    std::vector<Feature> features = run.scene.Features();
+    const auto in_view = run.scene.model.PlantsInView(run.scene.truth);
+    ASSERT_GE(in_view.size(), 6u);
+    const geometry::GridPlant& g = in_view[in_view.size() / 2];
+    Feature weed;
+    weed.ground_m = g.ground_m + Eigen::Vector2d(0.0, 0.03);
+    weed.image_px = *run.scene.camera.Project({weed.ground_m.x(), weed.ground_m.y(), 0.0});
+    weed.area_m2 = 0.002;
+    const int j = ReplacePlantFeature(features, g, weed);
+    const FrameReport r = run.tracker.ProcessFrame(0, 640, 480, features);
+    ASSERT_TRUE(r.updated) << r.skipped_reason;
+    EXPECT_EQ(Associated(r, j), fraction == 0.0) << "fraction " << fraction;
+    EXPECT_EQ(r.matched, static_cast<int>(features.size()) - (fraction > 0.0 ? 1 : 0));
+  }
+}
+
+TEST(GridTracker, ABlobHoldingTwoPlantsPredictionsIsNotAssociated) {
+  // Tall neighbours merged in the image: the blob's box spans both plants'
+  // predictions and its centroid lies between them, here 4 cm from one.
+  for (const bool skip : {true, false}) {
+    TrackerOptions o;
+    o.skip_merged_features = skip;
+    Drive run(o);
+    run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+    std::vector<Feature> features = run.scene.Features();
+    const auto in_view = run.scene.model.PlantsInView(run.scene.truth);
+    const geometry::GridPlant* a = nullptr;
+    const geometry::GridPlant* b = nullptr;
+    for (const auto& p : in_view) {
+      for (const auto& q : in_view) {
+        if (p.n == q.n && q.m == p.m + 1 && p.n == 0) a = &p, b = &q;
+      }
+    }
+    ASSERT_TRUE(a && b);
+    Feature merged;
+    merged.ground_m = a->ground_m + Eigen::Vector2d(0.0, 0.04);
+    merged.image_px = *run.scene.camera.Project({merged.ground_m.x(), merged.ground_m.y(), 0.0});
+    merged.area_m2 = 0.06;
+    merged.box_u0_px = std::min(a->image_px.x(), b->image_px.x()) - 20.0;
+    merged.box_u1_px = std::max(a->image_px.x(), b->image_px.x()) + 20.0;
+    merged.box_v0_px = std::min(a->image_px.y(), b->image_px.y()) - 20.0;
+    merged.box_v1_px = std::max(a->image_px.y(), b->image_px.y()) + 20.0;
+    const int j = ReplacePlantFeature(features, *a, merged);
+    // b keeps its own feature, which is associated either way.
+    const int k = PlantFeature(features, *b);
+    const FrameReport r = run.tracker.ProcessFrame(0, 640, 480, features);
+    ASSERT_TRUE(r.updated) << r.skipped_reason;
+    EXPECT_EQ(Associated(r, j), !skip) << "skip " << skip;
+    EXPECT_TRUE(Associated(r, k));
+  }
 }
 
 }  // namespace

@@ -112,6 +112,13 @@ int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
   });
 }
 
+int TreatmentMap::RemoveFootprint(const Quad& q, bool crop) {
+  return ForCellsIn(q, [&](size_t i) {
+    uint16_t& n = crop ? counts_[i].crop : counts_[i].weed;
+    if (n > 0) --n;
+  });
+}
+
 void TreatmentMap::MarkObserved(const Quad& q) {
   ForCellsIn(q, [&](size_t i) { flags_[i] |= kObservedFlag; });
 }

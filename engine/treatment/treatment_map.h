@@ -41,6 +41,8 @@ class TreatmentMap {
   // Adds one vote to every cell whose centre lies inside the convex quad
   // (bed frame). Returns the number of cells counted.
   int AddFootprint(const Quad& bed_quad, bool crop);
+  // Takes back the vote of an AddFootprint of the same quad.
+  int RemoveFootprint(const Quad& bed_quad, bool crop);
   void Clear();
 
   // Cell (column, row) of a bed point; false outside the map across or

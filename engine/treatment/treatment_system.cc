@@ -12,6 +12,7 @@ OptionErrors TreatmentOptions::Validate() const {
   add(Prefixed("scheduler", scheduler.Validate()));
   add(Prefixed("registry", registry.Validate()));
   RequireInRange(e, "crop_footprint_scale", crop_footprint_scale, 0.05, 2.0);
+  RequireInRange(e, "crop_footprint_min_half_m", crop_footprint_min_half_m, 0.0, 0.5);
   RequireInRange(e, "weed_footprint_scale", weed_footprint_scale, 0.05, 2.0);
   RequireInRange(e, "weed_height_m", weed_height_m, 0.0, 0.5);
   return e;
@@ -62,28 +63,77 @@ void TreatmentSystem::AddFootprint(const BedPose& pose, const vision::Blob& b, b
 void TreatmentSystem::AddFootprint(const BedPose& pose, const Eigen::Vector2d& centroid_px,
                                    const cv::Rect& box, bool crop,
                                    std::optional<Eigen::Vector2d> centre_m) {
+  if (const std::optional<Quad> q = BedFootprint(pose, centroid_px, box, crop, centre_m)) {
+    map_.AddFootprint(*q, crop);
+  }
+}
+
+std::optional<Quad> TreatmentSystem::BedFootprint(const BedPose& pose,
+                                                  const Eigen::Vector2d& centroid_px,
+                                                  const cv::Rect& box, bool crop,
+                                                  std::optional<Eigen::Vector2d> centre_m) const {
   const double scale = crop ? options_.crop_footprint_scale : options_.weed_footprint_scale;
   // Weeds stand lower than crops: their footprints lie at the weeds' height.
   const std::optional<double> plane = crop ? CropPlaneHeight(centroid_px) : options_.weed_height_m;
   const std::optional<Quad> q = FootprintOnPlane(camera_, centroid_px, box.x, box.y,
                                                  box.x + box.width, box.y + box.height, scale, plane);
-  if (!q) return;
+  if (!q) return std::nullopt;
+  Eigen::Vector2d low = (*q)[0];
+  Eigen::Vector2d high = (*q)[0];
+  for (const Eigen::Vector2d& corner : *q) {
+    low = low.cwiseMin(corner);
+    high = high.cwiseMax(corner);
+  }
+  const Eigen::Vector2d middle = 0.5 * (low + high);
+  // A small crop's footprint is widened to cover the placement error.
+  Eigen::Vector2d stretch = Eigen::Vector2d::Ones();
+  if (crop) {
+    const Eigen::Vector2d half = 0.5 * (high - low);
+    for (int k = 0; k < 2; ++k) {
+      if (half[k] > 0.0) stretch[k] = std::max(1.0, options_.crop_footprint_min_half_m / half[k]);
+    }
+  }
   // Moved as a whole so that its middle lands on centre_m: the image box
   // projects further beyond its centroid than short of it (perspective),
   // and the spray should straddle the plant evenly.
-  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
-  if (centre_m) {
-    Eigen::Vector2d low = (*q)[0];
-    Eigen::Vector2d high = (*q)[0];
-    for (const Eigen::Vector2d& corner : *q) {
-      low = low.cwiseMin(corner);
-      high = high.cwiseMax(corner);
-    }
-    shift = *centre_m - 0.5 * (low + high);
-  }
+  const Eigen::Vector2d to = centre_m ? *centre_m : middle;
   Quad bed;
-  for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i] + shift);
-  map_.AddFootprint(bed, crop);
+  for (size_t i = 0; i < 4; ++i) {
+    bed[i] = VehicleToBed(pose, to + stretch.cwiseProduct((*q)[i] - middle));
+  }
+  return bed;
+}
+
+namespace {
+
+// Frames after which a plant no longer seen is forgotten (8 s at 12.5 Hz:
+// long past the bar; its cells stay where it was last placed).
+constexpr int64_t kFollowFrames = 100;
+
+Quad ShiftedAlong(const Quad& q, double by) {
+  Quad out = q;
+  for (Eigen::Vector2d& corner : out) corner.y() += by;
+  return out;
+}
+
+}  // namespace
+
+void TreatmentSystem::PlaceFollowing(std::pair<int, int> key, const Quad& bed_quad,
+                                     double along_bed_m, bool moves) {
+  const auto [it, added] = followed_.try_emplace(key);
+  FollowedPlant& plant = it->second;
+  plant.last_frame = frames_;
+  if (added) plant.along_bed_m = along_bed_m;
+  plant.relative.push_back(ShiftedAlong(bed_quad, -along_bed_m));
+  if (!moves || along_bed_m == plant.along_bed_m) {
+    map_.AddFootprint(ShiftedAlong(plant.relative.back(), plant.along_bed_m), true);
+    return;
+  }
+  for (size_t i = 0; i + 1 < plant.relative.size(); ++i) {
+    map_.RemoveFootprint(ShiftedAlong(plant.relative[i], plant.along_bed_m), true);
+  }
+  plant.along_bed_m = along_bed_m;
+  for (const Quad& r : plant.relative) map_.AddFootprint(ShiftedAlong(r, plant.along_bed_m), true);
 }
 
 bool TreatmentSystem::BlobPixels(const cv::Mat& mask, const vision::Blob& blob,
@@ -150,6 +200,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                                                std::span<const int> blob_of_feature,
                                                const cv::Mat& mask) {
   last_frame_utime_ = utime;
+  ++frames_;
   heights_ = tracker.centroid_heights();
   frame_.classified = false;
   frame_.map_reset = false;
@@ -160,6 +211,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     // A new bed frame: what was mapped before cannot be placed in it.
     map_.Clear();
     registry_.Clear();
+    followed_.clear();
     frame_.map_reset = true;
     ++map_resets_;
   }
@@ -246,14 +298,25 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                      : std::nullopt);
   }
   if (seen) registry_.CountView(*seen);
+  const bool follow =
+      options_.crop_footprint_at_tracked_plant && options_.crop_footprint_follows_plant;
   for (const PlantFootprint& p : plants) {
     if (!(p.area_px > 0.0)) continue;
     const std::optional<Eigen::Vector2d> centre =
         options_.crop_footprint_at_tracked_plant
             ? std::optional<Eigen::Vector2d>(tracker.PlantPosition(p.m, p.n))
             : std::nullopt;
-    AddFootprint(pose, p.moment_px / p.area_px, p.box, true, centre);
+    if (!follow) {
+      AddFootprint(pose, p.moment_px / p.area_px, p.box, true, centre);
+    } else if (const auto q = BedFootprint(pose, p.moment_px / p.area_px, p.box, true, centre)) {
+      // Only an estimate with the plant's own offset moves it: beyond the
+      // view's border the tracker has let that go and holds the grid node.
+      PlaceFollowing({tracker.lines_passed() + p.m, p.n}, *q, VehicleToBed(pose, *centre).y(),
+                     tracker.PlantOffsetCovariance(p.m, p.n).has_value());
+    }
   }
+  // Plants long out of view stay where they were last placed.
+  std::erase_if(followed_, [&](const auto& f) { return frames_ - f.second.last_frame > kFollowFrames; });
   return frame_;
 }
 

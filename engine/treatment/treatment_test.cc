@@ -71,6 +71,30 @@ TEST(TreatmentMap, MajorityWithThreshold) {
   EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);
 }
 
+TEST(TreatmentMap, RemoveFootprintTakesBackExactlyItsVotes) {
+  TreatmentMap map(TreatmentMapOptions{});
+  const Quad diamond = {Eigen::Vector2d(0.0, 0.9), Eigen::Vector2d(0.1, 1.0),
+                        Eigen::Vector2d(0.0, 1.1), Eigen::Vector2d(-0.1, 1.0)};
+  const Quad square = Square(0.05, 1.0, 0.04);  // overlaps the diamond's right half
+  map.AddFootprint(square, true);
+  map.AddFootprint(square, false);
+  const int n = map.AddFootprint(diamond, true);
+  EXPECT_EQ(map.RemoveFootprint(diamond, true), n);
+  int column = 0, row = 0;
+  // The square's votes stand; the diamond's are gone, in and out of the square.
+  ASSERT_TRUE(map.CellOf({0.05, 1.0}, column, row));
+  EXPECT_EQ(map.Counts(column, row).crop, 1);
+  EXPECT_EQ(map.Counts(column, row).weed, 1);
+  ASSERT_TRUE(map.CellOf({-0.05, 1.0}, column, row));
+  EXPECT_EQ(map.Counts(column, row).crop, 0);
+  // Taking back more than was given stops at zero.
+  map.RemoveFootprint(square, false);
+  map.RemoveFootprint(square, false);
+  ASSERT_TRUE(map.CellOf({0.05, 1.0}, column, row));
+  EXPECT_EQ(map.Counts(column, row).weed, 0);
+  EXPECT_EQ(map.Counts(column, row).crop, 1);
+}
+
 TEST(TreatmentMap, RotatedQuadCountsCellsInside) {
   TreatmentMap map(TreatmentMapOptions{});
   // A diamond of half-diagonal 0.1 m: area 0.02 m² ≈ 112.6 cells.
