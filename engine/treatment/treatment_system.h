@@ -35,7 +35,9 @@ struct TreatmentOptions {
   // tracked plant) 0.30 reaches 42 mm each side of the plant, about 3σ.
   // Field, 5 seeds: 0.30 hits all 1103 crops and 12.1 % of the weeds on
   // 6.6 % of the bed; 0.40 all, 18.5 %, 10.7 %; 0.25 1102, 9.1 %, 4.9 %;
-  // 0.20 1097, 7.0 %, 3.5 %.
+  // 0.20 1097, 7.0 %, 3.5 %. With footprints following their plants
+  // (along RMS 12.7 mm): 0.30 all, 12.4 %, 6.9 %; 0.25 1101 (missed by 3
+  // and 10 mm), 9.7 %, 5.0 %; 0.20 1095, 6.9 %, 3.5 %.
   double crop_footprint_scale = 0.30;
   // Scaled footprints of small crops are stretched to at least this half
   // size along and across (vehicle frame): 0.30 of a 3-week crop's box is
