@@ -62,6 +62,40 @@ void BM_MapFootprints(benchmark::State& state) {
 }
 BENCHMARK(BM_MapFootprints);
 
+// The same frame when footprints follow their plants
+// (TreatmentOptions::crop_footprint_follows_plant, TreatmentSystem's
+// PlaceFollowing): each of the 15 plants, seen in `range(0)` frames before,
+// takes back its earlier footprints' votes, adds this frame's footprint and
+// puts them all down again 1 mm further along.
+void BM_MapFootprintsFollowing(benchmark::State& state) {
+  TreatmentMap map(TreatmentMapOptions{});
+  const std::vector<classify::PredictedCrop> crops = Grid();
+  const int seen = static_cast<int>(state.range(0));
+  const auto quad = [](const Eigen::Vector2d& p) -> Quad {
+    return {p + Eigen::Vector2d(-0.065, -0.06), p + Eigen::Vector2d(0.065, -0.06),
+            p + Eigen::Vector2d(0.07, 0.06), p + Eigen::Vector2d(-0.07, 0.06)};
+  };
+  std::vector<std::vector<ColumnSpan>> spans(crops.size());
+  std::vector<double> along(crops.size());
+  for (size_t i = 0; i < crops.size(); ++i) {
+    along[i] = crops[i].ground_m.y();
+    for (int k = 0; k < seen; ++k) map.AppendSpans(quad(crops[i].ground_m), along[i], spans[i]);
+    map.AddSpans(spans[i], along[i], 1, true);
+  }
+  for (auto _ : state) {
+    for (size_t i = 0; i < crops.size(); ++i) {
+      map.AddSpans(spans[i], along[i], -1, true);
+      along[i] += 0.001;
+      const size_t before = spans[i].size();
+      map.AppendSpans(quad(Eigen::Vector2d(crops[i].ground_m.x(), along[i])), along[i], spans[i]);
+      benchmark::DoNotOptimize(map.AddSpans(spans[i], along[i], 1, true));
+      map.AddSpans(std::span<const ColumnSpan>(spans[i]).subspan(before), along[i], -1, true);
+      spans[i].resize(before);  // back to `seen` footprints per plant
+    }
+  }
+}
+BENCHMARK(BM_MapFootprintsFollowing)->Arg(10)->Arg(40);
+
 void BM_SchedulerTick(benchmark::State& state) {
   TreatmentMapOptions mo;
   mo.majority_threshold = 1;

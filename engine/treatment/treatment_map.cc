@@ -112,11 +112,54 @@ int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
   });
 }
 
-int TreatmentMap::RemoveFootprint(const Quad& q, bool crop) {
-  return ForCellsIn(q, [&](size_t i) {
-    uint16_t& n = crop ? counts_[i].crop : counts_[i].weed;
-    if (n > 0) --n;
-  });
+void TreatmentMap::AppendSpans(const Quad& q, double along_m,
+                               std::vector<ColumnSpan>& out) const {
+  double x0 = q[0].x(), x1 = x0;
+  for (const Eigen::Vector2d& p : q) {
+    if (!p.allFinite()) return;
+    x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x());
+  }
+  const double s = options_.cell_m;
+  const int c0 = std::max(0, static_cast<int>(std::floor((x0 - origin_x_m()) / s)));
+  const int c1 = std::min(columns_ - 1, static_cast<int>(std::floor((x1 - origin_x_m()) / s)));
+  for (int c = c0; c <= c1; ++c) {
+    const double x = origin_x_m() + (c + 0.5) * s;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (size_t i = 0; i < 4; ++i) {
+      const Eigen::Vector2d& a = q[i];
+      const Eigen::Vector2d& b = q[(i + 1) % 4];
+      if ((a.x() - x) * (b.x() - x) > 0.0) continue;  // the edge does not reach x
+      if (a.x() == b.x()) {
+        lo = std::min({lo, a.y(), b.y()}), hi = std::max({hi, a.y(), b.y()});
+      } else {
+        const double y = a.y() + (x - a.x()) / (b.x() - a.x()) * (b.y() - a.y());
+        lo = std::min(lo, y), hi = std::max(hi, y);
+      }
+    }
+    if (lo <= hi) out.push_back({c, lo - along_m, hi - along_m});
+  }
+}
+
+int TreatmentMap::AddSpans(std::span<const ColumnSpan> spans, double along_m, int votes,
+                           bool crop) {
+  const double s = options_.cell_m;
+  int cells = 0;
+  for (const ColumnSpan& span : spans) {
+    // Rows whose centre start + (r + 0.5) s lies in [y0, y1].
+    const double first = std::ceil((span.y0_m + along_m - options_.start_y_m) / s - 0.5);
+    const double last = std::floor((span.y1_m + along_m - options_.start_y_m) / s - 0.5);
+    if (!(first <= last) || last < 0.0 || first > kMaxRows - 1) continue;
+    const int r0 = static_cast<int>(std::max(first, 0.0));
+    const int r1 = static_cast<int>(std::min(last, kMaxRows - 1.0));
+    GrowTo(r1);
+    for (int r = r0; r <= r1; ++r) {
+      CellCounts& n = counts_[static_cast<size_t>(r) * columns_ + span.column];
+      uint16_t& v = crop ? n.crop : n.weed;
+      v = static_cast<uint16_t>(std::clamp(v + votes, 0, 65535));
+      ++cells;
+    }
+  }
+  return cells;
 }
 
 void TreatmentMap::MarkObserved(const Quad& q) {

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "engine/common/options.h"
@@ -33,6 +34,15 @@ struct CellCounts {
   uint16_t weed = 0;
 };
 
+// A footprint as the cells of each map column it covers: the y range of
+// cell centres inside it, so that it can be counted anywhere along the bed
+// without testing every cell against the quad again (a plant's footprints
+// that follow it along, TreatmentOptions::crop_footprint_follows_plant).
+struct ColumnSpan {
+  int column = 0;
+  double y0_m = 0.0, y1_m = 0.0;  // bed y of the column's edge inside the footprint, relative
+};
+
 class TreatmentMap {
  public:
   // Throws InvalidOptionsError.
@@ -41,8 +51,14 @@ class TreatmentMap {
   // Adds one vote to every cell whose centre lies inside the convex quad
   // (bed frame). Returns the number of cells counted.
   int AddFootprint(const Quad& bed_quad, bool crop);
-  // Takes back the vote of an AddFootprint of the same quad.
-  int RemoveFootprint(const Quad& bed_quad, bool crop);
+  // The quad's spans, its bed y measured from `along_m`: where the line
+  // down the middle of each column it reaches crosses it.
+  void AppendSpans(const Quad& bed_quad, double along_m, std::vector<ColumnSpan>& out) const;
+  // Adds `votes` (negative: takes back) to the cells whose centres lie in
+  // the spans moved to `along_m`, counters kept within [0, 65535]. The same
+  // spans at the same along_m count the same cells as AddFootprint of the
+  // quad, but for centres on its boundary.
+  int AddSpans(std::span<const ColumnSpan> spans, double along_m, int votes, bool crop);
   void Clear();
 
   // Cell (column, row) of a bed point; false outside the map across or

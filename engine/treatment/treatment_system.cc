@@ -110,12 +110,6 @@ namespace {
 // long past the bar; its cells stay where it was last placed).
 constexpr int64_t kFollowFrames = 100;
 
-Quad ShiftedAlong(const Quad& q, double by) {
-  Quad out = q;
-  for (Eigen::Vector2d& corner : out) corner.y() += by;
-  return out;
-}
-
 }  // namespace
 
 void TreatmentSystem::PlaceFollowing(std::pair<int, int> key, const Quad& bed_quad,
@@ -124,16 +118,16 @@ void TreatmentSystem::PlaceFollowing(std::pair<int, int> key, const Quad& bed_qu
   FollowedPlant& plant = it->second;
   plant.last_frame = frames_;
   if (added) plant.along_bed_m = along_bed_m;
-  plant.relative.push_back(ShiftedAlong(bed_quad, -along_bed_m));
+  const size_t earlier = plant.spans.size();
+  map_.AppendSpans(bed_quad, along_bed_m, plant.spans);
+  const std::span<const ColumnSpan> spans(plant.spans);
   if (!moves || along_bed_m == plant.along_bed_m) {
-    map_.AddFootprint(ShiftedAlong(plant.relative.back(), plant.along_bed_m), true);
+    map_.AddSpans(spans.subspan(earlier), plant.along_bed_m, 1, true);
     return;
   }
-  for (size_t i = 0; i + 1 < plant.relative.size(); ++i) {
-    map_.RemoveFootprint(ShiftedAlong(plant.relative[i], plant.along_bed_m), true);
-  }
+  map_.AddSpans(spans.first(earlier), plant.along_bed_m, -1, true);
   plant.along_bed_m = along_bed_m;
-  for (const Quad& r : plant.relative) map_.AddFootprint(ShiftedAlong(r, plant.along_bed_m), true);
+  map_.AddSpans(spans, plant.along_bed_m, 1, true);
 }
 
 bool TreatmentSystem::BlobPixels(const cv::Mat& mask, const vision::Blob& blob,

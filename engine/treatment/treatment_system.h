@@ -223,10 +223,10 @@ class TreatmentSystem {
   int64_t last_frame_utime_ = -1;
   int map_resets_ = 0;
   // Crop plants whose footprints follow them, by (line counted from the
-  // tracker's initialisation, row): their footprints with the plant's bed y
-  // taken off, that bed y now, and the frame that last saw them.
+  // tracker's initialisation, row): their footprints' column spans with the
+  // plant's bed y taken off, that bed y now, and the frame that last saw them.
   struct FollowedPlant {
-    std::vector<Quad> relative;
+    std::vector<ColumnSpan> spans;
     double along_bed_m = 0.0;
     int64_t last_frame = 0;
   };

@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+
 #include <cmath>
 #include <vector>
 
@@ -71,28 +76,41 @@ TEST(TreatmentMap, MajorityWithThreshold) {
   EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);
 }
 
-TEST(TreatmentMap, RemoveFootprintTakesBackExactlyItsVotes) {
-  TreatmentMap map(TreatmentMapOptions{});
-  const Quad diamond = {Eigen::Vector2d(0.0, 0.9), Eigen::Vector2d(0.1, 1.0),
-                        Eigen::Vector2d(0.0, 1.1), Eigen::Vector2d(-0.1, 1.0)};
-  const Quad square = Square(0.05, 1.0, 0.04);  // overlaps the diamond's right half
-  map.AddFootprint(square, true);
-  map.AddFootprint(square, false);
-  const int n = map.AddFootprint(diamond, true);
-  EXPECT_EQ(map.RemoveFootprint(diamond, true), n);
-  int column = 0, row = 0;
-  // The square's votes stand; the diamond's are gone, in and out of the square.
-  ASSERT_TRUE(map.CellOf({0.05, 1.0}, column, row));
-  EXPECT_EQ(map.Counts(column, row).crop, 1);
-  EXPECT_EQ(map.Counts(column, row).weed, 1);
-  ASSERT_TRUE(map.CellOf({-0.05, 1.0}, column, row));
-  EXPECT_EQ(map.Counts(column, row).crop, 0);
-  // Taking back more than was given stops at zero.
-  map.RemoveFootprint(square, false);
-  map.RemoveFootprint(square, false);
-  ASSERT_TRUE(map.CellOf({0.05, 1.0}, column, row));
-  EXPECT_EQ(map.Counts(column, row).weed, 0);
-  EXPECT_EQ(map.Counts(column, row).crop, 1);
+TEST(TreatmentMap, ColumnSpansCountTheFootprintsCellsAnywhereAlong) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> centre(-0.5, 0.5), half(0.01, 0.12), angle(0.0, 6.3);
+  for (int trial = 0; trial < 50; ++trial) {
+    // A random convex quad: corners at increasing angles on an ellipse.
+    const Eigen::Vector2d c(centre(rng), 1.0 + centre(rng));
+    const double hx = half(rng), hy = half(rng);
+    std::array<double, 4> a = {angle(rng), angle(rng), angle(rng), angle(rng)};
+    std::sort(a.begin(), a.end());
+    Quad q;
+    for (size_t i = 0; i < 4; ++i) q[i] = c + Eigen::Vector2d(hx * std::cos(a[i]), hy * std::sin(a[i]));
+    TreatmentMap by_quad(TreatmentMapOptions{}), by_spans(TreatmentMapOptions{});
+    std::vector<ColumnSpan> spans;
+    const double along = 0.37;  // spans measured from a plant 0.37 m along
+    by_spans.AppendSpans(q, along, spans);
+    const double shift = 0.0123 * trial;  // the plant moved along
+    Quad moved = q;
+    for (Eigen::Vector2d& p : moved) p.y() += shift;
+    const int n = by_quad.AddFootprint(moved, true);
+    EXPECT_EQ(by_spans.AddSpans(spans, along + shift, 1, true), n) << "trial " << trial;
+    for (int row = 0; row < by_quad.rows(); ++row) {
+      for (int column = 0; column < by_quad.columns(); ++column) {
+        ASSERT_EQ(by_spans.Counts(column, row).crop, by_quad.Counts(column, row).crop)
+            << "trial " << trial << " cell " << column << "," << row;
+      }
+    }
+    // Taken back, nothing is left; the counters stop at zero.
+    EXPECT_EQ(by_spans.AddSpans(spans, along + shift, -1, true), n);
+    by_spans.AddSpans(spans, along + shift, -1, true);
+    for (int row = 0; row < by_spans.rows(); ++row) {
+      for (int column = 0; column < by_spans.columns(); ++column) {
+        ASSERT_EQ(by_spans.Counts(column, row).crop, 0);
+      }
+    }
+  }
 }
 
 TEST(TreatmentMap, RotatedQuadCountsCellsInside) {
