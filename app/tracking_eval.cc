@@ -231,6 +231,7 @@ tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
   o.estimate_odometry_scale = false;
   o.plant_offsets = false;
   o.model_bounce = false;
+  o.skip_merged_features = false;  // every feature in the gate (§6.2)
   o.space = tracking::ObservationSpace::kImage;
   o.rows_each_side = RowsEachSide(s);
   o.row_spacing_m = s.field.NominalRowSpacing();

@@ -274,6 +274,7 @@ treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions&) {
 treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& s) {
   treatment::TreatmentOptions o;
   o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
+  o.crop_footprint_min_half_m = 0.0;  // however small
   o.crop_footprint_per_plant = false;  // each feature's own box
   o.abstain_merged = false;
   o.clipped_on_crop_votes_weed = true;  // every feature's box votes

@@ -64,6 +64,7 @@ void BM_TrackerFrameThesis(benchmark::State& state) {
   o.estimate_spacing = false;
   o.plant_offsets = false;
   o.model_bounce = false;
+  o.skip_merged_features = false;
   o.space = ObservationSpace::kImage;
   RunTracker(state, o);
 }

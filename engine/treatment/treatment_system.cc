@@ -310,7 +310,8 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     }
   }
   // Plants long out of view stay where they were last placed.
-  std::erase_if(followed_, [&](const auto& f) { return frames_ - f.second.last_frame > kFollowFrames; });
+  std::erase_if(followed_,
+                [&](const auto& f) { return frames_ - f.second.last_frame > kFollowFrames; });
   return frame_;
 }
 
