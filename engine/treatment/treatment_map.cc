@@ -105,11 +105,13 @@ int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   return cells;
 }
 
+void TreatmentMap::Vote(size_t cell, int votes, bool crop) {
+  uint16_t& n = crop ? counts_[cell].crop : counts_[cell].weed;
+  n = static_cast<uint16_t>(std::clamp(n + votes, 0, int{std::numeric_limits<uint16_t>::max()}));
+}
+
 int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
-  return ForCellsIn(q, [&](size_t i) {
-    uint16_t& n = crop ? counts_[i].crop : counts_[i].weed;
-    if (n < std::numeric_limits<uint16_t>::max()) ++n;
-  });
+  return ForCellsIn(q, [&](size_t i) { Vote(i, 1, crop); });
 }
 
 void TreatmentMap::AppendSpans(const Quad& q, double along_m,
@@ -152,12 +154,8 @@ int TreatmentMap::AddSpans(std::span<const ColumnSpan> spans, double along_m, in
     const int r0 = static_cast<int>(std::max(first, 0.0));
     const int r1 = static_cast<int>(std::min(last, kMaxRows - 1.0));
     GrowTo(r1);
-    for (int r = r0; r <= r1; ++r) {
-      CellCounts& n = counts_[static_cast<size_t>(r) * columns_ + span.column];
-      uint16_t& v = crop ? n.crop : n.weed;
-      v = static_cast<uint16_t>(std::clamp(v + votes, 0, 65535));
-      ++cells;
-    }
+    for (int r = r0; r <= r1; ++r) Vote(static_cast<size_t>(r) * columns_ + span.column, votes, crop);
+    cells += r1 - r0 + 1;
   }
   return cells;
 }

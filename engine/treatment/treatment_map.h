@@ -87,6 +87,8 @@ class TreatmentMap {
 
  private:
   void GrowTo(int row);
+  // Adds `votes` (negative: takes back) to one counter, kept within [0, 65535].
+  void Vote(size_t cell, int votes, bool crop);
   // Calls f(index) for every cell whose centre lies inside the convex quad,
   // growing the map to it; returns the number of cells.
   template <typename F>

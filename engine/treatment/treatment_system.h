@@ -76,8 +76,9 @@ struct TreatmentOptions {
   // about the plant, each footprint stays where its frame put it: their
   // spread averages it (latest across 9.7 mm, mean 9.1). Beyond the view's
   // border the tracker drops the plant's own offset, so footprints of
-  // those frames join the others where they stand. Field, 5 seeds: along
-  // RMS 16.5 -> 12.6 mm, across 10.0 -> 9.8 mm, bed treated 7.3 -> 6.9 %.
+  // those frames join the others where they stand. Field, 5 seeds, with
+  // the tracker's merged and weed-sized blob rules: along RMS 16.5 -> 12.7
+  // mm, across 10.0 -> 9.8 mm, bed treated 7.3 -> 6.9 %.
   // Needs crop_footprint_at_tracked_plant.
   bool crop_footprint_follows_plant = true;
   // A blob that passed the size filter but missed every association region
