@@ -32,6 +32,7 @@ struct TreatmentArgs {
   std::optional<double> assoc_chi2;
   std::optional<double> sure_crop_area_m2;
   std::optional<int> majority;
+  std::optional<int> weed_majority;
   std::optional<double> split_radius_m;
   std::optional<double> split_chi2;
   std::optional<double> split_cover_m;
@@ -46,6 +47,8 @@ struct TreatmentArgs {
   bool footprint_at_centroid = false;
   bool footprints_stay = false;
   bool abstain_merged = false;
+  bool weed_whole_box = false;
+  std::optional<double> min_weed_part_mm2;
   bool clipped_on_crop_votes_weed = false;
   double costs_ratio = 1.0;
   bool json = false;
@@ -166,6 +169,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
   if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
   if (a.majority) o.treatment.map.majority_threshold = *a.majority;
+  if (a.weed_majority) o.treatment.map.weed_majority_threshold = *a.weed_majority;
   if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
   if (a.split_chi2) o.treatment.classifier.split_assoc_chi2 = *a.split_chi2;
   if (a.split_cover_m) o.treatment.classifier.split_cover_m = *a.split_cover_m;
@@ -181,6 +185,8 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.footprint_at_centroid) o.treatment.crop_footprint_at_tracked_plant = false;
   if (a.footprints_stay) o.treatment.crop_footprint_follows_plant = false;
   if (a.abstain_merged) o.treatment.abstain_merged = true;
+  if (a.weed_whole_box) o.treatment.merged_weed_parts_only = false;
+  if (a.min_weed_part_mm2) o.treatment.min_weed_part_m2 = *a.min_weed_part_mm2 * 1e-6;
   if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
   o.costs_ratio = a.costs_ratio;
   const TreatmentEvaluation e = EvaluateTreatment(o);
@@ -259,6 +265,8 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--sure-crop-area-m2", args.sure_crop_area_m2,
                   "blobs this big are crop without association (merged plants)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--weed-majority", args.weed_majority, "votes a weed cell needs (0: as --majority)")
+      ->check(CLI::Range(0, 10000));
   cmd->add_option("--majority", args.majority, "votes a map cell needs")
       ->check(CLI::Range(1, 10000));
   cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
@@ -295,6 +303,11 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
   cmd->add_flag("--footprints-stay", args.footprints_stay,
                 "a plant's footprints stay where each frame put them (not moved along with its latest position)");
+  cmd->add_flag("--weed-whole-box", args.weed_whole_box,
+                "merged blobs vote weed with their whole box (the old way), not only their weed parts");
+  cmd->add_option("--min-weed-part-mm2", args.min_weed_part_mm2,
+                  "smallest part of a blob (ground mm^2) that votes weed on its own")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_flag("--abstain-merged", args.abstain_merged,
                 "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,

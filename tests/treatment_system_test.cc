@@ -25,13 +25,16 @@ TreatmentEvaluation Evaluate(const char* preset, int seeds, double length_m, boo
   return EvaluateTreatment(o);
 }
 
-// One seed of `preset` with the product's options, then again changed.
+// One seed of `preset` with the product's options (after `setup`), then
+// again changed.
 std::pair<TreatmentEvaluation, TreatmentEvaluation> OneSeedAndChanged(
-    const char* preset, const std::function<void(treatment::TreatmentOptions&)>& change) {
+    const char* preset, const std::function<void(treatment::TreatmentOptions&)>& change,
+    const std::function<void(TreatmentEvalOptions&)>& setup = {}) {
   TreatmentEvalOptions o;
   o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
   o.seeds = 1;
   o.treatment = OurTreatmentOptions(o.sim);
+  if (setup) setup(o);
   TreatmentEvaluation product = EvaluateTreatment(o);
   change(o.treatment);
   return {std::move(product), EvaluateTreatment(o)};
@@ -49,31 +52,34 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(e.missed_crops.size(), 2u);
   for (const MissedCrop& c : e.missed_crops) EXPECT_GE(c.nearest_spray_m, 0.0);
   // Issue: |bias| ≤ 3 mm on both axes (thesis 9.7 / −23.1 mm): met,
-  // +0.4 / −0.5 mm.
+  // +0.2 / −0.3 mm.
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
   // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3):
-  // 12.7 mm along (not met), 9.8 mm across (met), with each plant's
-  // footprints following it along to where the tracker last holds it and
-  // the tracker taking no merged or weed-sized blob for a plant (16.5 /
-  // 10.0 mm before; 27.0 / 12.2 on each frame's centroid; 28.5 / 12.4 with
-  // one virtual plane); thesis 34.4 / 33.6 mm. The plants' lean (10 mm sd
+  // 11.9 mm along (not met), 9.7 mm across (met), with each plant's
+  // footprints following it along to where the tracker last holds it, the
+  // tracker taking no merged or weed-sized blob for a plant, and merged
+  // blobs voting weed only beyond their crops (12.7 / 9.8 mm with their
+  // whole box; 16.5 / 10.0 mm before following; 27.0 / 12.2 on each
+  // frame's centroid; 28.5 / 12.4 with one virtual plane); thesis 34.4 /
+  // 33.6 mm. The plants' lean (10 mm sd
   // of the rim from the root, hidden under the canopy the camera sees)
   // alone puts about 7 mm on each axis.
   EXPECT_LE(m.placement_rms_along_m, 0.0135);
   EXPECT_LE(m.placement_rms_across_m, 0.0105);
   EXPECT_LE(m.centre_rms_across_m, 0.0115);
-  // Issue target ≤ 15 % of the bed: met, 6.9 % with 0.30 footprints
-  // (7.3 % before they followed their plants; thesis 33 %).
+  // Issue target ≤ 15 % of the bed: met, 7.2 % with 0.30 footprints
+  // (6.9 % while merged blobs' whole boxes voted weed and held some crop
+  // cells back; 7.3 % before they followed their plants; thesis 33 %).
   EXPECT_LE(m.treated_area_fraction, 0.15);
   EXPECT_GE(m.treated_area_fraction, 0.04);  // a real spray pattern, not nothing
-  // Weeds clear of the crop's leaves are not sprayed (0 of 1115: the
+  // Weeds clear of the crop's leaves are not sprayed (1 of 1115: the
   // thesis's count, which saw weeds on photographs; 2.2 % on each frame's
   // centroid); weeds under a crop's leaves share its spray (12.1 % of all
-  // weeds hit with 0.30 footprints, 18.5 % with 0.40; 12.4 % now; issue
+  // weeds hit with 0.30 footprints, 18.5 % with 0.40; 12.9 % now; issue
   // target 0.5 % not met: 36 % of the weeds stand under a crop's leaves).
   EXPECT_LE(m.weed_hit_rate_clear, 0.005);
-  EXPECT_LE(m.weed_hit_rate, 0.13);
+  EXPECT_LE(m.weed_hit_rate, 0.135);
   // Crop pixels labelled crop 96.9 %: issue target 95 % met on the field
   // (96.7 % before leaf fragments, 93.6 % before the plants beyond the
   // view's border were predicted, 91.5 % before the hull growth, 85.0 %
@@ -102,8 +108,8 @@ TEST(TreatmentSystem, FieldSprayCrop) {
 
 // A plant's footprints from its far views carry the parallax of its own
 // height: moved along to its latest (nearest) estimate, the spray lands
-// closer to the root. Field, seed 1 (222 crops): along RMS 14.1 mm against
-// 17.0 mm with each footprint left where its frame put it (across 9.8 and
+// closer to the root. Field, seed 1 (222 crops): along RMS 12.8 mm against
+// 15.5 mm with each footprint left where its frame put it (across 9.8 and
 // 9.7 mm).
 TEST(TreatmentSystem, FootprintsFollowingTheirPlantSprayCloserAlong) {
   const auto [follow, stay] = OneSeedAndChanged(
@@ -127,28 +133,32 @@ TEST(TreatmentSystem, SmallCropsFootprintsStretchedToCoverThePlacementError) {
   EXPECT_LE(stretched.ours.treated_area_fraction, 0.025);
 }
 
+// Spray-weed mode, field, 20 m of seed 1 (158 weeds, 106 clear of the
+// crop's leaves; 96 crops).
 TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
-  TreatmentEvalOptions o;
-  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
-  o.sim.length_m = 20.0;
-  o.seeds = 1;
-  o.treatment = OurTreatmentOptions(o.sim);
-  o.treatment.scheduler.mode = treatment::SprayMode::kWeed;
-  const TreatmentEvaluation e = EvaluateTreatment(o);
-  EXPECT_EQ(e.mode, "weed");
-  ASSERT_GT(e.ours.weeds, 50);
-  // 81 % of the weeds clear of the crop are sprayed here, since weed blobs
-  // are located at the weeds' own height (31 % when they stood on the
-  // crop's 0.1 m plane, 20 cm beyond where they are 3 m ahead): the rest
-  // are small weeds lost to segmentation (≈ 30 % of weed pixels labelled
-  // soil) or below the map's majority threshold. The crop is spared: none
-  // of 96 hit here.
-  EXPECT_GT(e.ours.weed_hit_rate_clear, 0.7);
-  EXPECT_LT(e.ours.crop_hit_rate, 0.03);
-  // Blobs cut by the image border over a predicted crop cast no weed votes:
-  // 79.2 % of the weeds clear of crop on 23.0 % of the bed here (81.1 % on
-  // 31.1 % when those crops, entering and leaving the view, voted weed).
-  EXPECT_LT(e.ours.treated_area_fraction, 0.26);
+  const auto [product, whole_box] = OneSeedAndChanged(
+      "field", [](treatment::TreatmentOptions& t) { t.merged_weed_parts_only = false; },
+      [](TreatmentEvalOptions& o) {
+        o.sim.length_m = 20.0;
+        o.treatment.scheduler.mode = treatment::SprayMode::kWeed;
+      });
+  const TreatmentMetrics& m = product.ours;
+  EXPECT_EQ(product.mode, "weed");
+  ASSERT_GT(m.weeds, 50);
+  // 73.6 % of the weeds clear of the crop are sprayed on 4.7 % of the bed.
+  // Weed blobs are located at the weeds' own height (31 % when they stood
+  // on the crop's 0.1 m plane, 20 cm beyond where they are 3 m ahead) and
+  // one vote makes a weed cell (TreatmentMapOptions::weed_majority_threshold).
+  // The weeds missed are mostly small ones lost to segmentation (≈ 30 % of
+  // weed pixels labelled soil) and weeds just beyond a crop, which its
+  // canopy hides or joins in every view. The crop is spared: none of 96 hit.
+  EXPECT_GT(m.weed_hit_rate_clear, 0.68);
+  EXPECT_LT(m.crop_hit_rate, 0.03);
+  EXPECT_LT(m.treated_area_fraction, 0.07);
+  // Merged blobs voting weed with their whole box, as wide as two crops and
+  // on the weeds' low plane, sprayed a third of the bed (34.9 %) to reach
+  // 93.4 % of these weeds: blanket spraying beside every crop.
+  EXPECT_LT(m.treated_area_fraction, 0.25 * whole_box.ours.treated_area_fraction);
 }
 
 // Crop pixels labelled crop (thesis tables 7.5–7.8: 95.1, 78.9, 81.7, 55.0 %

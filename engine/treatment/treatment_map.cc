@@ -28,6 +28,7 @@ OptionErrors TreatmentMapOptions::Validate() const {
   RequireInRange(e, "width_m", width_m, 0.1, 50.0);
   if (!std::isfinite(start_y_m)) e.push_back({"start_y_m", "must be finite"});
   if (majority_threshold < 1) e.push_back({"majority_threshold", "must be >= 1"});
+  if (weed_majority_threshold < 0) e.push_back({"weed_majority_threshold", "must be >= 0 (0: majority_threshold)"});
   return e;
 }
 
@@ -69,9 +70,10 @@ CellCounts TreatmentMap::Counts(int column, int row) const {
 
 CellClass TreatmentMap::ClassOf(int column, int row) const {
   const CellCounts c = Counts(column, row);
-  const int top = std::max(c.crop, c.weed);
-  if (top < options_.majority_threshold) return CellClass::kSoil;
-  return c.crop >= c.weed ? CellClass::kCrop : CellClass::kWeed;
+  if (c.crop >= c.weed) return c.crop >= options_.majority_threshold ? CellClass::kCrop : CellClass::kSoil;
+  const int weed_threshold = options_.weed_majority_threshold > 0 ? options_.weed_majority_threshold
+                                                                  : options_.majority_threshold;
+  return c.weed >= weed_threshold ? CellClass::kWeed : CellClass::kSoil;
 }
 
 CellClass TreatmentMap::ClassAt(const Eigen::Vector2d& b) const {

@@ -25,6 +25,7 @@ struct TreatmentMapOptions {
   double width_m = 3.4;      // across, centred on the central row
   double start_y_m = -5.0;   // bed y of the first cell row (behind the start)
   int majority_threshold = 3;  // counts a class needs before a cell is not soil
+  int weed_majority_threshold = 1;
 
   OptionErrors Validate() const;
 };

@@ -15,6 +15,7 @@ OptionErrors TreatmentOptions::Validate() const {
   RequireInRange(e, "crop_footprint_min_half_m", crop_footprint_min_half_m, 0.0, 0.5);
   RequireInRange(e, "weed_footprint_scale", weed_footprint_scale, 0.05, 2.0);
   RequireInRange(e, "weed_height_m", weed_height_m, 0.0, 0.5);
+  RequireInRange(e, "min_weed_part_m2", min_weed_part_m2, 0.0, 1.0);
   return e;
 }
 
@@ -187,6 +188,32 @@ bool TreatmentSystem::SplitMergedBlob(int feature, const vision::Blob& blob,
   return true;
 }
 
+void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
+                                    std::span<const uint8_t> weed, double pixel_area_m2) {
+  cv::Rect box;
+  for (size_t q = 0; q < pixels.size(); ++q) {
+    if (weed[q]) box |= cv::Rect(pixels[q].x, pixels[q].y, 1, 1);
+  }
+  if (box.empty()) return;
+  parts_.create(box.height, box.width, CV_8UC1);
+  parts_.setTo(0);
+  for (size_t q = 0; q < pixels.size(); ++q) {
+    if (weed[q]) parts_.at<uint8_t>(pixels[q] - box.tl()) = 255;
+  }
+  const int n = cv::connectedComponentsWithStats(parts_, components_, stats_, centroids_, 8, CV_32S);
+  const double min_px = options_.min_weed_part_m2 / pixel_area_m2;
+  for (int k = 1; k < n; ++k) {
+    if (stats_.at<int>(k, cv::CC_STAT_AREA) < min_px) continue;
+    const cv::Rect part(box.x + stats_.at<int>(k, cv::CC_STAT_LEFT),
+                        box.y + stats_.at<int>(k, cv::CC_STAT_TOP),
+                        stats_.at<int>(k, cv::CC_STAT_WIDTH), stats_.at<int>(k, cv::CC_STAT_HEIGHT));
+    // Pixel centres at +0.5, as the blobs' centroids.
+    const Eigen::Vector2d centroid(box.x + centroids_.at<double>(k, 0) + 0.5,
+                                   box.y + centroids_.at<double>(k, 1) + 0.5);
+    AddFootprint(pose, centroid, part, false);
+  }
+}
+
 const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::GridTracker& tracker,
                                                const tracking::FrameReport& report,
                                                std::span<const vision::Blob> blobs,
@@ -275,7 +302,19 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
           AddFootprint(pose, moment[k] / area[k], box[k], true);
         }
       }
-      if (VotesWeed(d, blob, crops)) AddFootprint(pose, blob, false);
+      if (VotesWeed(d, blob, crops)) {
+        if (options_.merged_weed_parts_only) {
+          // Only plant matter beyond every predicted crop's split radius:
+          // a part near a prediction that failed its tests is most likely
+          // that crop's leaves cut off-centre, not a weed.
+          beyond_.resize(part.size());
+          for (size_t q = 0; q < part.size(); ++q) beyond_[q] = part[q] < 0 ? 1 : 0;
+          VoteWeedParts(pose, split.pixels, beyond_,
+                        d.area_m2 / static_cast<double>(split.pixels.size()));
+        } else {
+          AddFootprint(pose, blob, false);
+        }
+      }
     } else if (options_.abstain_merged && maybe_merged && CoversAPrediction(blob, crops)) {
       // Possibly merged plants: no votes either way.
     } else if (!d.crop || d.associated) {

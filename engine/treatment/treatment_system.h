@@ -110,6 +110,19 @@ struct TreatmentOptions {
   // (touching plants, 5 seeds), where those votes held merged plants' crop
   // cells in check: 93.4 % of crops hit (82.6 %) on 22.2 % of the bed (13.0 %).
   bool clipped_on_crop_votes_weed = false;
+  // A merged blob split among the predicted crops (split_merged) votes
+  // weed only with its plant matter beyond every prediction's split radius,
+  // each 8-connected part of it (of at least min_weed_part_m2 on the
+  // ground) its own bounding box at the weeds' height. Off: the whole box
+  // votes weed, as the thesis's unassociated blobs do. That box, as wide as
+  // two crops and projected on the weeds' low plane (far beyond the crops
+  // when they are far ahead), left blocks of weed cells beside the crops on
+  // the map: on the field preset, seed 1, 3.8 m² of weed footprints in 1405
+  // merged blobs held no weed, against 0.25 m² in 796 that did. Field, 5
+  // seeds: spray-weed mode treats XX of the bed (22.2 %) and hits XX of the
+  // weeds clear of crop (75.3 %); spray-crop mode along RMS 12.7 -> XX mm.
+  bool merged_weed_parts_only = true;
+  double min_weed_part_m2 = 0.0003;  // a disk of 10 mm radius: the field's smallest weeds
 
   OptionErrors Validate() const;
 };
@@ -200,6 +213,12 @@ class TreatmentSystem {
                        std::span<const classify::PredictedCrop> crops,
                        const geometry::Matrix5d& covariance, const cv::Mat& mask);
 
+  // Votes weed with each 8-connected part of the pixels flagged in `weed`
+  // (each standing for pixel_area_m2 of ground) of at least
+  // min_weed_part_m2: its own bounding box about its centroid.
+  void VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
+                     std::span<const uint8_t> weed, double pixel_area_m2);
+
   // Where a crop blob centred at centroid_px stands: the tracker's centroid
   // height there (TrackerOptions::crop_radius_m), else the virtual plane,
   // so that crop footprints and the tracker's predictions agree in scale.
@@ -214,13 +233,14 @@ class TreatmentSystem {
   NozzleScheduler scheduler_;
   PlantRegistry registry_;
   FrameTreatment frame_;
-  // Scratch of BlobPixels and SplitMergedBlob.
-  cv::Mat components_, stats_, centroids_;
+  // Scratch of BlobPixels, SplitMergedBlob and VoteWeedParts.
+  cv::Mat components_, stats_, centroids_, parts_;
   std::vector<cv::Point> split_pixels_;
   std::vector<Eigen::Vector2d> split_ground_;
   std::vector<double> split_area_;
   std::vector<int> split_part_;
   std::vector<uint8_t> split_part_crop_;
+  std::vector<uint8_t> beyond_;  // per split pixel: beyond every prediction's radius
   int64_t last_frame_utime_ = -1;
   int map_resets_ = 0;
   // Crop plants whose footprints follow them, by (line counted from the

@@ -76,6 +76,37 @@ TEST(TreatmentMap, MajorityWithThreshold) {
   EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);
 }
 
+// A weed cell may need fewer votes than a crop cell (spray-weed mode: a
+// weed missed costs more than a drop of herbicide); 0 takes the crop's.
+TEST(TreatmentMap, WeedCellsHaveTheirOwnThreshold) {
+  TreatmentMapOptions o;
+  o.majority_threshold = 3;
+  o.weed_majority_threshold = 1;
+  TreatmentMap map(o);
+  const Eigen::Vector2d w(0.1, 1.0), c(0.5, 1.0);
+  map.AddFootprint(Square(w.x(), w.y(), 0.02), false);
+  EXPECT_EQ(map.ClassAt(w), CellClass::kWeed);  // one vote is enough for a weed
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), true);
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), true);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);  // two are not for a crop
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), false);
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), false);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kSoil);  // 2 : 2, the crop short of its threshold
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), false);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kWeed);  // 2 : 3
+  map.AddFootprint(Square(c.x(), c.y(), 0.02), true);
+  EXPECT_EQ(map.ClassAt(c), CellClass::kCrop);  // 3 : 3 goes to crop
+  o.weed_majority_threshold = 0;  // as the crop's
+  TreatmentMap same(o);
+  same.AddFootprint(Square(w.x(), w.y(), 0.02), false);
+  same.AddFootprint(Square(w.x(), w.y(), 0.02), false);
+  EXPECT_EQ(same.ClassAt(w), CellClass::kSoil);
+  same.AddFootprint(Square(w.x(), w.y(), 0.02), false);
+  EXPECT_EQ(same.ClassAt(w), CellClass::kWeed);
+  o.weed_majority_threshold = -1;
+  EXPECT_THROW(TreatmentMap{o}, InvalidOptionsError);
+}
+
 TEST(TreatmentMap, ColumnSpansCountTheFootprintsCellsAnywhereAlong) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> centre(-0.5, 0.5), half(0.01, 0.12), angle(0.0, 6.3);
