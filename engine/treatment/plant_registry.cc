@@ -89,7 +89,7 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
       r.counts = map.Counts(column, row);
       r.map_class = map.ClassOf(column, row);
     }
-    char text[320];
+    char text[384];
     const char* reason = r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
                          : r.crop()          ? "associated with a predicted crop"
                          : r.small           ? "below the size filter"
@@ -97,11 +97,11 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
     std::snprintf(text, sizeof text,
                   "%s (%d crop / %d weed votes): %s; area %.4f m2 (filter %.4f), "
                   "gamma2 %.2f (gate %.2f), %.0f mm from the predicted crop; cell counters "
-                  "crop %d weed %d -> %s; %s (spray-%s mode)",
+                  "crop %d weed %d doubt %d -> %s; %s (spray-%s mode)",
                   r.crop() ? "crop" : "weed", r.crop_votes, r.weed_votes, reason, r.area_m2,
                   r.size_filter_m2, std::isfinite(r.gamma2) ? r.gamma2 : -1.0, c.assoc_chi2,
                   std::isfinite(r.distance_m) ? r.distance_m * 1000.0 : -1.0, r.counts.crop,
-                  r.counts.weed, ToString(r.map_class), r.sprayed ? "sprayed" : "not sprayed",
+                  r.counts.weed, r.counts.doubt, ToString(r.map_class), r.sprayed ? "sprayed" : "not sprayed",
                   ToString(mode));
     r.why = text;
   }

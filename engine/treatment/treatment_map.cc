@@ -70,7 +70,10 @@ CellCounts TreatmentMap::Counts(int column, int row) const {
 
 CellClass TreatmentMap::ClassOf(int column, int row) const {
   const CellCounts c = Counts(column, row);
-  if (c.crop >= c.weed) return c.crop >= options_.majority_threshold ? CellClass::kCrop : CellClass::kSoil;
+  if (c.crop >= c.weed) {
+    return c.crop >= options_.majority_threshold && c.crop >= c.weed + c.doubt ? CellClass::kCrop
+                                                                            : CellClass::kSoil;
+  }
   const int weed_threshold = options_.weed_majority_threshold > 0 ? options_.weed_majority_threshold
                                                                   : options_.majority_threshold;
   return c.weed >= weed_threshold ? CellClass::kWeed : CellClass::kSoil;
@@ -107,13 +110,16 @@ int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   return cells;
 }
 
-void TreatmentMap::Vote(size_t cell, int votes, bool crop) {
-  uint16_t& n = crop ? counts_[cell].crop : counts_[cell].weed;
+void TreatmentMap::Vote(uint16_t& n, int votes) {
   n = static_cast<uint16_t>(std::clamp(n + votes, 0, int{std::numeric_limits<uint16_t>::max()}));
 }
 
 int TreatmentMap::AddFootprint(const Quad& q, bool crop) {
   return ForCellsIn(q, [&](size_t i) { Vote(i, 1, crop); });
+}
+
+int TreatmentMap::AddDoubt(const Quad& q) {
+  return ForCellsIn(q, [&](size_t i) { Vote(counts_[i].doubt, 1); });
 }
 
 void TreatmentMap::AppendSpans(const Quad& q, double along_m,

@@ -3,9 +3,10 @@
 // bed in the bed frame (bed_frame.h), 13.33 mm cells by default. Each frame,
 // every classified blob's footprint adds one to the crop or the weed counter
 // of the cells whose centre it covers, so a plant seen in many frames
-// accumulates. A cell's class is the larger counter when it reaches the
-// threshold (a tie goes to crop: the crop is what must not be wronged), and
-// soil otherwise. The map grows along the bed as the vehicle drives.
+// accumulates. A cell's class is the larger counter when it reaches its
+// class's threshold (a tie goes to crop: the crop is what must not be
+// wronged), and soil otherwise; a crop cell must also tie or outvote the
+// weed and doubt counters together (CellCounts::doubt). The map grows along the bed as the vehicle drives.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -25,6 +26,14 @@ struct TreatmentMapOptions {
   double width_m = 3.4;      // across, centred on the central row
   double start_y_m = -5.0;   // bed y of the first cell row (behind the start)
   int majority_threshold = 3;  // counts a class needs before a cell is not soil
+  // ... and a weed cell (0: majority_threshold). Spray-weed mode sprays
+  // weed cells, and a weed missed costs more than a drop of herbicide;
+  // weed votes come from weed-sized blobs and from merged blobs' plant
+  // matter beyond every crop (TreatmentOptions::merged_weed_parts_only).
+  // Field, 5 seeds, weeds clear of crop hit / bed treated: 1 vote 71.8 /
+  // 4.2 %, 2 votes 62.5 / 2.2 %, 3 votes 57.7 / 1.7 %. Spray-crop mode is
+  // untouched: a crop cell still needs majority_threshold and to tie or
+  // outvote the weed counter.
   int weed_majority_threshold = 1;
 
   OptionErrors Validate() const;
@@ -33,6 +42,9 @@ struct TreatmentMapOptions {
 struct CellCounts {
   uint16_t crop = 0;
   uint16_t weed = 0;
+  // Votes against crop that are no weed's: the box of touching plants
+  // merged into one blob, beyond the footprints of the crops in it.
+  uint16_t doubt = 0;
 };
 
 // A footprint as the cells of each map column it covers: the y range of
@@ -52,6 +64,8 @@ class TreatmentMap {
   // Adds one vote to every cell whose centre lies inside the convex quad
   // (bed frame). Returns the number of cells counted.
   int AddFootprint(const Quad& bed_quad, bool crop);
+  // Adds one doubt vote (CellCounts::doubt) to the same cells.
+  int AddDoubt(const Quad& bed_quad);
   // The quad's spans, its bed y measured from `along_m`: where the line
   // down the middle of each column it reaches crosses it.
   void AppendSpans(const Quad& bed_quad, double along_m, std::vector<ColumnSpan>& out) const;
@@ -89,7 +103,10 @@ class TreatmentMap {
  private:
   void GrowTo(int row);
   // Adds `votes` (negative: takes back) to one counter, kept within [0, 65535].
-  void Vote(size_t cell, int votes, bool crop);
+  void Vote(uint16_t& counter, int votes);
+  void Vote(size_t cell, int votes, bool crop) {
+    Vote(crop ? counts_[cell].crop : counts_[cell].weed, votes);
+  }
   // Calls f(index) for every cell whose centre lies inside the convex quad,
   // growing the map to it; returns the number of cells.
   template <typename F>

@@ -188,6 +188,17 @@ bool TreatmentSystem::SplitMergedBlob(int feature, const vision::Blob& blob,
   return true;
 }
 
+void TreatmentSystem::AddDoubt(const BedPose& pose, const vision::Blob& b) {
+  const std::optional<Quad> q =
+      FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
+                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0,
+                       CropPlaneHeight(b.centroid_px));
+  if (!q) return;
+  Quad bed;
+  for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i]);
+  map_.AddDoubt(bed);
+}
+
 void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
                                     std::span<const uint8_t> weed, double pixel_area_m2) {
   cv::Rect box;
@@ -311,6 +322,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
           for (size_t q = 0; q < part.size(); ++q) beyond_[q] = part[q] < 0 ? 1 : 0;
           VoteWeedParts(pose, split.pixels, beyond_,
                         d.area_m2 / static_cast<double>(split.pixels.size()));
+          AddDoubt(pose, blob);
         } else {
           AddFootprint(pose, blob, false);
         }

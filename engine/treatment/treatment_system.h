@@ -93,11 +93,9 @@ struct TreatmentOptions {
   // may be touching plants merged, its centroid between them (thesis fig.
   // 2.17): when OnFrame has the mask, its pixels are split among the
   // predicted crops (CropClassifier::SplitMerged) and each crop part marks
-  // its plant's footprint; the whole box still votes weed, so cells of the
-  // box outside the plants' footprints stay weed (inside, crop ties it; a
-  // tie is crop). Field, 5 seeds: all 1103 crops hit (99.27 % unsplit) at
-  // the same treated area; weed parts voting only their own boxes hit all
-  // too but treat 17.5 % and hit 5.1 % of weeds clear of crop (2.6 %).
+  // its plant's footprint; what votes weed is merged_weed_parts_only's.
+  // Field, 5 seeds: all 1103 crops hit (99.27 % unsplit) at the same
+  // treated area.
   bool split_merged = true;
   // A blob cut by the image border whose box covers a predicted crop is most
   // likely that crop entering or leaving the view: its centroid is biased
@@ -113,14 +111,24 @@ struct TreatmentOptions {
   // A merged blob split among the predicted crops (split_merged) votes
   // weed only with its plant matter beyond every prediction's split radius,
   // each 8-connected part of it (of at least min_weed_part_m2 on the
-  // ground) its own bounding box at the weeds' height. Off: the whole box
-  // votes weed, as the thesis's unassociated blobs do. That box, as wide as
-  // two crops and projected on the weeds' low plane (far beyond the crops
-  // when they are far ahead), left blocks of weed cells beside the crops on
-  // the map: on the field preset, seed 1, 3.8 m² of weed footprints in 1405
-  // merged blobs held no weed, against 0.25 m² in 796 that did. Field, 5
-  // seeds: spray-weed mode treats XX of the bed (22.2 %) and hits XX of the
-  // weeds clear of crop (75.3 %); spray-crop mode along RMS 12.7 -> XX mm.
+  // ground) its own bounding box at the weeds' height; its whole box, on
+  // the crops' plane, casts a doubt vote (CellCounts::doubt), which a crop
+  // cell must outvote as it does the weed counter but which makes no weed
+  // cell. Off: the whole box votes weed on the weeds' plane (as the thesis's
+  // unassociated blobs). That box, as wide as two crops and projected on
+  // the weeds' low plane (far beyond the crops when they are far ahead),
+  // left blocks of weed cells beside the crops on the map: on the field
+  // preset, seed 1, 3.8 m² of weed footprints in 1405 merged blobs held no
+  // weed, against 0.25 m² in 796 that did. Field, 5 seeds, spray-weed mode:
+  // 4.2 % of the bed treated for 71.8 % of the weeds clear of crop (whole
+  // boxes: 22.2 % for 75.3 % with three votes a weed cell). Spray-crop
+  // mode: along RMS 12.7 -> 11.9 mm (the box on the weeds' plane, beyond
+  // the crops, had eaten into their cells on the far side), bed treated
+  // 6.9 -> 6.8 %, weeds hit 12.4 -> 12.2 %. Without the doubt votes: 11.9
+  // mm too, but the crop cells spread (bed 7.2 %, weeds hit 12.9 %; on
+  // preset A 25.1 % of the bed against 22.8). Parts of a
+  // prediction that failed its tests voting weed too: 77.3 % of the weeds
+  // for 10.7 % of the bed, and blocks of weed cells beside the crops again.
   bool merged_weed_parts_only = true;
   double min_weed_part_m2 = 0.0003;  // a disk of 10 mm radius: the field's smallest weeds
 
@@ -213,6 +221,8 @@ class TreatmentSystem {
                        std::span<const classify::PredictedCrop> crops,
                        const geometry::Matrix5d& covariance, const cv::Mat& mask);
 
+  // A doubt vote over the blob's whole box on the crops' plane.
+  void AddDoubt(const BedPose& pose, const vision::Blob& blob);
   // Votes weed with each 8-connected part of the pixels flagged in `weed`
   // (each standing for pixel_area_m2 of ground) of at least
   // min_weed_part_m2: its own bounding box about its centroid.

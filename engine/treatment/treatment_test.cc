@@ -96,6 +96,17 @@ TEST(TreatmentMap, WeedCellsHaveTheirOwnThreshold) {
   EXPECT_EQ(map.ClassAt(c), CellClass::kWeed);  // 2 : 3
   map.AddFootprint(Square(c.x(), c.y(), 0.02), true);
   EXPECT_EQ(map.ClassAt(c), CellClass::kCrop);  // 3 : 3 goes to crop
+  // Doubt votes (touching plants merged) hold a crop cell back but make no weed.
+  const Eigen::Vector2d d(0.9, 1.0);
+  for (int k = 0; k < 3; ++k) map.AddFootprint(Square(d.x(), d.y(), 0.02), true);
+  EXPECT_EQ(map.ClassAt(d), CellClass::kCrop);
+  for (int k = 0; k < 4; ++k) map.AddDoubt(Square(d.x(), d.y(), 0.02));
+  EXPECT_EQ(map.ClassAt(d), CellClass::kSoil);  // 3 crop against 4 doubt
+  map.AddFootprint(Square(d.x(), d.y(), 0.02), true);
+  EXPECT_EQ(map.ClassAt(d), CellClass::kCrop);  // 4 : 4
+  map.AddFootprint(Square(d.x(), d.y(), 0.02), false);
+  EXPECT_EQ(map.ClassAt(d), CellClass::kSoil);  // 4 against 1 weed + 4 doubt, and no weed cell
+  EXPECT_EQ(map.Counts(0, 0).doubt, 0);
   o.weed_majority_threshold = 0;  // as the crop's
   TreatmentMap same(o);
   same.AddFootprint(Square(w.x(), w.y(), 0.02), false);
