@@ -49,6 +49,7 @@ struct TreatmentArgs {
   bool abstain_merged = false;
   bool weed_whole_box = false;
   std::optional<double> min_weed_part_mm2;
+  std::optional<double> lone_crop_fraction;
   bool clipped_on_crop_votes_weed = false;
   double costs_ratio = 1.0;
   bool json = false;
@@ -186,6 +187,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.footprints_stay) o.treatment.crop_footprint_follows_plant = false;
   if (a.abstain_merged) o.treatment.abstain_merged = true;
   if (a.weed_whole_box) o.treatment.merged_weed_parts_only = false;
+  if (a.lone_crop_fraction) o.treatment.classifier.lone_crop_fraction = *a.lone_crop_fraction;
   if (a.min_weed_part_mm2) o.treatment.min_weed_part_m2 = *a.min_weed_part_mm2 * 1e-6;
   if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
   o.costs_ratio = a.costs_ratio;
@@ -305,6 +307,9 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "a plant's footprints stay where each frame put them (not moved along with its latest position)");
   cmd->add_flag("--weed-whole-box", args.weed_whole_box,
                 "merged blobs vote weed with their whole box (the old way), not only their weed parts");
+  cmd->add_option("--lone-crop-fraction", args.lone_crop_fraction,
+                  "a blob under the size filter but at least this fraction of it, alone in a predicted crop's region, is that crop (0: off)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--min-weed-part-mm2", args.min_weed_part_mm2,
                   "smallest part of a blob (ground mm^2) that votes weed on its own")
       ->check(CLI::Range(0.0, 1e6));

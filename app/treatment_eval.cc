@@ -297,6 +297,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.classifier.feature_sd_m = radius_m;
   o.classifier.plant_sd_m = 0.0;
   o.classifier.sure_crop_area_m2 = std::numeric_limits<double>::infinity();
+  o.classifier.lone_crop_fraction = 0.0;  // under the size filter is weed
   o.classifier.camera_pitch_sd_rad = 0.0;
   o.classifier.camera_roll_sd_rad = 0.0;
   o.classifier.camera_height_sd_m = 0.0;

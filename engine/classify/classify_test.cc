@@ -87,6 +87,7 @@ TEST(CropClassifier, SizeFilterThenAssociation) {
 // m², and a crop of 0.002 m² that the fixed 0.004 m² called weed is crop.
 TEST(CropClassifier, SizeFilterFollowsTheCropsOwnSize) {
   ClassifierOptions o = SizeAndGate();
+  o.lone_crop_fraction = 0.0;  // the filter alone
   CropClassifier classifier(o);
   const std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.475, 1.0)};
   std::vector<BlobDecision> d;
@@ -364,6 +365,46 @@ TEST(CropClassifier, ASmallBlobBesideACropFoundIsItsLeaf) {
   }
   thesis.Classify(frame, crops, geometry::Matrix5d::Zero(), d);
   EXPECT_FALSE(d[1].crop);
+}
+
+// A 3-week crop that segmentation found small: under the size filter, but
+// alone in its prediction's region it is that crop.
+TEST(CropClassifier, ASmallBlobAloneInACropsRegionIsThatCrop) {
+  ClassifierOptions o = SizeAndGate();  // filter 0.004 m²
+  o.lone_crop_fraction = 0.25;
+  o.fragment_reach = 0.0;
+  CropClassifier classifier(o);
+  std::vector<PredictedCrop> crops = {CropAt(0.0, 1.0), CropAt(0.0, 1.5), CropAt(0.0, 2.0)};
+  for (int m = 0; m < 3; ++m) crops[static_cast<size_t>(m)].m = m;
+  const std::vector<tracking::Feature> frame = {
+      FeatureAt(0.01, 1.0, 0.002),          // alone at the first: crop
+      FeatureAt(0.0, 1.5, 0.02),            // the second, whole
+      FeatureAt(0.01, 1.51, 0.002),         // small beside it: weed (the crop is taken)
+      FeatureAt(0.01, 2.0, 0.0009),         // under a quarter of the filter: weed
+      FeatureAt(0.1, 1.0, 0.002),           // outside the region: weed
+      FeatureAt(0.0, 2.01, 0.002, true),    // cut by the border: as before
+  };
+  std::vector<BlobDecision> d;
+  classifier.Classify(frame, crops, geometry::Matrix5d::Zero(), d);
+  ASSERT_EQ(d.size(), 6u);
+  EXPECT_TRUE(d[0].crop && d[0].associated && d[0].lone);
+  EXPECT_EQ(d[0].m, 0);
+  EXPECT_NEAR(d[0].predicted_ground_m.y(), 1.0, 1e-12);
+  EXPECT_TRUE(d[1].crop);
+  EXPECT_FALSE(d[2].crop);
+  EXPECT_FALSE(d[3].crop);
+  EXPECT_FALSE(d[4].crop);
+  EXPECT_TRUE(d[5].crop && !d[5].lone);  // clipped and associated: crop by the thesis's rule already
+  // Lone crops do not teach the size filter (it would sink with them).
+  for (int k = 0; k < 40; ++k) classifier.Classify(frame, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_NEAR(classifier.size_filter_m2(), 0.004, 1e-12);
+  // Off: the thesis's rule, under the size filter is weed.
+  o.lone_crop_fraction = 0.0;
+  CropClassifier thesis(o);
+  thesis.Classify(frame, crops, geometry::Matrix5d::Zero(), d);
+  EXPECT_FALSE(d[0].crop);
+  o.lone_crop_fraction = 1.5;
+  EXPECT_THROW(CropClassifier{o}, InvalidOptionsError);
 }
 
 // A crop entering the view: the image border cuts its leaves 5 cm from

@@ -30,6 +30,7 @@ OptionErrors ClassifierOptions::Validate() const {
   if (crop_size_min_samples < 1 || crop_size_min_samples > crop_size_window) {
     e.push_back({"crop_size_min_samples", "must be in [1, crop_size_window]"});
   }
+  RequireInRange(e, "lone_crop_fraction", lone_crop_fraction, 0.0, 1.0);
   return e;
 }
 
@@ -149,9 +150,22 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
       }
     }
   }
+  // Lone small crops (ClassifierOptions::lone_crop_fraction).
+  if (options_.lone_crop_fraction > 0.0) {
+    for (BlobDecision& d : out) {
+      if (d.crop || d.clipped || !d.associated ||
+          d.area_m2 < options_.lone_crop_fraction * d.size_filter_m2) {
+        continue;
+      }
+      const bool taken = std::any_of(out.begin(), out.end(), [&](const BlobDecision& c) {
+        return c.crop && c.associated && c.m == d.m && c.n == d.n;
+      });
+      if (!taken) d.crop = d.lone = true;
+    }
+  }
   // Learnt after the frame, so every blob of a frame meets the same filter.
   for (const BlobDecision& d : out) {
-    if (d.crop && d.associated && !d.clipped) RememberCropArea(d.area_m2);
+    if (d.crop && d.associated && !d.clipped && !d.lone) RememberCropArea(d.area_m2);
   }
   UpdateSizeFilter();
 }
