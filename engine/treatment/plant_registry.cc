@@ -90,7 +90,9 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
       r.map_class = map.ClassOf(column, row);
     }
     char text[384];
-    const char* reason = r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
+    const char* reason = r.crop() && r.small && r.grid_plant
+                             ? "below the size filter, alone in a predicted crop's region"
+                         : r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
                          : r.crop()          ? "associated with a predicted crop"
                          : r.small           ? "below the size filter"
                                              : "outside every crop association region";

@@ -26,12 +26,15 @@ void FeatureBlobIndices(std::span<const vision::Blob> blobs, std::vector<int>& o
   }
 }
 
+std::optional<Quad> TreatmentSystem::BoxOnCropPlane(const vision::Blob& b) const {
+  return FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
+                          b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0,
+                          CropPlaneHeight(b.centroid_px));
+}
+
 bool TreatmentSystem::CoversAPrediction(const vision::Blob& b,
                                         std::span<const classify::PredictedCrop> crops) const {
-  const std::optional<Quad> q =
-      FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
-                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0,
-                       CropPlaneHeight(b.centroid_px));
+  const std::optional<Quad> q = BoxOnCropPlane(b);
   if (!q) return false;
   return std::any_of(crops.begin(), crops.end(), [&](const classify::PredictedCrop& c) {
     return InsideQuad(*q, c.ground_m);
@@ -189,10 +192,7 @@ bool TreatmentSystem::SplitMergedBlob(int feature, const vision::Blob& blob,
 }
 
 void TreatmentSystem::AddDoubt(const BedPose& pose, const vision::Blob& b) {
-  const std::optional<Quad> q =
-      FootprintOnPlane(camera_, b.centroid_px, b.bbox_px.x, b.bbox_px.y,
-                       b.bbox_px.x + b.bbox_px.width, b.bbox_px.y + b.bbox_px.height, 1.0,
-                       CropPlaneHeight(b.centroid_px));
+  const std::optional<Quad> q = BoxOnCropPlane(b);
   if (!q) return;
   Quad bed;
   for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i]);

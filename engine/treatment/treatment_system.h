@@ -195,6 +195,8 @@ class TreatmentSystem {
   // False for a clipped blob covering a predicted crop (clipped_on_crop_votes_weed).
   bool VotesWeed(const classify::BlobDecision& d, const vision::Blob& b,
                  std::span<const classify::PredictedCrop> crops) const;
+  // The blob's whole bounding box on the crops' plane (vehicle frame).
+  std::optional<Quad> BoxOnCropPlane(const vision::Blob& blob) const;
   // Does the blob's bounding box, projected, hold a predicted crop position?
   bool CoversAPrediction(const vision::Blob& blob,
                          std::span<const classify::PredictedCrop> crops) const;

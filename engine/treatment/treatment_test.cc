@@ -389,7 +389,12 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   classify::BlobDecision leaf = weed;  // under the filter, a crop's cut-off leaf
   leaf.crop = leaf.fragment = true;
   EXPECT_EQ(reg.Observe({0.6, 1.0}, leaf), 2);
-  ASSERT_EQ(reg.records().size(), 3u);
+  classify::BlobDecision lone = weed;  // under the filter, alone in a crop's region
+  lone.crop = lone.associated = lone.lone = true;
+  lone.gamma2 = 1.0;
+  const Eigen::Vector2d lone_grid(1.2, 1.0);
+  EXPECT_EQ(reg.Observe({1.2, 1.01}, lone, lone_grid), 3);
+  ASSERT_EQ(reg.records().size(), 4u);
   EXPECT_NEAR(reg.records()[0].bed_m.x(), 0.005, 1e-12);
   EXPECT_EQ(reg.records()[0].crop_votes, 2);
   reg.MarkSprayed({0, -0.01, 0.02, 0.99, 1.0});
@@ -412,6 +417,11 @@ TEST(PlantRegistry, MergesObservationsAndExplains) {
   EXPECT_NE(l.why.find("crop (1 crop / 0 weed votes): below the size filter, a leaf of a crop"),
             std::string::npos)
       << l.why;
+  const PlantRecord& s = reg.records()[3];
+  EXPECT_NE(s.why.find("crop (1 crop / 0 weed votes): below the size filter, alone in a predicted"),
+            std::string::npos)
+      << s.why;
+  EXPECT_NE(a.why.find("crop 1 weed 0 doubt 0 -> crop"), std::string::npos) << a.why;
 }
 
 TEST(PlantRegistry, APlantIsConfirmedByBeingSeenWhereverItWasInView) {
