@@ -164,7 +164,7 @@ TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
 
 // Crop pixels labelled crop (thesis tables 7.5–7.8: 95.1, 78.9, 81.7, 55.0 %
 // on A–D). Issue target ≥ 95 % on every preset: met on A and C over 5 seeds
-// (96.6, 97.5 %), not on B and D (91.9, 91.5 %), where segmentation loses
+// (96.5, 97.5 %), not on B and D (91.9, 91.5 %), where segmentation loses
 // 7.4–7.7 % of the crop pixels to soil (README). Blobs that miss every
 // association region are split among the predicted crops, which lifts A
 // (touching plants merged) from 48 %. On 10 m, 1 seed: 94.7 / 91.2 / 96.6 /
