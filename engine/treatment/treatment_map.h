@@ -6,7 +6,8 @@
 // accumulates. A cell's class is the larger counter when it reaches its
 // class's threshold (a tie goes to crop: the crop is what must not be
 // wronged), and soil otherwise; a crop cell must also tie or outvote the
-// weed and doubt counters together (CellCounts::doubt). The map grows along the bed as the vehicle drives.
+// weed and doubt counters together (CellCounts::doubt). The map grows
+// along the bed as the vehicle drives.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -33,7 +34,7 @@ struct TreatmentMapOptions {
   // Field, 5 seeds, weeds clear of crop hit / bed treated: 1 vote 71.8 /
   // 4.2 %, 2 votes 62.5 / 2.2 %, 3 votes 57.7 / 1.7 %. Spray-crop mode is
   // untouched: a crop cell still needs majority_threshold and to tie or
-  // outvote the weed counter.
+  // outvote the weed and doubt counters together.
   int weed_majority_threshold = 1;
 
   OptionErrors Validate() const;
