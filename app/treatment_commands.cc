@@ -50,6 +50,8 @@ struct TreatmentArgs {
   bool weed_whole_box = false;
   std::optional<double> min_weed_part_mm2;
   std::optional<double> lone_crop_fraction;
+  std::optional<double> own_offset_along;
+  std::optional<double> own_offset_across;
   bool clipped_on_crop_votes_weed = false;
   double costs_ratio = 1.0;
   bool json = false;
@@ -188,6 +190,8 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.abstain_merged) o.treatment.abstain_merged = true;
   if (a.weed_whole_box) o.treatment.merged_weed_parts_only = false;
   if (a.lone_crop_fraction) o.treatment.classifier.lone_crop_fraction = *a.lone_crop_fraction;
+  if (a.own_offset_along) o.treatment.own_offset_fraction_along = *a.own_offset_along;
+  if (a.own_offset_across) o.treatment.own_offset_fraction_across = *a.own_offset_across;
   if (a.min_weed_part_mm2) o.treatment.min_weed_part_m2 = *a.min_weed_part_mm2 * 1e-6;
   if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
   o.costs_ratio = a.costs_ratio;
@@ -303,6 +307,12 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "every crop blob its own footprint (not one per predicted plant)");
   cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,
                 "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
+  cmd->add_option("--own-offset-along", args.own_offset_along,
+                  "crop footprint: at the plant's grid node plus this fraction of its own offset along the rows (default 0.7)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--own-offset-across", args.own_offset_across,
+                  "... and across the rows (default 1)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--footprints-stay", args.footprints_stay,
                 "a plant's footprints stay where each frame put them (not moved along with its latest position)");
   cmd->add_flag("--weed-whole-box", args.weed_whole_box,

@@ -259,9 +259,14 @@ void GridTracker::PredictTo(int64_t utime) {
 }
 
 Eigen::Vector2d GridTracker::PlantPosition(int m, int n) const {
+  return PlantPosition(m, n, Eigen::Vector2d::Ones());
+}
+
+Eigen::Vector2d GridTracker::PlantPosition(int m, int n, const Eigen::Vector2d& weight) const {
   const int offset = OffsetIndex(m, n);
-  const Eigen::Vector2d delta =
-      offset >= 0 ? Eigen::Vector2d(x_.segment<2>(offset)) : Eigen::Vector2d::Zero();
+  const Eigen::Vector2d delta = offset >= 0
+                                    ? Eigen::Vector2d(weight.cwiseProduct(x_.segment<2>(offset)))
+                                    : Eigen::Vector2d::Zero();
   return PlantWithOffset(state(), m, n, delta);
 }
 

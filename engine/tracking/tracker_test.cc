@@ -242,6 +242,41 @@ TEST(GridTracker, LosesTheGridWhenItStopsSeeingItAndReinitialises) {
   EXPECT_NEAR(run.tracker.state().offset_m, run.scene.truth.offset_m, 0.005);
 }
 
+TEST(GridTracker, PlantPositionWithPartOfItsOwnOffset) {
+  // Weight (1, 1) is the plant; (0, 0) its grid node; in between the node
+  // plus that share of the offset, across and along the rows separately.
+  TrackerOptions o;
+  Drive run(o);
+  run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+  run.Frames(8);
+  int checked = 0, moved = 0;
+  for (int m = -2; m <= 8; ++m) {
+    for (int n = -1; n <= 1; ++n) {
+      if (!run.tracker.PlantOffsetCovariance(m, n)) continue;
+      const Eigen::Vector2d plant = run.tracker.PlantPosition(m, n);
+      EXPECT_TRUE(plant.isApprox(run.tracker.PlantPosition(m, n, Eigen::Vector2d(1, 1))));
+      const Eigen::Vector2d node = run.tracker.PlantPosition(m, n, Eigen::Vector2d::Zero());
+      const GridState s = run.tracker.state();
+      const double c = std::cos(s.bearing_rad), si = std::sin(s.bearing_rad);
+      const Eigen::Vector2d g(n * s.row_spacing_m, m * s.plant_spacing_m + s.forward_m);
+      EXPECT_NEAR(node.x(), c * g.x() + si * g.y() + s.offset_m, 1e-12);
+      EXPECT_NEAR(node.y(), -si * g.x() + c * g.y(), 1e-12);
+      // The offset in the rows' axes, rotated back: δ = Rᵀ(plant − node).
+      const Eigen::Vector2d d = plant - node;
+      const Eigen::Vector2d delta(c * d.x() - si * d.y(), si * d.x() + c * d.y());
+      const Eigen::Vector2d w(0.25, 0.7);
+      const Eigen::Vector2d part = run.tracker.PlantPosition(m, n, w) - node;
+      const Eigen::Vector2d want = w.cwiseProduct(delta);
+      EXPECT_NEAR(part.x(), c * want.x() + si * want.y(), 1e-12);
+      EXPECT_NEAR(part.y(), -si * want.x() + c * want.y(), 1e-12);
+      ++checked;
+      moved += delta.cwiseAbs().minCoeff() > 1e-4;
+    }
+  }
+  EXPECT_GT(checked, 3);
+  EXPECT_GT(moved, 3);  // offsets learnt on both axes, so the weights matter
+}
+
 TEST(GridTracker, CovarianceIsConsistentOnTheSyntheticGrid) {
   // NEES of (t_x, Y, Ψ) over many frames: mean near 3 for an honest filter.
   TrackerOptions o;

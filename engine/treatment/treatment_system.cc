@@ -16,6 +16,8 @@ OptionErrors TreatmentOptions::Validate() const {
   RequireInRange(e, "weed_footprint_scale", weed_footprint_scale, 0.05, 2.0);
   RequireInRange(e, "weed_height_m", weed_height_m, 0.0, 0.5);
   RequireInRange(e, "min_weed_part_m2", min_weed_part_m2, 0.0, 1.0);
+  RequireInRange(e, "own_offset_fraction_across", own_offset_fraction_across, 0.0, 1.0);
+  RequireInRange(e, "own_offset_fraction_along", own_offset_fraction_along, 0.0, 1.0);
   return e;
 }
 
@@ -345,11 +347,13 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   if (seen) registry_.CountView(*seen);
   const bool follow =
       options_.crop_footprint_at_tracked_plant && options_.crop_footprint_follows_plant;
+  const Eigen::Vector2d own_offset_weight(options_.own_offset_fraction_across,
+                                          options_.own_offset_fraction_along);
   for (const PlantFootprint& p : plants) {
     if (!(p.area_px > 0.0)) continue;
     const std::optional<Eigen::Vector2d> centre =
         options_.crop_footprint_at_tracked_plant
-            ? std::optional<Eigen::Vector2d>(tracker.PlantPosition(p.m, p.n))
+            ? std::optional<Eigen::Vector2d>(tracker.PlantPosition(p.m, p.n, own_offset_weight))
             : std::nullopt;
     if (!follow) {
       AddFootprint(pose, p.moment_px / p.area_px, p.box, true, centre);
