@@ -14,6 +14,7 @@
 #include "engine/treatment/plant_registry.h"
 #include "engine/treatment/simulated_bar.h"
 #include "engine/treatment/treatment_map.h"
+#include "engine/treatment/treatment_system.h"
 
 namespace plantscale::treatment {
 namespace {
@@ -340,6 +341,20 @@ TEST(NozzleScheduler, BadOptionsAreNamed) {
     EXPECT_NE(std::string(e.what()).find("bar.nozzles"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("fail_safe.max_pose_age_s"), std::string::npos);
   }
+}
+
+TEST(TreatmentOptions, OwnOffsetFractionsAreShares) {
+  TreatmentOptions o;
+  EXPECT_TRUE(o.Validate().empty());
+  o.own_offset_fraction_along = 1.2;
+  o.own_offset_fraction_across = -0.1;
+  const OptionErrors e = o.Validate();
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(e[0].key, "own_offset_fraction_across");
+  EXPECT_EQ(e[1].key, "own_offset_fraction_along");
+  o.own_offset_fraction_along = std::nan("");
+  o.own_offset_fraction_across = 0.0;
+  ASSERT_EQ(o.Validate().size(), 1u);
 }
 
 TEST(SimulatedBar, ShotsLandWhereTheNozzleWasAfterTheLatency) {
