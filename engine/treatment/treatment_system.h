@@ -91,8 +91,9 @@ struct TreatmentOptions {
   // the rows), the weight of the root's own scatter in the offset. Field,
   // 5 seeds, along (placement RMS along): 1.0 → 11.5 mm, 0.8 → 11.0, 0.7
   // → 10.8, 0.6 → 11.1, 0.5 → 11.3. Across, where the located centroid is
-  // better, a fraction of 0.6 raised the RMS (9.8 → 10.2 mm). Needs
-  // crop_footprint_at_tracked_plant.
+  // better, less than the whole offset is worse: 0.85 → 9.7 mm against 9.6
+  // (0.6 on both axes, before the along walk was lowered: 9.8 → 10.2 mm).
+  // Needs crop_footprint_at_tracked_plant.
   double own_offset_fraction_across = 1.0;
   double own_offset_fraction_along = 0.7;
   // A blob that passed the size filter but missed every association region
