@@ -86,14 +86,14 @@ struct TreatmentOptions {
   // canopy is located, which adds to the root's planting error the lean of
   // the canopy and, along the rows, a bias of the located centroid that
   // stays with the plant (its height's parallax, leaves hidden behind the
-  // rim). The grid node shares none of these, so the footprint stands at
-  // the node plus this fraction of the plant's own offset (across, along
-  // the rows), the weight of the root's own scatter in the offset. Field,
-  // 5 seeds, along (placement RMS along): 1.0 → 11.5 mm, 0.8 → 11.0, 0.7
-  // → 10.8, 0.6 → 11.1, 0.5 → 11.3. Across, where the located centroid is
-  // better, less than the whole offset is worse: 0.85 → 9.7 mm against 9.6
-  // (0.6 on both axes, before the along walk was lowered: 9.8 → 10.2 mm).
-  // Needs crop_footprint_at_tracked_plant.
+  // rim, neighbours touching it). The grid node shares none of these, so
+  // the footprint stands at the node plus this fraction of the plant's own
+  // offset (across, along the rows), the weight of the root's own scatter
+  // in the offset. Field, 5 seeds, along (placement RMS along): 1.0 → 11.5
+  // mm, 0.8 → 11.0, 0.7 → 10.8, 0.6 → 11.1, 0.5 → 11.3. Across, where the
+  // located centroid is better, less than the whole offset is worse: 0.85
+  // → 9.7 mm against 9.6 (0.6 on both axes, before the along walk was
+  // lowered: 9.8 → 10.2 mm). Needs crop_footprint_at_tracked_plant.
   double own_offset_fraction_across = 1.0;
   double own_offset_fraction_along = 0.7;
   // A blob that passed the size filter but missed every association region
