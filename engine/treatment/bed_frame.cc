@@ -23,6 +23,12 @@ Eigen::Vector2d VehicleToBed(const BedPose& pose, const Eigen::Vector2d& v) {
   return {c * dx - s * dy, pose.distance_m + s * dx + c * dy};
 }
 
+Quad VehicleToBed(const BedPose& pose, const Quad& v) {
+  Quad bed;
+  for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, v[i]);
+  return bed;
+}
+
 Eigen::Vector2d BedToVehicle(const BedPose& pose, const Eigen::Vector2d& b) {
   const double c = std::cos(pose.bearing_rad), s = std::sin(pose.bearing_rad);
   const double gx = b.x();

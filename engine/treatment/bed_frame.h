@@ -36,6 +36,8 @@ Eigen::Vector2d VehicleToBed(const BedPose& pose, const Eigen::Vector2d& vehicle
 Eigen::Vector2d BedToVehicle(const BedPose& pose, const Eigen::Vector2d& bed_m);
 
 using Quad = std::array<Eigen::Vector2d, 4>;
+// The quad's corners, vehicle frame to bed frame.
+Quad VehicleToBed(const BedPose& pose, const Quad& vehicle_m);
 
 // p inside a convex quad of either winding (the boundary counts).
 bool InsideQuad(const Quad& q, const Eigen::Vector2d& p);

@@ -194,11 +194,7 @@ bool TreatmentSystem::SplitMergedBlob(int feature, const vision::Blob& blob,
 }
 
 void TreatmentSystem::AddDoubt(const BedPose& pose, const vision::Blob& b) {
-  const std::optional<Quad> q = BoxOnCropPlane(b);
-  if (!q) return;
-  Quad bed;
-  for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*q)[i]);
-  map_.AddDoubt(bed);
+  if (const std::optional<Quad> q = BoxOnCropPlane(b)) map_.AddDoubt(VehicleToBed(pose, *q));
 }
 
 void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
@@ -260,8 +256,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   const double w = camera_.width(), h = camera_.height();
   std::optional<Quad> seen;  // on the bed
   if (const std::optional<Quad> view = FootprintOnPlane(camera_, {0.5 * w, 0.5 * h}, 0.0, 0.0, w, h, 1.0)) {
-    Quad bed;
-    for (size_t i = 0; i < 4; ++i) bed[i] = VehicleToBed(pose, (*view)[i]);
+    const Quad bed = VehicleToBed(pose, *view);
     map_.MarkObserved(bed);
     seen = bed;
   }

@@ -37,6 +37,11 @@ TEST(BedFrame, RoundTripAndGridPlantsStayPut) {
   const BedPose p = Pose(0.03, 0.05, 2.0);
   const Eigen::Vector2d v(0.4, 1.3);
   EXPECT_NEAR((BedToVehicle(p, VehicleToBed(p, v)) - v).norm(), 0.0, 1e-12);
+  // A quad's corners each as a point.
+  const Quad q{v, Eigen::Vector2d(0.5, 1.3), Eigen::Vector2d(0.5, 1.6), Eigen::Vector2d(0.4, 1.6)};
+  const Quad bed = VehicleToBed(p, q);
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(bed[i], VehicleToBed(p, q[i]));
+  EXPECT_GT((bed[2] - bed[0]).norm(), 0.3);
   // Plant (m, n) of a grid state maps to bed (n r̄, s + m l̄ + Y); after a
   // reference shift (m → m − 1, Y → Y + l̄) the same plant keeps its place.
   geometry::GridState g;
