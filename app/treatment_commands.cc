@@ -41,6 +41,8 @@ struct TreatmentArgs {
   std::optional<double> fill_holes_max_fraction;
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
+  std::optional<double> size_height_sd_mm;
+  std::optional<double> size_edge_loss_mm;
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
@@ -184,6 +186,14 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
+  if (a.size_height_sd_mm || a.size_edge_loss_mm) {
+    o.adjust_tracker = [sd = a.size_height_sd_mm, edge = a.size_edge_loss_mm](
+                           tracking::TrackerOptions& t) {
+      if (sd) t.height_from_size = *sd > 0.0;
+      if (sd && *sd > 0.0) t.size_height_sd_m = *sd * 1e-3;
+      if (edge) t.size_edge_loss_m = *edge * 1e-3;
+    };
+  }
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
   if (a.footprint_at_centroid) o.treatment.crop_footprint_at_tracked_plant = false;
   if (a.footprints_stay) o.treatment.crop_footprint_follows_plant = false;
@@ -327,6 +337,12 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,
                 "blobs cut by the image border that cover a predicted crop vote weed (the old way)");
+  cmd->add_option("--size-height-sd-mm", args.size_height_sd_mm,
+                  "tracker: sd per frame of a plant's centroid height read from its blob's size (0: not read; default 6)")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--size-edge-loss-mm", args.size_edge_loss_mm,
+                  "tracker: the rim a plant's blob loses, for its size (default 30)")
+      ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "map and label merged blobs whole (no split among predicted crops)");
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");

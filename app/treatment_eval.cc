@@ -322,8 +322,9 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
     sim::Simulator simulator(so);
     const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);
-    Chain ours(simulator, options.segmenter, ProductTrackerOptions(so), options.treatment,
-               latency);
+    tracking::TrackerOptions our_tracker = ProductTrackerOptions(so);
+    if (options.adjust_tracker) options.adjust_tracker(our_tracker);
+    Chain ours(simulator, options.segmenter, our_tracker, options.treatment, latency);
     ours.collect_samples = options.mrroc;
     std::optional<Chain> thesis;
     treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so);

@@ -8,6 +8,7 @@
 // 50-pixel size filter and a 95 % gate) runs on the same frames as the
 // baseline. Optionally sweeps the classifier's two parameters into an MRROC.
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "app/treatment_score.h"
 #include "engine/classify/mrroc.h"
 #include "engine/sim/simulator.h"
+#include "engine/tracking/grid_tracker.h"
 #include "engine/treatment/treatment_system.h"
 #include "engine/vision/segmenter.h"
 
@@ -29,6 +31,9 @@ struct TreatmentEvalOptions {
   bool baseline_thesis = false;
   bool mrroc = false;
   double costs_ratio = 1.0;  // Φ for the MRROC operating point
+  // Changes to our tracker's options (ProductTrackerOptions of each run's
+  // simulator), for trying them; none: the product's.
+  std::function<void(tracking::TrackerOptions&)> adjust_tracker;
 
   OptionErrors Validate() const;
 };

@@ -52,11 +52,13 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(e.missed_crops.size(), 2u);
   for (const MissedCrop& c : e.missed_crops) EXPECT_GE(c.nearest_spray_m, 0.0);
   // Issue: |bias| ≤ 3 mm on both axes (thesis 9.7 / −23.1 mm): met,
-  // +0.2 / −0.5 mm.
+  // +1.1 / −0.4 mm.
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
   // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3):
-  // 10.8 mm along (not met), 9.6 mm across (met), with footprints at the
+  // 10.3 mm along (not met), 9.8 mm across (met), with each plant's
+  // centroid height read from its blob's size (10.8 / 9.6 mm without),
+  // footprints at the
   // grid node plus 0.7 of each plant's own offset along and the tracker's
   // offsets walking 6 mm/√m along (11.9 / 9.8 mm before both; 11.5 / 9.7
   // with the walk alone), each plant's footprints following it along to
@@ -68,7 +70,7 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   // 33.6 mm. The plants' lean (10 mm sd of the rim from the root, hidden
   // under the canopy the camera sees) puts about 6 mm along: 10.0 mm with
   // no lean.
-  EXPECT_LE(m.placement_rms_along_m, 0.012);
+  EXPECT_LE(m.placement_rms_along_m, 0.011);
   EXPECT_LE(m.placement_rms_across_m, 0.0105);
   EXPECT_LE(m.centre_rms_across_m, 0.0115);
   // Issue target ≤ 15 % of the bed: met, 6.8 % with 0.30 footprints
@@ -139,6 +141,27 @@ TEST(TreatmentSystem, FootprintsAtPartOfThePlantsOwnOffsetSprayCloserToTheRoot) 
   EXPECT_LT(part.ours.placement_rms_along_m, whole.ours.placement_rms_along_m - 0.001);
   EXPECT_LT(part.ours.placement_rms_across_m, whole.ours.placement_rms_across_m + 0.0005);
   EXPECT_NEAR(part.ours.treated_area_fraction, whole.ours.treated_area_fraction, 0.003);
+}
+
+// A plant's size sets its centroid's height, whose parallax moves its
+// located centroid along the rows as it crosses the view: with each blob's
+// size read as a pseudo-observation of the plant's height
+// (TrackerOptions::height_from_size), the tracker holds it nearer its root.
+// Field, seed 1 (222 crops, all hit either way): along RMS 10.25 mm against
+// 11.10 mm without, across 9.94 against 9.53 mm, 6.65 % of the bed both.
+TEST(TreatmentSystem, HeightsReadFromBlobSizesSprayCloserAlong) {
+  TreatmentEvalOptions o;
+  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
+  o.seeds = 1;
+  o.treatment = OurTreatmentOptions(o.sim);
+  const TreatmentEvaluation sized = EvaluateTreatment(o);
+  o.adjust_tracker = [](tracking::TrackerOptions& t) { t.height_from_size = false; };
+  const TreatmentEvaluation unsized = EvaluateTreatment(o);
+  ASSERT_GT(sized.ours.crop_plants, 200);
+  EXPECT_GE(sized.ours.crop_hit_rate, unsized.ours.crop_hit_rate);
+  EXPECT_LT(sized.ours.placement_rms_along_m, unsized.ours.placement_rms_along_m - 0.0005);
+  EXPECT_LT(sized.ours.placement_rms_across_m, unsized.ours.placement_rms_across_m + 0.0007);
+  EXPECT_NEAR(sized.ours.treated_area_fraction, unsized.ours.treated_area_fraction, 0.003);
 }
 
 // A 3-week crop's scaled box is some ±15 mm, under 2σ of the placement:

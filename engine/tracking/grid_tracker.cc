@@ -34,6 +34,12 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "plant_offset_walk_across_sd_per_sqrt_m", plant_offset_walk_across_sd_per_sqrt_m);
   RequireNonNegative(e, "plant_offset_walk_along_sd_per_sqrt_m", plant_offset_walk_along_sd_per_sqrt_m);
   RequirePositive(e, "plant_height_sd_m", plant_height_sd_m);
+  RequirePositive(e, "size_height_sd_m", size_height_sd_m);
+  RequireInRange(e, "size_ratio_max", size_ratio_max, 1.0, 10.0, false, true);
+  RequireInRange(e, "size_edge_loss_m", size_edge_loss_m, 0.0, 1.0);
+  if (size_bands < 1 || size_bands > 480) e.push_back({"size_bands", "must be in [1, 480]"});
+  if (size_min_samples < 1) e.push_back({"size_min_samples", "must be >= 1"});
+  RequireInRange(e, "size_mean_weight", size_mean_weight, 0.0, 1.0, false, true);
   RequirePositive(e, "feature_sd_m", feature_sd_m);
   RequireNonNegative(e, "crop_radius_m", crop_radius_m);
   RequireNonNegative(e, "crop_height_m", crop_height_m);
@@ -105,7 +111,9 @@ GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptio
       model_(camera, ModelOptions(options)),
       heights_((ThrowIfInvalid("grid tracker", options.Validate()), MakeHeights(camera, options))),
       initialiser_(options.init, options.row_spacing_m, options.plant_spacing_m,
-                   options.rows_each_side, options.track_width_m) {
+                   options.rows_each_side, options.track_width_m),
+      band_radius_m_(static_cast<size_t>(options.size_bands), 0.0),
+      band_samples_(static_cast<size_t>(options.size_bands), 0) {
   Reset();
 }
 
@@ -274,6 +282,12 @@ std::optional<Eigen::Matrix2d> GridTracker::PlantOffsetCovariance(int m, int n) 
   const int offset = OffsetIndex(m, n);
   if (offset < 0) return std::nullopt;
   return Eigen::Matrix2d(p_.block<2, 2>(offset, offset));
+}
+
+std::optional<double> GridTracker::PlantHeightOffset(int m, int n) const {
+  const int offset = OffsetIndex(m, n);
+  if (offset < 0 || PlantStates() < 3) return std::nullopt;
+  return x_(offset + 2);
 }
 
 Eigen::Vector3d GridTracker::BouncePrior() const {
@@ -704,8 +718,67 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     x_.conservativeResize(persistent);
     p_.conservativeResize(persistent, persistent);
   }
+  if (options_.HeightFromSize()) {
+    std::vector<SizeMatch> sized;
+    for (const Candidate& c : matches) {
+      const auto& g = in_view[static_cast<size_t>(c.plant)];
+      if (!skipped_[static_cast<size_t>(c.feature)]) sized.push_back({g.m, g.n, c.feature});
+    }
+    ObserveHeightsFromSize(features, sized);
+  }
   report.updated = true;
   last_update_utime_ = utime_;
+}
+
+void GridTracker::ObserveHeightsFromSize(std::span<const Feature> features,
+                                         std::span<const SizeMatch> matches) {
+  const int bands = options_.size_bands;
+  const auto band_of = [&](const Feature& f) {
+    const int b = static_cast<int>(f.image_px.y() * bands / std::max(1, camera_.height()));
+    return static_cast<size_t>(std::clamp(b, 0, bands - 1));
+  };
+  const double sd = options_.size_height_sd_m;
+  PseudoObservation z{Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(matches.size()), x_.size()),
+                      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(matches.size())),
+                      {}};
+  Eigen::Index rows = 0;
+  for (const SizeMatch& s : matches) {
+    const Feature& f = features[static_cast<size_t>(s.feature)];
+    const int offset = OffsetIndex(s.m, s.n);
+    const size_t b = band_of(f);
+    if (offset < 0 || f.clipped || !(f.area_m2 > 0.0) ||
+        band_samples_[b] < options_.size_min_samples) {
+      continue;
+    }
+    const double ratio = (std::sqrt(f.area_m2 / std::numbers::pi) + options_.size_edge_loss_m) /
+                         (band_radius_m_[b] + options_.size_edge_loss_m);
+    if (!(ratio <= options_.size_ratio_max && ratio * options_.size_ratio_max >= 1.0)) continue;
+    const double dh = heights_->HeightAt(f.image_px) * (ratio - 1.0);
+    const int h = offset + 2;
+    z.factor(rows, h) = 1.0 / sd;
+    z.residual(rows) = (dh - x_(h)) / sd;
+    z.support.push_back(h);
+    ++rows;
+  }
+  if (rows > 0) {
+    z.factor.conservativeResize(rows, Eigen::NoChange);
+    z.residual.conservativeResize(rows);
+    std::sort(z.support.begin(), z.support.end());
+    Apply(z);
+  }
+  // The bands' means after this frame's observations, so that no blob is
+  // compared with a mean it is part of.
+  for (const SizeMatch& s : matches) {
+    const Feature& f = features[static_cast<size_t>(s.feature)];
+    if (f.clipped || !(f.area_m2 > 0.0)) continue;
+    const size_t b = band_of(f);
+    const double rho = std::sqrt(f.area_m2 / std::numbers::pi);
+    int& n = band_samples_[b];
+    // The plain mean until the EMA's weight takes over.
+    const double w = std::max(options_.size_mean_weight, 1.0 / (n + 1));
+    band_radius_m_[b] += w * (rho - band_radius_m_[b]);
+    ++n;
+  }
 }
 
 double GridTracker::Apply(const PseudoObservation& z) {

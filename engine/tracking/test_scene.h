@@ -21,6 +21,10 @@ struct TestScene {
   double plant_offset_sd_m = 0.01;
   double noise_sd_m = 0.004;
   int weeds_per_frame = 0;
+  double plant_area_m2 = 0.03;
+  // One plant (absolute line, row) whose blob has this area instead (0: none).
+  int big_line = 0, big_row = 0;
+  double big_area_m2 = 0.0;
   std::mt19937 rng{7};
   int lines_passed = 0;
 
@@ -41,7 +45,9 @@ struct TestScene {
       const auto uv = camera.Project({f.ground_m.x(), f.ground_m.y(), 0.0});
       if (!uv || !camera.InImage(*uv, 2.0)) continue;
       f.image_px = *uv;
-      f.area_m2 = 0.03;
+      f.area_m2 = big_area_m2 > 0.0 && g.m + lines_passed == big_line && g.n == big_row
+                      ? big_area_m2
+                      : plant_area_m2;
       out.push_back(f);
     }
     std::uniform_real_distribution<double> x(-0.8, 0.8);

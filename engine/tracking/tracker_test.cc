@@ -5,6 +5,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -438,6 +440,49 @@ TEST(GridTracker, ABlobHoldingTwoPlantsPredictionsIsNotAssociated) {
     ASSERT_TRUE(r.updated) << r.skipped_reason;
     EXPECT_EQ(Associated(r, j), !skip) << "skip " << skip;
     EXPECT_TRUE(Associated(r, k));
+  }
+}
+
+TEST(GridTracker, ABiggerBlobRaisesItsPlantsCentroidHeight) {
+  // One plant's blob is 1.2 times the crop's size (with the edge the blob
+  // loses, e): its centroid stands at 1.2·h_l, δh = 0.2·h_l, some 10–18 mm.
+  // The scene puts every centroid where δh = 0 would, so its positions pull
+  // the other way; the size observation must still raise it, and leave the
+  // plants of the crop's mean size near 0.
+  constexpr int kLine = 8;  // enters the view once every band has its mean
+  for (const bool from_size : {true, false}) {
+    TrackerOptions o;
+    o.crop_radius_m = 0.14;
+    o.crop_height_m = 0.112;
+    o.height_from_size = from_size;
+    Drive run(o);
+    const double rho = std::sqrt(run.scene.plant_area_m2 / std::numbers::pi);
+    const double big_rho = 1.2 * (rho + o.size_edge_loss_m) - o.size_edge_loss_m;
+    run.scene.big_line = kLine;
+    run.scene.big_area_m2 = std::numbers::pi * big_rho * big_rho;
+    run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
+    run.Frames(45);
+    ASSERT_EQ(run.tracker.mode(), TrackerMode::kTracking);
+    const int m = kLine - run.tracker.lines_passed();
+    const std::optional<double> big = run.tracker.PlantHeightOffset(m, 0);
+    ASSERT_TRUE(big.has_value()) << "line " << m << " has no states";
+    std::vector<double> others;
+    for (int k = -2; k <= 8; ++k) {
+      for (int n = -1; n <= 1; ++n) {
+        if (k == m && n == 0) continue;
+        if (const auto h = run.tracker.PlantHeightOffset(k, n)) others.push_back(std::abs(*h));
+      }
+    }
+    ASSERT_GE(others.size(), 6u);
+    std::nth_element(others.begin(), others.begin() + others.size() / 2, others.end());
+    const double median = others[others.size() / 2];
+    if (from_size) {
+      EXPECT_GT(*big, 0.006) << "median |δh| of the others " << median;
+      EXPECT_LT(*big, 0.02);
+      EXPECT_LT(median, 0.003);
+    } else {
+      EXPECT_LT(std::abs(*big), 0.004);  // its positions alone say 0
+    }
   }
 }
 
