@@ -113,8 +113,9 @@ struct TrackerOptions {
   // [1/size_ratio_max, size_ratio_max] are merged or cut and say nothing
   // of the plant's size. Needs PlantHeightStates() and the crop's radius.
   // Field, 5 seeds, spray placement RMS along: off 10.84 mm; e 0.011 →
-  // 10.63, 0.03 → 10.33, 0.04 → 10.64, 0.06 → 10.60 (σ 6 mm); σ 4 mm,
-  // e 0.03 → 10.36. 10 seeds: 11.25 → 10.53 mm, bias −0.9 → +0.1 mm.
+  // 10.63, 0.025 → 10.60, 0.03 → 10.33, 0.035 → 10.35, 0.04 → 10.64, 0.06
+  // → 10.60 (σ 6 mm); σ 4 / 8 mm, e 0.03 → 10.36 / 10.36. 10 seeds: 11.25
+  // → 10.53 mm, bias −0.9 → +0.1 mm.
   // With each plant's true radius instead (an oracle), σ 2 / 6 / 12 mm:
   // 10.63 / 10.22 / 10.32 mm: the size is not the whole of it.
   bool height_from_size = true;
