@@ -719,10 +719,11 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     p_.conservativeResize(persistent, persistent);
   }
   if (options_.HeightFromSize()) {
+    // The matches hold no merged or weed-sized blob (skipped_ above).
     std::vector<SizeMatch> sized;
     for (const Candidate& c : matches) {
       const auto& g = in_view[static_cast<size_t>(c.plant)];
-      if (!skipped_[static_cast<size_t>(c.feature)]) sized.push_back({g.m, g.n, c.feature});
+      sized.push_back({g.m, g.n, c.feature});
     }
     ObserveHeightsFromSize(features, sized);
   }
