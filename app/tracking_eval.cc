@@ -229,6 +229,7 @@ tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
   tracking::TrackerOptions o;
   o.estimate_spacing = false;
   o.estimate_odometry_scale = false;
+  o.slip_guard.enabled = false;
   o.plant_offsets = false;
   o.model_bounce = false;
   o.skip_merged_features = false;  // every feature in the gate (§6.2)

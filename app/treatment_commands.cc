@@ -43,6 +43,8 @@ struct TreatmentArgs {
   std::optional<double> hull_gain;
   std::optional<double> size_height_sd_mm;
   std::optional<double> size_edge_loss_mm;
+  std::optional<double> forward_sd_mm;
+  bool no_slip_guard = false;
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
@@ -186,12 +188,15 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
-  if (a.size_height_sd_mm || a.size_edge_loss_mm) {
-    o.adjust_tracker = [sd = a.size_height_sd_mm, edge = a.size_edge_loss_mm](
-                           tracking::TrackerOptions& t) {
-      if (sd) t.height_from_size = *sd > 0.0;
-      if (sd && *sd > 0.0) t.size_height_sd_m = *sd * 1e-3;
-      if (edge) t.size_edge_loss_m = *edge * 1e-3;
+  if (a.size_height_sd_mm || a.size_edge_loss_mm || a.forward_sd_mm || a.no_slip_guard) {
+    o.adjust_tracker = [a](tracking::TrackerOptions& t) {
+      if (const auto& sd = a.size_height_sd_mm) {
+        t.height_from_size = *sd > 0.0;
+        if (*sd > 0.0) t.size_height_sd_m = *sd * 1e-3;
+      }
+      if (a.size_edge_loss_mm) t.size_edge_loss_m = *a.size_edge_loss_mm * 1e-3;
+      if (a.no_slip_guard) t.slip_guard.enabled = false;
+      if (a.forward_sd_mm) t.forward_sd_per_sqrt_m = *a.forward_sd_mm * 1e-3;
     };
   }
   if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
@@ -342,6 +347,11 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_option("--size-edge-loss-mm", args.size_edge_loss_mm,
                   "tracker: the rim a plant's blob loses, for its size (default 30)")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_flag("--no-slip-guard", args.no_slip_guard,
+                "tracker: take the wheels' speeds as they come (no wheel spin or lock read from jumps)");
+  cmd->add_option("--forward-sd-mm", args.forward_sd_mm,
+                  "tracker: forward process noise, mm per square-root metre driven (default 10)")
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "map and label merged blobs whole (no split among predicted crops)");

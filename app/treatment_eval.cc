@@ -62,10 +62,11 @@ struct Chain {
 
   void Odometry(const sim::OdometrySample& o) {
     const bool ok = tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s).accepted;
-    const treatment::TickResult r =
-        system.OnPose(o.utime, tracker, 0.5 * (o.left_m_s + o.right_m_s), ok);
-    ++ticks;
-    if (r.fail_reasons) ++ticks_fail_safe;
+    for (const treatment::TickResult& r :
+         system.OnPose(o.utime, tracker, ok)) {
+      ++ticks;
+      if (r.fail_reasons) ++ticks_fail_safe;
+    }
   }
 
   void Frame(const sim::SimFrame& frame, const geometry::CameraModel& camera, const cv::Mat& roi) {

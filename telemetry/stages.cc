@@ -3,6 +3,7 @@
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
@@ -215,9 +216,7 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
   const double speed = 0.5 * (o.left_m_s + o.right_m_s);
   const bool odometry_ok = std::isfinite(speed) && std::abs(speed) <=
                                                        tracker.options().max_wheel_speed_m_s;
-  treatment::BedPose pose = treatment::BedPoseFromGrid(
-      o.utime, tracker.state(), tracker.forward_distance_m(), odometry_ok ? speed : 0.0);
-  pose.distance_m -= pose.speed_m_s * 1e-6 * static_cast<double>(tracker.utime() - o.utime);
+  const treatment::BedPose pose = treatment::TrackerPose(tracker, o.utime, odometry_ok);
   treatment::SafetyInputs safety;
   safety.pose_utime = std::min(tracker.utime(), o.utime);
   safety.last_frame_utime = system_.last_frame_utime();
@@ -229,8 +228,17 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
     system_.set_mode(mode == plantscale_command_t::MODE_SPRAY_WEED ? treatment::SprayMode::kWeed
                                                                    : treatment::SprayMode::kCrop);
   }
-  last_tick_ = system_.Tick(o.utime, pose, safety);
-  status.failsafe = last_tick_.fail_reasons != 0;
+  // The scheduler's ticks until the next pose, each led from this one.
+  const treatment::SchedulerOptions& scheduler = system_.options().scheduler;
+  const int64_t tick_us = std::llround(scheduler.tick_s * 1e6);
+  bool failsafe = false;
+  for (int k = 0; k < scheduler.TicksPerPose(); ++k) {
+    const int64_t utime = o.utime + k * tick_us;
+    last_tick_ = system_.Tick(utime, pose, safety);
+    failsafe |= last_tick_.fail_reasons != 0;
+    RecordShots(utime);
+  }
+  status.failsafe = failsafe;
   // The tracker reports its own loss; before the first frame the bar is
   // closed by design, not by a fault.
   if (safety.last_frame_utime >= 0) {
@@ -240,6 +248,9 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
       }
     }
   }
+}
+
+void TreatmentStage::RecordShots(int64_t utime) {
   std::vector<Eigen::Vector2d> centre(open_since_.size(), Eigen::Vector2d::Zero());
   for (const treatment::NozzleTarget& t : last_tick_.opened) {
     centre[static_cast<size_t>(t.nozzle)] = {0.5 * (t.x0 + t.x1), 0.5 * (t.y0 + t.y1)};
@@ -247,11 +258,11 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
   for (size_t i = 0; i < open_since_.size(); ++i) {
     const bool open = (last_tick_.open_mask >> i) & 1u;
     if (open) {
-      if (open_since_[i] < 0) open_since_[i] = o.utime, open_sum_[i].setZero(), open_ticks_[i] = 0;
+      if (open_since_[i] < 0) open_since_[i] = utime, open_sum_[i].setZero(), open_ticks_[i] = 0;
       open_sum_[i] += centre[i];
       ++open_ticks_[i];
     } else if (open_since_[i] >= 0) {
-      shots_.push_back({static_cast<int>(i), open_since_[i], o.utime,
+      shots_.push_back({static_cast<int>(i), open_since_[i], utime,
                         open_sum_[i] / std::max(1, open_ticks_[i]), -1});
       open_since_[i] = -1;
     }

@@ -123,6 +123,8 @@ class TreatmentStage : public Stage {
 
  private:
   void Tick(const sim::OdometrySample& o, RunStatus& status);
+  // The last tick's opened and closed nozzles into the shots.
+  void RecordShots(int64_t utime);
   void PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
                      Publisher& publisher);
   void PublishNozzles(int64_t utime, Publisher& publisher);

@@ -43,8 +43,9 @@ expect 2 "--can: only with --publish" -- "$plantscale" simulate --preset testbed
 
 # The whole vehicle path with the bar played in process over a socketpair
 # (same codec and SprayBar as on SocketCAN): the treatment scheduler drives
-# the bar at every 50 Hz odometry tick, two command frames per tick (the
-# 64-nozzle bar has two sections), four ticks per 12.5 Hz frame; every
+# the bar at 200 Hz (four ticks per 50 Hz odometry sample), two command
+# frames per tick (the 64-nozzle bar has two sections), sixteen ticks per
+# 12.5 Hz frame; every
 # command but those of the last frame is acknowledged, heartbeats arrive,
 # nothing is malformed, the bar opened nozzles, and it is out of fail-safe
 # at the end.
@@ -61,9 +62,9 @@ frames=$(grep -oE "[0-9]+ frames \(" <<<"$out" | grep -oE "^[0-9]+")
 if [[ -z "${commands:-}" || -z "${frames:-}" || -z "${received:-}" ]]; then
   fail "no spray bar summary in: $out"
 else
-  [[ $((commands % 2)) -eq 0 && $commands -ge $((8 * (frames - 1))) && $commands -le $((8 * (frames + 1))) ]] ||
-    fail "spray bar: $commands commands for $frames frames (expected 8 per frame)"
-  [[ $acks -le $commands && $acks -ge $((commands - 16)) ]] || fail "spray bar: $acks acks for $commands commands"
+  [[ $((commands % 2)) -eq 0 && $commands -ge $((32 * (frames - 1))) && $commands -le $((32 * (frames + 1))) ]] ||
+    fail "spray bar: $commands commands for $frames frames (expected 32 per frame)"
+  [[ $acks -le $commands && $acks -ge $((commands - 64)) ]] || fail "spray bar: $acks acks for $commands commands"
   [[ $heartbeats -ge $((frames - 1)) ]] || fail "spray bar: $heartbeats heartbeats over $frames frames"
   [[ $rejected -eq 0 && $gaps -eq 0 ]] || fail "spray bar: $rejected rejected, $gaps gaps"
   grep -q "fail-safe" <<<"$line" && fail "spray bar fail-safe at the end: $line"

@@ -70,6 +70,7 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "lost_offset_sd_m", lost_offset_sd_m);
   RequirePositive(e, "max_coast_s", max_coast_s);
   for (auto& error : init.Validate()) e.push_back({"init." + error.key, error.reason});
+  for (auto& error : slip_guard.Validate()) e.push_back({"slip_guard." + error.key, error.reason});
   return e;
 }
 
@@ -113,7 +114,8 @@ GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptio
       initialiser_(options.init, options.row_spacing_m, options.plant_spacing_m,
                    options.rows_each_side, options.track_width_m),
       band_radius_m_(static_cast<size_t>(options.size_bands), 0.0),
-      band_samples_(static_cast<size_t>(options.size_bands), 0) {
+      band_samples_(static_cast<size_t>(options.size_bands), 0),
+      slip_guard_(options.slip_guard) {
   Reset();
 }
 
@@ -209,8 +211,9 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
   if (utime_ < 0) {
     utime_ = utime;
     if (problem.empty()) {
-      left_m_s_ = left_m_s;
-      right_m_s_ = right_m_s;
+      const WheelSpeeds w = slip_guard_.Filter({left_m_s, right_m_s}, 0.0);
+      left_m_s_ = w.left_m_s;
+      right_m_s_ = w.right_m_s;
       have_speeds_ = true;
     }
     return problem.empty() ? status : InputStatus{false, "odometry refused: " + problem};
@@ -240,10 +243,11 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
     }
     return {false, "odometry refused: " + problem + "; bridged by dead reckoning"};
   }
-  left_m_s_ = left_m_s;
-  right_m_s_ = right_m_s;
+  const WheelSpeeds w = slip_guard_.Filter({left_m_s, right_m_s}, dt);
+  left_m_s_ = w.left_m_s;
+  right_m_s_ = w.right_m_s;
   have_speeds_ = true;
-  const WheelIncrement u{left_m_s * dt, right_m_s * dt};
+  const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
   Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
           options_.wheel_sd_fraction * std::abs(u.right_m), dt);
   utime_ = utime;

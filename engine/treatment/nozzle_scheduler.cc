@@ -41,7 +41,13 @@ OptionErrors SchedulerOptions::Validate() const {
   OptionErrors e = Prefixed("bar", bar.Validate());
   for (OptionError& x : Prefixed("fail_safe", fail_safe.Validate())) e.push_back(x);
   RequireInRange(e, "tick_s", tick_s, 0.001, 1.0);
+  RequireInRange(e, "pose_period_s", pose_period_s, 0.001, 1.0);
+  if (tick_s > pose_period_s) e.push_back({"tick_s", "must be at most pose_period_s"});
   return e;
+}
+
+int SchedulerOptions::TicksPerPose() const {
+  return std::max(1, static_cast<int>(std::lround(pose_period_s / tick_s)));
 }
 
 namespace {
@@ -97,12 +103,14 @@ NozzleScheduler::NozzleScheduler(const SchedulerOptions& options, NozzleSink sin
   ThrowIfInvalid("nozzle scheduler", options_.Validate());
 }
 
-NozzleTarget NozzleScheduler::Target(int i, const BedPose& pose) const {
+NozzleTarget NozzleScheduler::Target(int i, const BedPose& pose, int64_t now) const {
   const SprayBarOptions& bar = options_.bar;
-  // Where the nozzle will be when the valve has opened: led by the latency
-  // at the forward speed (the vehicle frame moves along its own y).
+  // Where the nozzle will be when the valve has opened: led by the time
+  // since the pose and the latency at the forward speed (the vehicle frame
+  // moves along its own y).
+  const double since_pose_s = std::max<int64_t>(0, now - pose.utime) * 1e-6;
   Eigen::Vector2d v = bar.Nozzle(i);
-  v.y() += pose.speed_m_s * bar.valve_latency_s;
+  v.y() += pose.speed_m_s * (since_pose_s + bar.valve_latency_s);
   const Eigen::Vector2d start = VehicleToBed(pose, v);
   const double travel = pose.speed_m_s * options_.tick_s;
   NozzleTarget t;
@@ -123,7 +131,7 @@ TickResult NozzleScheduler::Tick(int64_t now, const BedPose& pose, const Treatme
     const CellClass treated =
         options_.mode == SprayMode::kCrop ? CellClass::kCrop : CellClass::kWeed;
     for (int i = 0; i < options_.bar.nozzles; ++i) {
-      const NozzleTarget t = Target(i, pose);
+      const NozzleTarget t = Target(i, pose, now);
       if (!map.AnyIn(t.x0, t.x1, t.y0, t.y1, treated)) continue;
       r.open_mask |= uint64_t{1} << i;
       r.opened.push_back(t);

@@ -47,9 +47,20 @@ struct SchedulerOptions {
   SprayBarOptions bar;
   SprayMode mode = SprayMode::kCrop;
   FailSafeOptions fail_safe;
-  double tick_s = 0.02;  // the 50 Hz pose rate
+  // The command period. A nozzle opens and closes on ticks only, so each
+  // end of its spray falls anywhere within one tick's travel of the map's
+  // edge: at 50 Hz and 0.7 m/s that is 14 mm, and the sprayed patch's
+  // centre moves by sd 2.9 mm. Commands run at 200 Hz (3.5 mm, sd 0.7 mm),
+  // four per 50 Hz pose, each led from the pose by the time since it.
+  // Field, 5 seeds, placement RMS along: 50 Hz 10.33 mm, 200 Hz 10.02 mm.
+  // On the CAN bus, 64 nozzles at 200 Hz are 400 commands and 400
+  // acknowledgements a second, about 42 % of a 250 kbit/s bus.
+  double tick_s = 0.005;
+  double pose_period_s = 0.02;  // the 50 Hz pose each group of ticks starts from
 
   OptionErrors Validate() const;
+  // Ticks per pose: pose_period_s / tick_s, at least 1.
+  int TicksPerPose() const;
 };
 
 // What the vehicle knows about its own health at a tick.
@@ -99,9 +110,10 @@ class NozzleScheduler {
 
   TickResult Tick(int64_t now_utime, const BedPose& pose, const TreatmentMap& map,
                   const SafetyInputs& safety);
-  // The bed strip nozzle i covers during the tick starting at the pose's time
-  // plus the valve latency.
-  NozzleTarget Target(int i, const BedPose& pose) const;
+  // The bed strip nozzle i covers during the tick starting at `now_utime`
+  // plus the valve latency: the pose is dead-reckoned forward to then at
+  // its speed (a tick later than its pose leads by the time since it).
+  NozzleTarget Target(int i, const BedPose& pose, int64_t now_utime) const;
 
   const SchedulerOptions& options() const { return options_; }
   void set_sink(NozzleSink sink) { sink_ = std::move(sink); }

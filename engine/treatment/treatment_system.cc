@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 #include <algorithm>
+#include <cmath>
 
 namespace plantscale::treatment {
 
@@ -365,19 +366,31 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   return frame_;
 }
 
-TickResult TreatmentSystem::OnPose(int64_t utime, const tracking::GridTracker& tracker,
-                                   double speed_m_s, bool odometry_ok, bool camera_ok) {
+BedPose TrackerPose(const tracking::GridTracker& tracker, int64_t utime, bool speed_known) {
+  // The wheels' speed past the slip guard, corrected by the scale the
+  // tracker has learnt: the latency lead and the tick's strip are ground
+  // distances.
+  BedPose pose = BedPoseFromGrid(utime, tracker.state(), tracker.forward_distance_m(),
+                                 speed_known ? tracker.ground_speed_m_s() : 0.0);
+  pose.distance_m -= pose.speed_m_s * 1e-6 * static_cast<double>(tracker.utime() - utime);
+  return pose;
+}
+
+std::span<const TickResult> TreatmentSystem::OnPose(int64_t utime,
+                                                    const tracking::GridTracker& tracker,
+                                                    bool odometry_ok, bool camera_ok) {
   SafetyInputs safety;
   safety.pose_utime = tracker.utime();
   safety.last_frame_utime = last_frame_utime_;
   safety.camera_ok = camera_ok;
   safety.odometry_valid = odometry_ok;
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
-  // The wheels' speed corrected by the scale the tracker has learnt: the
-  // latency lead and the tick's strip are ground distances.
-  const BedPose pose = BedPoseFromGrid(tracker.utime(), tracker.state(), tracker.forward_distance_m(),
-                                       speed_m_s * tracker.odometry_scale());
-  return Tick(utime, pose, safety);
+  const BedPose pose = TrackerPose(tracker, tracker.utime(), true);
+  const SchedulerOptions& o = scheduler_.options();
+  const int64_t tick_us = std::llround(o.tick_s * 1e6);
+  pose_ticks_.clear();
+  for (int k = 0; k < o.TicksPerPose(); ++k) pose_ticks_.push_back(Tick(utime + k * tick_us, pose, safety));
+  return pose_ticks_;
 }
 
 TickResult TreatmentSystem::Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety) {

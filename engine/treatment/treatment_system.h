@@ -165,6 +165,11 @@ struct FrameTreatment {
   std::vector<SplitBlob> split;                   // blobs split (TreatmentOptions::split_merged)
 };
 
+// The bed pose at `utime` from the tracker's latest state, dead-reckoned
+// from the tracker's time at its ground speed (the wheels past the slip
+// guard, times the learnt scale); speed 0 when the odometry is not known.
+BedPose TrackerPose(const tracking::GridTracker& tracker, int64_t utime, bool speed_known);
+
 class TreatmentSystem {
  public:
   // Throws InvalidOptionsError.
@@ -181,9 +186,11 @@ class TreatmentSystem {
                                 std::span<const tracking::Feature> features,
                                 std::span<const int> blob_of_feature,
                                 const cv::Mat& mask = cv::Mat());
-  // A pose tick (after the tracker took the odometry sample at utime).
-  TickResult OnPose(int64_t utime, const tracking::GridTracker& tracker, double speed_m_s,
-                    bool odometry_ok, bool camera_ok = true);
+  // A pose (after the tracker took the odometry sample at utime): the
+  // scheduler's ticks until the next pose (SchedulerOptions::TicksPerPose,
+  // at utime, utime + tick_s, ...), each led from this pose.
+  std::span<const TickResult> OnPose(int64_t utime, const tracking::GridTracker& tracker,
+                                     bool odometry_ok, bool camera_ok = true);
   // The same with the pose and health given (a runner that ticks after the
   // tracker has moved on dead-reckons the pose back to the tick).
   TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
@@ -254,6 +261,7 @@ class TreatmentSystem {
   geometry::CameraModel camera_;
   const geometry::CentroidHeights* heights_ = nullptr;  // the tracker's, set each frame
   std::vector<int> newly_sprayed_;
+  std::vector<TickResult> pose_ticks_;  // OnPose's
   TreatmentOptions options_;
   classify::CropClassifier classifier_;
   TreatmentMap map_;

@@ -243,8 +243,9 @@ TEST(NozzleScheduler, OpensAheadByTheLatencyOverCropCells) {
   NozzleScheduler scheduler(Bar(), [&](int64_t, uint64_t m) { masks.push_back(m); });
   EXPECT_NEAR(scheduler.options().bar.Nozzle(6).x(), 0.125, 1e-12);
   const double speed = 0.5;
+  const double travel = speed * scheduler.options().tick_s;  // 2.5 mm a tick at 200 Hz
   // The nozzle is at bed y = s − 0.5; at the latency it will be 25 mm further.
-  // Open when [s − 0.5 + 0.025, + 10 mm] holds a crop cell centre (0.98..1.02).
+  // Open when [s − 0.5 + 0.025, + travel] holds a crop cell centre (0.98..1.02).
   int first_open = -1;
   for (int k = 0; k < 200; ++k) {
     const double s = 1.3 + k * 0.001;
@@ -256,8 +257,10 @@ TEST(NozzleScheduler, OpensAheadByTheLatencyOverCropCells) {
       EXPECT_EQ(r.opened[0].nozzle, 6);
     }
   }
-  // The strip [s − 0.475, s − 0.465] first reaches the lowest crop cell
-  // centre at or above 0.98 (within one 1 mm step of s).
+  // The strip [s − 0.475, s − 0.475 + travel], narrower than a cell, holds
+  // the cell its middle is in: the nozzle opens as that middle enters the
+  // lowest crop cell, the one whose centre is the first at or above 0.98
+  // (within one 1 mm step of s).
   int column = 0, row = 0;
   ASSERT_TRUE(map.CellOf({0.125, 0.98 + 0.5 * mo.cell_m}, column, row));
   const double lowest = map.CellCentre(column, row).y();
@@ -265,8 +268,38 @@ TEST(NozzleScheduler, OpensAheadByTheLatencyOverCropCells) {
   ASSERT_EQ(map.ClassOf(column, row - 1), CellClass::kSoil);
   ASSERT_GE(first_open, 0);
   const double s_open = 1.3 + first_open * 0.001;
-  EXPECT_NEAR(s_open - 0.465, lowest, 0.0011);
+  EXPECT_NEAR(s_open - 0.475 + 0.5 * travel, lowest - 0.5 * mo.cell_m, 0.0011);
   EXPECT_EQ(masks.size(), 200u);
+}
+
+TEST(NozzleScheduler, ATickAfterItsPoseLeadsByTheTimeSinceIt) {
+  NozzleScheduler scheduler(Bar());
+  BedPose pose = Pose(0.0, 0.0, 1.0, 0.7);
+  pose.utime = 1'000'000;
+  const double travel = 0.7 * scheduler.options().tick_s;
+  const NozzleTarget at_pose = scheduler.Target(6, pose, pose.utime);
+  // Nozzle at bed y 0.5, led by the 50 ms latency: 0.535.
+  EXPECT_NEAR(at_pose.y0, 0.535, 1e-9);
+  EXPECT_NEAR(at_pose.y1, 0.535 + travel, 1e-9);
+  // The pose's third tick, 10 ms on: 7 mm further, and the ticks of one
+  // pose tile the ground it drives over.
+  const NozzleTarget later = scheduler.Target(6, pose, pose.utime + 10'000);
+  EXPECT_NEAR(later.y0, 0.542, 1e-9);
+  EXPECT_NEAR(scheduler.Target(6, pose, pose.utime + 5'000).y1, later.y0, 1e-9);
+  // A tick before its pose (a runner dead-reckoning back) is not led back.
+  EXPECT_NEAR(scheduler.Target(6, pose, pose.utime - 5'000).y0, 0.535, 1e-9);
+}
+
+TEST(NozzleScheduler, CommandsRunFourTimesPerPose) {
+  SchedulerOptions o;
+  EXPECT_EQ(o.TicksPerPose(), 4);
+  o.tick_s = 0.02;
+  EXPECT_EQ(o.TicksPerPose(), 1);
+  EXPECT_TRUE(o.Validate().empty());
+  o.tick_s = 0.03;  // slower than the pose: each pose would skip ground
+  const OptionErrors e = o.Validate();
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].key, "tick_s");
 }
 
 TEST(NozzleScheduler, FailSafeClosesEveryNozzleAndSaysWhy) {
