@@ -22,6 +22,7 @@ struct TreatmentArgs {
   std::string baseline;
   std::optional<double> latency_ms;
   std::optional<double> true_latency_ms;
+  std::optional<double> tick_ms;
   std::optional<double> footprint_scale;
   std::optional<double> weed_footprint_scale;
   std::optional<double> footprint_min_half_mm;
@@ -166,6 +167,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   treatment::ParseSprayMode(a.mode, o.treatment.scheduler.mode);
   if (a.latency_ms) o.treatment.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
+  if (a.tick_ms) o.treatment.scheduler.tick_s = *a.tick_ms / 1000.0;
   if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
   if (a.weed_footprint_scale) o.treatment.weed_footprint_scale = *a.weed_footprint_scale;
   if (a.footprint_min_half_mm) o.treatment.crop_footprint_min_half_m = 1e-3 * *a.footprint_min_half_mm;
@@ -262,6 +264,9 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--true-latency-ms", args.true_latency_ms,
                   "the simulated valves' latency (default: as scheduled)")
       ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--tick-ms", args.tick_ms,
+                  "spray bar command period, at most the 20 ms pose period (default 5: 200 Hz)")
+      ->check(CLI::Range(1.0, 20.0));
   cmd->add_option("--footprint-scale", args.footprint_scale,
                   "crop footprint: bounding box scaled about the centroid (1: thesis)")
       ->check(CLI::Range(0.05, 2.0));

@@ -78,7 +78,9 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
   // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3):
-  // 10.3 mm along (not met), 9.8 mm across (met), with each plant's
+  // met, 9.62 mm along and 9.89 mm across, with the bar commanded at
+  // 200 Hz and the tracker's slip guard (10.3 / 9.8 mm at 50 Hz without
+  // it), each plant's
   // centroid height read from its blob's size (10.8 / 9.6 mm without),
   // footprints at the
   // grid node plus 0.7 of each plant's own offset along and the tracker's
@@ -92,7 +94,7 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   // 33.6 mm. The plants' lean (10 mm sd of the rim from the root, hidden
   // under the canopy the camera sees) puts about 6 mm along: 10.0 mm with
   // no lean.
-  EXPECT_LE(m.placement_rms_along_m, 0.011);
+  EXPECT_LE(m.placement_rms_along_m, 0.010);
   EXPECT_LE(m.placement_rms_across_m, 0.0105);
   EXPECT_LE(m.centre_rms_across_m, 0.0115);
   // Issue target ≤ 15 % of the bed: met, 6.8 % with 0.30 footprints
@@ -105,9 +107,10 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   // centroid); weeds under a crop's leaves share its spray (12.1 % of all
   // weeds hit with 0.30 footprints, 18.5 % with 0.40; 12.2 % now; issue
   // target 0.5 % not met: 36 % of the weeds stand under a crop's leaves;
-  // 12.35 % with footprints at 0.7 of the plant's own offset along).
+  // 12.35 % with footprints at 0.7 of the plant's own offset along; 12.9 %
+  // with the bar at 200 Hz and the slip guard).
   EXPECT_LE(m.weed_hit_rate_clear, 0.005);
-  EXPECT_LE(m.weed_hit_rate, 0.13);
+  EXPECT_LE(m.weed_hit_rate, 0.135);
   // Crop pixels labelled crop 96.9 %: issue target 95 % met on the field
   // (96.7 % before leaf fragments, 93.6 % before the plants beyond the
   // view's border were predicted, 91.5 % before the hull growth, 85.0 %
@@ -172,6 +175,29 @@ TEST(TreatmentSystem, HeightsReadFromBlobSizesSprayCloserAlong) {
     o.adjust_tracker = [](tracking::TrackerOptions& t) { t.height_from_size = false; };
   });
   ExpectCloserAlongOnTheSameBed(sized, unsized, 0.0005, 0.0007);
+}
+
+// A nozzle opens and closes on ticks only: at 50 Hz each end of a spray
+// falls anywhere within 14 mm of travel, at 200 Hz within 3.5 mm. Field,
+// seed 1 (222 crops, all hit either way): along RMS 9.59 mm at 200 Hz
+// against 9.88 mm at 50 Hz, across 10.05 against 9.95 mm.
+TEST(TreatmentSystem, CommandsAt200HzSprayCloserAlong) {
+  const auto [fast, slow] = OneSeedAndChanged(
+      "field", [](treatment::TreatmentOptions& t) { t.scheduler.tick_s = 0.02; });
+  EXPECT_EQ(fast.ours.ticks, 4 * slow.ours.ticks);
+  ExpectCloserAlongOnTheSameBed(fast, slow, 0.00015, 0.0005);
+}
+
+// A wheel spinning 15 % long runs the dead-reckoned grid ahead of the
+// plants between frames, and the nozzles fire late; the tracker's slip
+// guard holds the ground speed from before the jump. Field, seed 1 (222
+// crops, all hit either way): along RMS 9.59 mm against 9.94 mm without,
+// across 10.05 against 10.04 mm.
+TEST(TreatmentSystem, TheSlipGuardSpraysCloserAlong) {
+  const auto [guarded, unguarded] = OneSeedAndChangedEvaluation("field", [](TreatmentEvalOptions& o) {
+    o.adjust_tracker = [](tracking::TrackerOptions& t) { t.slip_guard.enabled = false; };
+  });
+  ExpectCloserAlongOnTheSameBed(guarded, unguarded, 0.0002, 0.0005);
 }
 
 // A 3-week crop's scaled box is some ±15 mm, under 2σ of the placement:
