@@ -78,7 +78,7 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   EXPECT_LE(std::abs(m.placement_bias_along_m), 0.003);
   EXPECT_LE(std::abs(m.placement_bias_across_m), 0.003);
   // Issue target RMS ≤ 10 mm (to the root, as the thesis's fig. 8.3):
-  // met, 9.62 mm along and 9.89 mm across, with the bar commanded at
+  // met, 9.50 mm along and 9.83 mm across, with the bar commanded at
   // 200 Hz and the tracker's slip guard (10.3 / 9.8 mm at 50 Hz without
   // it), each plant's
   // centroid height read from its blob's size (10.8 / 9.6 mm without),
@@ -177,27 +177,16 @@ TEST(TreatmentSystem, HeightsReadFromBlobSizesSprayCloserAlong) {
   ExpectCloserAlongOnTheSameBed(sized, unsized, 0.0005, 0.0007);
 }
 
-// A nozzle opens and closes on ticks only: at 50 Hz each end of a spray
-// falls anywhere within 14 mm of travel, at 200 Hz within 3.5 mm. Field,
-// seed 1 (222 crops, all hit either way): along RMS 9.59 mm at 200 Hz
-// against 9.88 mm at 50 Hz, across 10.05 against 9.95 mm.
-TEST(TreatmentSystem, CommandsAt200HzSprayCloserAlong) {
-  const auto [fast, slow] = OneSeedAndChanged(
-      "field", [](treatment::TreatmentOptions& t) { t.scheduler.tick_s = 0.02; });
-  EXPECT_EQ(fast.ours.ticks, 4 * slow.ours.ticks);
-  ExpectCloserAlongOnTheSameBed(fast, slow, 0.00015, 0.0005);
-}
-
 // A wheel spinning 15 % long runs the dead-reckoned grid ahead of the
 // plants between frames, and the nozzles fire late; the tracker's slip
 // guard holds the ground speed from before the jump. Field, seed 1 (222
-// crops, all hit either way): along RMS 9.59 mm against 9.94 mm without,
-// across 10.05 against 10.04 mm.
+// crops, all hit either way): along RMS 9.44 mm against 10.61 mm without,
+// across 10.25 against 10.17 mm.
 TEST(TreatmentSystem, TheSlipGuardSpraysCloserAlong) {
   const auto [guarded, unguarded] = OneSeedAndChangedEvaluation("field", [](TreatmentEvalOptions& o) {
     o.adjust_tracker = [](tracking::TrackerOptions& t) { t.slip_guard.enabled = false; };
   });
-  ExpectCloserAlongOnTheSameBed(guarded, unguarded, 0.0002, 0.0005);
+  ExpectCloserAlongOnTheSameBed(guarded, unguarded, 0.0006, 0.0005);
 }
 
 // A 3-week crop's scaled box is some ±15 mm, under 2σ of the placement:
