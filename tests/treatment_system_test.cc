@@ -190,15 +190,16 @@ TEST(TreatmentSystem, TheSlipGuardSpraysCloserAlong) {
 }
 
 // A 3-week crop's scaled box is some ±15 mm, under 2σ of the placement:
-// stretched to ±25 mm it covers the root. D, seed 1 (229 crops): 98.7 %
-// hit on 2.0 % of the bed against 94.8 % on 1.5 % unstretched (97.4 and
-// 92.6 % before lone small crops were crop).
+// stretched to ±25 mm it covers the root. D, seed 1 (229 crops): 100 %
+// hit on 2.0 % of the bed against 98.7 % on 1.5 % unstretched (98.7 and
+// 94.8 % before the bar ran at 200 Hz and the tracker guarded against
+// slip; 97.4 and 92.6 % before lone small crops were crop).
 TEST(TreatmentSystem, SmallCropsFootprintsStretchedToCoverThePlacementError) {
   const auto [stretched, scaled] = OneSeedAndChanged(
       "D", [](treatment::TreatmentOptions& t) { t.crop_footprint_min_half_m = 0.0; });
   ASSERT_GT(stretched.ours.crop_plants, 200);
-  EXPECT_GE(stretched.ours.crop_hit_rate, 0.965);
-  EXPECT_GT(stretched.ours.crop_hit_rate, scaled.ours.crop_hit_rate + 0.02);
+  EXPECT_GE(stretched.ours.crop_hit_rate, 0.99);
+  EXPECT_GT(stretched.ours.crop_hit_rate, scaled.ours.crop_hit_rate + 0.008);
   EXPECT_LE(stretched.ours.treated_area_fraction, 0.025);
 }
 
