@@ -229,14 +229,11 @@ void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
                                                                    : treatment::SprayMode::kCrop);
   }
   // The scheduler's ticks until the next pose, each led from this one.
-  const treatment::SchedulerOptions& scheduler = system_.options().scheduler;
-  const int64_t tick_us = std::llround(scheduler.tick_s * 1e6);
   bool failsafe = false;
-  for (int k = 0; k < scheduler.TicksPerPose(); ++k) {
-    const int64_t utime = o.utime + k * tick_us;
-    last_tick_ = system_.Tick(utime, pose, safety);
-    failsafe |= last_tick_.fail_reasons != 0;
-    RecordShots(utime);
+  for (const treatment::TickResult& tick : system_.TicksFrom(o.utime, pose, safety)) {
+    last_tick_ = tick;
+    failsafe |= tick.fail_reasons != 0;
+    RecordShots(tick.utime);
   }
   status.failsafe = failsafe;
   // The tracker reports its own loss; before the first frame the bar is

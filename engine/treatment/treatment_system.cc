@@ -385,7 +385,11 @@ std::span<const TickResult> TreatmentSystem::OnPose(int64_t utime,
   safety.camera_ok = camera_ok;
   safety.odometry_valid = odometry_ok;
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
-  const BedPose pose = TrackerPose(tracker, tracker.utime(), true);
+  return TicksFrom(utime, TrackerPose(tracker, tracker.utime(), true), safety);
+}
+
+std::span<const TickResult> TreatmentSystem::TicksFrom(int64_t utime, const BedPose& pose,
+                                                       const SafetyInputs& safety) {
   const SchedulerOptions& o = scheduler_.options();
   const int64_t tick_us = std::llround(o.tick_s * 1e6);
   pose_ticks_.clear();

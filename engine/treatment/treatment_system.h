@@ -193,6 +193,9 @@ class TreatmentSystem {
                                      bool odometry_ok, bool camera_ok = true);
   // The same with the pose and health given (a runner that ticks after the
   // tracker has moved on dead-reckons the pose back to the tick).
+  std::span<const TickResult> TicksFrom(int64_t utime, const BedPose& pose,
+                                        const SafetyInputs& safety);
+  // One tick.
   TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
   int64_t last_frame_utime() const { return last_frame_utime_; }
   // Writes every plant record's `why`.
