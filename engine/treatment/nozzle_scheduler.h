@@ -2,9 +2,11 @@
 // Nozzle scheduling (thesis §8.2): a bar of N nozzles a known distance
 // behind the camera's ground point passes over the treatment map; a nozzle
 // opens when the strip of ground it will cover during the next tick holds a
-// cell of the treated class. "Will": the valve opens `valve_latency_s` after
+// cell of the treated class (a strip narrower than a cell: the cell its
+// middle is in). "Will": the valve opens `valve_latency_s` after
 // the command, so the strip is where the nozzle will be then, led by the
-// forward speed from the 50 Hz pose. Fail-safe: every nozzle closed when the
+// forward speed from the 50 Hz pose over the latency and the time since the
+// pose (ticks run at 200 Hz, four per pose). Fail-safe: every nozzle closed when the
 // pose is stale, the camera is lost, odometry is invalid or the tracker has
 // lost the grid; each reason is reported.
 
@@ -52,7 +54,7 @@ struct SchedulerOptions {
   // edge: at 50 Hz and 0.7 m/s that is 14 mm, and the sprayed patch's
   // centre moves by sd 2.9 mm. Commands run at 200 Hz (3.5 mm, sd 0.7 mm),
   // four per 50 Hz pose, each led from the pose by the time since it.
-  // Field, 5 seeds, placement RMS along: 50 Hz 10.33 mm, 200 Hz 10.02 mm.
+  // Field, 5 seeds, placement RMS along: 50 Hz 10.33 mm, 200 Hz 10.03 mm.
   // On the CAN bus, 64 nozzles at 200 Hz are 400 commands and 400
   // acknowledgements a second, about 42 % of a 250 kbit/s bus.
   double tick_s = 0.005;

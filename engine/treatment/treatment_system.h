@@ -1,8 +1,8 @@
 #pragma once
 // The treatment chain of one vehicle (DESIGN.md §1): classify each frame's
 // blobs against the tracker's predicted crop grid, accumulate their
-// footprints in the treatment map and the plant registry, and on every 50 Hz
-// pose tick schedule the nozzles (with the fail-safe). Shared by the
+// footprints in the treatment map and the plant registry, and from every
+// 50 Hz pose schedule the nozzles at 200 Hz (with the fail-safe). Shared by the
 // evaluation (app/) and the vehicle runner (telemetry/stages).
 
 #include <cstdint>
