@@ -330,6 +330,9 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     std::optional<Chain> thesis;
     treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so);
     thesis_options.scheduler = options.treatment.scheduler;
+    // The thesis's chain commands its bar at the pose rate, as it did before
+    // ours went to 200 Hz: the baseline stays where it was calibrated.
+    thesis_options.scheduler.tick_s = thesis_options.scheduler.pose_period_s;
     if (options.baseline_thesis) {
       thesis.emplace(simulator, thesis_seg, ThesisTrackerOptions(so), thesis_options, latency);
     }
