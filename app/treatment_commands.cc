@@ -356,7 +356,7 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_flag("--no-slip-guard", args.no_slip_guard,
                 "tracker: take the wheels' speeds as they come (no wheel spin or lock read from jumps)");
   cmd->add_option("--forward-sd-mm", args.forward_sd_mm,
-                  "tracker: forward process noise, mm per square-root metre driven (default 10)")
+                  "tracker: forward process noise, mm per square-root metre driven (default 5)")
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "map and label merged blobs whole (no split among predicted crops)");

@@ -134,6 +134,7 @@ void GridTracker::Reset() {
   ResetBounce();
   offsets_.clear();
   initialiser_.Reset();
+  slip_guard_.Reset();
   since_frame_ = {};
   lines_in_view_ = -1;
   lines_passed_ = 0;
