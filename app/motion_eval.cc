@@ -260,9 +260,10 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   // The features are the contours' dominant points, the notches between
   // leaves among them: closing them cost correct correspondences on set-up
   // 2 (ours 98.9 → 97.6 %, the paper's 94.2 %). Growth inside the hulls
-  // fills the same notches.
+  // and into the soil fills the same notches.
   seg_options.close_notches_px = 0;
   seg_options.hull_gain = 0.0;
+  seg_options.soil_growth.z = 0.0;
   if (options.sim.render.kind == sim::ImageKind::kRgb) {
     // Colour frames: excess green and Otsu, as `plantscale segment` does.
     seg_options.method = vision::ThresholdMethod::kOtsu;

@@ -29,6 +29,8 @@ struct EvaluateArgs {
   double fill_holes_max_fraction = -1.0;
   int close_notches_px = -1;
   double hull_gain = -1.0;
+  double soil_growth_z = -1.0;
+  bool soil_growth_refuse_joins = false;
   std::string errors_dir;
 };
 
@@ -127,6 +129,8 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.fill_holes_max_fraction >= 0) o.segmenter.fill_holes_max_fraction = a.fill_holes_max_fraction;
   if (a.close_notches_px >= 0) o.segmenter.close_notches_px = a.close_notches_px;
   if (a.hull_gain >= 0) o.segmenter.hull_gain = a.hull_gain;
+  if (a.soil_growth_z >= 0) o.segmenter.soil_growth.z = a.soil_growth_z;
+  if (a.soil_growth_refuse_joins) o.segmenter.soil_growth.refuse_joins = true;
   o.errors_dir = a.errors_dir;
   if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
   const SegmentationEvaluation e = EvaluateSegmentation(o);
@@ -218,6 +222,11 @@ void AddSegmentCommands(CommandRegistry& registry) {
   cmd->add_option("--hull-gain", ev.hull_gain,
                   "inside a blob's convex hull, plant at this lower local gain (0: off)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--soil-growth-z", ev.soil_growth_z,
+                  "blobs grow into pixels this many soil sds above the soil around them (0: off)")
+      ->check(CLI::Range(0.0, 20.0));
+  cmd->add_flag("--soil-growth-refuse-joins", ev.soil_growth_refuse_joins,
+                "soil growth may not join two blobs");
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
   cmd->add_option("--errors-dir", ev.errors_dir,
                   "write each frame's errors there as PNG (missed plant red, soil taken blue)");

@@ -42,6 +42,8 @@ struct TreatmentArgs {
   std::optional<double> fill_holes_max_fraction;
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
+  std::optional<double> soil_growth_z;
+  bool soil_growth_refuse_joins = false;
   std::optional<double> size_height_sd_mm;
   std::optional<double> size_edge_loss_mm;
   std::optional<double> forward_sd_mm;
@@ -187,6 +189,8 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.fill_holes_max_fraction) o.segmenter.fill_holes_max_fraction = *a.fill_holes_max_fraction;
   if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
+  if (a.soil_growth_z) o.segmenter.soil_growth.z = *a.soil_growth_z;
+  if (a.soil_growth_refuse_joins) o.segmenter.soil_growth.refuse_joins = true;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
@@ -311,6 +315,12 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--hull-gain", args.hull_gain,
                   "segmentation: inside a blob's convex hull, plant at this lower local gain (0: off)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--soil-growth-z", args.soil_growth_z,
+                  "segmentation: blobs grow into pixels this many soil sds above the soil around "
+                  "them (0: off)")
+      ->check(CLI::Range(0.0, 20.0));
+  cmd->add_flag("--soil-growth-refuse-joins", args.soil_growth_refuse_joins,
+                "segmentation: soil growth may not join two blobs");
   cmd->add_option("--split-cover-m", args.split_cover_m,
                   "merged blobs: a part with plant matter this close to its predicted crop is "
                   "that crop (0: the gate alone)")

@@ -78,6 +78,13 @@ void BM_SegmentNirWithoutHullGrowth(benchmark::State& s) {
   Segment(s, o, sim::ImageKind::kNir);
 }
 BENCHMARK(BM_SegmentNirWithoutHullGrowth);
+// The default without growth into the soil (soil_growth.z 0).
+void BM_SegmentNirWithoutSoilGrowth(benchmark::State& s) {
+  SegmenterOptions o;
+  o.soil_growth.z = 0.0;
+  Segment(s, o, sim::ImageKind::kNir);
+}
+BENCHMARK(BM_SegmentNirWithoutSoilGrowth);
 void BM_SegmentNirLocalUnsmoothed(benchmark::State& s) {
   Segment(s, With(ThresholdMethod::kLocal, 0.0), sim::ImageKind::kNir);
 }
@@ -188,6 +195,7 @@ void ShapeStep(benchmark::State& state, Step step) {
   options.fill_holes_max_fraction = 0.0;
   options.close_notches_px = 0;
   options.hull_gain = 0.0;
+  options.soil_growth.z = 0.0;
   Segmenter segmenter(options);
   const cv::Mat before = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
   cv::Mat mask = before.clone();
@@ -216,6 +224,7 @@ void BM_StageGrowInHullsOfDefaultMask(benchmark::State& state) {
   SetUp();
   SegmenterOptions options;
   options.hull_gain = 0.0;
+  options.soil_growth.z = 0.0;
   Segmenter segmenter(options);
   const cv::Mat before = segmenter.Process(Frame(sim::ImageKind::kNir).image).mask.clone();
   LocalThreshold local;
@@ -234,6 +243,13 @@ void BM_StageGrowInHullsOfDefaultMask(benchmark::State& state) {
   state.counters["changed_px"] = changed;
 }
 BENCHMARK(BM_StageGrowInHullsOfDefaultMask);
+// Soil growth alone (soil_growth.h), on the thresholded mask as above.
+void BM_StageGrowIntoSoilOfDefaultMask(benchmark::State& state) {
+  ShapeStep(state, [grower = SoilGrower(SegmenterOptions{}.soil_growth)](cv::Mat& m) mutable {
+    return grower.Grow(Frame(sim::ImageKind::kNir).image, m);
+  });
+}
+BENCHMARK(BM_StageGrowIntoSoilOfDefaultMask);
 
 void BM_BlobsOnly(benchmark::State& state) {
   SetUp();

@@ -108,6 +108,7 @@ TEST(Holes, SegmenterFillsAShadedPatchInsideAPlantButNotTheThesisBaseline) {
   cv::circle(image, {80, 60}, 6, cv::Scalar(60), cv::FILLED);
   SegmenterOptions ours;
   ours.smoothing_px = 0.0;
+  ours.soil_growth.z = 0.0;  // below: the hole filling alone
   Segmenter segmenter(ours);
   const Segmentation& seg = segmenter.Process(image);
   ASSERT_EQ(seg.blobs.size(), 1u);
@@ -120,6 +121,12 @@ TEST(Holes, SegmenterFillsAShadedPatchInsideAPlantButNotTheThesisBaseline) {
   // The same patch in a 120×160 image is over 0.5 % of it (96): kept.
   Segmenter small(ours);
   EXPECT_EQ(small.Process(image(cv::Rect(0, 0, 160, 120))).mask.at<uint8_t>(60, 80), 0);
+  // Soil growth (soil_growth.h) takes it there: at 60 it stands far above
+  // the flat soil at 40 around the plant, and the blob reaches it.
+  ours.soil_growth.z = 3.0;
+  Segmenter grown(ours);
+  const cv::Mat grown_mask = grown.Process(image(cv::Rect(0, 0, 160, 120))).mask;
+  EXPECT_EQ(cv::countNonZero(grown_mask(cv::Rect(74, 54, 13, 13)) == 0), 0);
 }
 
 cv::Mat Disk(int r) {

@@ -42,6 +42,7 @@ OptionErrors SegmenterOptions::Validate() const {
   if (close_notches_px < 0 || close_notches_px > 30) {
     e.push_back({"close_notches_px", "must be in [0, 30]"});
   }
+  for (OptionError& g : Prefixed("soil_growth", soil_growth.Validate())) e.push_back(std::move(g));
   for (OptionError& b : Prefixed("blobs", blobs.Validate())) e.push_back(std::move(b));
   for (OptionError& l : Prefixed("local", local.Validate())) e.push_back(std::move(l));
   return e;
@@ -53,6 +54,7 @@ SegmenterOptions ThesisSegmenterOptions() {
   o.fill_holes_max_fraction = 0.0;
   o.close_notches_px = 0;
   o.hull_gain = 0.0;
+  o.soil_growth.z = 0.0;
   return o;
 }
 
@@ -68,7 +70,8 @@ Segmenter::Segmenter(const SegmenterOptions& options)
     : options_(Validated(options)),
       blobs_(options.blobs),
       track_blobs_(options.blobs),
-      local_(options.local) {
+      local_(options.local),
+      soil_(options.soil_growth) {
   if (options_.smoothing_px > 0.0) smoother_.emplace(options_.smoothing_px);
 }
 
@@ -84,6 +87,7 @@ void Segmenter::Threshold(const cv::Mat& image) {
     ComputeColourIndex(image, options_.colour_index, index_);
     plant = &index_;
   }
+  raw_ = *plant;  // a header: no copy
   if (options_.smoothing_px > 0.0) {
     // σ = 2 (the default) is the tent of two 5×5 boxes, under a quarter of
     // cv::GaussianBlur's time at the same AUC (smoothing.h). Truncating the
@@ -160,6 +164,10 @@ bool Segmenter::GrowsInHulls() const {
   return options_.hull_gain > 0.0 && used_ == ThresholdMethod::kLocal;
 }
 
+bool Segmenter::GrowsIntoSoil() const {
+  return options_.soil_growth.enabled() && used_ == ThresholdMethod::kLocal;
+}
+
 void Segmenter::GrowInHulls() {
   local_.ApplyAtGain(result_.plant_image, options_.hull_gain, low_mask_);
   hull_.Grow(result_.mask, low_mask_, options_.hull_min_area_px);
@@ -180,19 +188,23 @@ const Segmentation& Segmenter::Process(const cv::Mat& image,
   const auto extract = [&](BlobExtractor& e) {
     return camera ? e.Extract(result_.mask, *camera) : e.Extract(result_.mask);
   };
-  if (GrowsInHulls()) {
-    // The tracker's blobs are the mask's before growth: from the hull
+  const bool grows = GrowsInHulls() || GrowsIntoSoil();
+  if (grows) {
+    // The tracker's blobs are the mask's before growth: from the first
     // grower's own labelling of it, unless contours need that mask.
     const bool contours = options_.blobs.trace_contours;
     if (contours) result_.track_blobs = extract(track_blobs_);
-    GrowInHulls();
+    if (GrowsInHulls()) GrowInHulls();
+    if (GrowsIntoSoil()) soil_.Grow(raw_, result_.mask);
     if (!contours) {
       result_.track_blobs =
-          track_blobs_.ExtractLabelled(hull_.mask_runs(), hull_.mask_parent(), camera);
+          GrowsInHulls()
+              ? track_blobs_.ExtractLabelled(hull_.mask_runs(), hull_.mask_parent(), camera)
+              : track_blobs_.ExtractLabelled(soil_.mask_runs(), soil_.mask_parent(), camera);
     }
   }
   result_.blobs = extract(blobs_);
-  if (!GrowsInHulls()) result_.track_blobs = result_.blobs;
+  if (!grows) result_.track_blobs = result_.blobs;
   return result_;
 }
 

@@ -15,6 +15,7 @@
 #include "engine/vision/holes.h"
 #include "engine/vision/local_threshold.h"
 #include "engine/vision/smoothing.h"
+#include "engine/vision/soil_growth.h"
 
 namespace plantscale::vision {
 
@@ -70,6 +71,11 @@ struct SegmenterOptions {
   // measures the blobs before it (Segmentation::track_blobs).
   double hull_gain = 1.8;
   int hull_min_area_px = 30;
+  // Local method only, last: blobs grow into the shaded rim that stands
+  // out of the soil around them (soil_growth.h; z 0: off). Presets, 5
+  // seeds, treatment crop pixels labelled crop: see soil_growth.h and the
+  // README. The tracker measures the blobs before it, as before hull growth.
+  SoilGrowthOptions soil_growth;
   BlobOptions blobs;
 
   OptionErrors Validate() const;
@@ -81,8 +87,9 @@ struct Segmentation {
   double threshold_at_top = 0.0;     // grey-level threshold used at the top row
   double threshold_at_bottom = 0.0;  // ... and at the bottom row (differ for kAdaptive)
   std::span<const Blob> blobs;
-  // The blobs before hull growth (SegmenterOptions::hull_gain; the same as
-  // `blobs` without it): what the grid tracker measures. On preset A
+  // The blobs before hull and soil growth (SegmenterOptions::hull_gain,
+  // soil_growth; the same as `blobs` without them): what the grid tracker
+  // measures. On preset A
   // (touching plants) the tracker fed grown blobs lost the grid 14 times in
   // 5 seeds instead of 9 and hit 84 % of crops instead of 95 %; the
   // classifier and the pixel labels take the grown ones.
@@ -115,10 +122,11 @@ class Segmenter {
   void Threshold(const cv::Mat& image);
   bool GrowsInHulls() const;
   void GrowInHulls();
+  bool GrowsIntoSoil() const;
 
   SegmenterOptions options_;
   BlobExtractor blobs_;
-  BlobExtractor track_blobs_;  // before hull growth
+  BlobExtractor track_blobs_;  // before hull and soil growth
   LocalThreshold local_;
   std::optional<Smoother> smoother_;  // when smoothing_px > 0
   cv::Mat index_;
@@ -126,6 +134,8 @@ class Segmenter {
   HoleFiller holes_;
   NotchCloser notches_;
   HullGrower hull_;
+  SoilGrower soil_;
+  cv::Mat raw_;  // the plant image before smoothing (a header on the input or index_)
   cv::Mat low_mask_;
   Segmentation result_;
 };

@@ -48,10 +48,11 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
   const double fp = cv::countNonZero(s.mask & ~plant);
   const double recall = tp / cv::countNonZero(plant);
   const double precision = tp / (tp + fp);
-  // Hull growth (SegmenterOptions::hull_gain) trades a little precision
-  // for recall: 0.969 / 0.943 measured on this frame.
-  EXPECT_GT(recall, 0.95);
-  EXPECT_GT(precision, 0.93);
+  // Hull and soil growth (SegmenterOptions::hull_gain, soil_growth) trade
+  // a little precision for recall: 0.984 / 0.931 measured on this frame
+  // (0.969 / 0.943 with hull growth alone).
+  EXPECT_GT(recall, 0.97);
+  EXPECT_GT(precision, 0.92);
   int big_crops = 0;
   for (const sim::PlantTruth& p : frame.truth.plants) {
     if (p.cls == sim::PlantClass::kCrop && p.area_px > 400) ++big_crops;
@@ -62,10 +63,12 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
     EXPECT_TRUE(b.on_ground);
   }
   EXPECT_NEAR(big_blobs, big_crops, 2);
-  // The tracker's blobs are those before hull growth: a segmenter without
-  // it gives the same; with it, the final blobs hold more plant pixels.
+  // The tracker's blobs are those before hull and soil growth: a segmenter
+  // without them gives the same; with them, the final blobs hold more plant
+  // pixels.
   SegmenterOptions no_growth;
   no_growth.hull_gain = 0.0;
+  no_growth.soil_growth.z = 0.0;
   Segmenter plain(no_growth);
   const Segmentation& p = plain.Process(frame.rendered.image, simulator.camera());
   ASSERT_EQ(p.track_blobs.size(), p.blobs.size());
