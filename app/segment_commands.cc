@@ -31,6 +31,8 @@ struct EvaluateArgs {
   double hull_gain = -1.0;
   double soil_growth_z = -1.0;
   bool soil_growth_refuse_joins = false;
+  double soil_growth_trim_z = -1.0;
+  int soil_growth_reach_px = -1;
   std::string errors_dir;
 };
 
@@ -131,6 +133,8 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.hull_gain >= 0) o.segmenter.hull_gain = a.hull_gain;
   if (a.soil_growth_z >= 0) o.segmenter.soil_growth.z = a.soil_growth_z;
   if (a.soil_growth_refuse_joins) o.segmenter.soil_growth.refuse_joins = true;
+  if (a.soil_growth_trim_z >= 0) o.segmenter.soil_growth.trim_z = a.soil_growth_trim_z;
+  if (a.soil_growth_reach_px >= 0) o.segmenter.soil_growth.reach_px = a.soil_growth_reach_px;
   o.errors_dir = a.errors_dir;
   if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
   const SegmentationEvaluation e = EvaluateSegmentation(o);
@@ -227,6 +231,12 @@ void AddSegmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.0, 20.0));
   cmd->add_flag("--soil-growth-refuse-joins", ev.soil_growth_refuse_joins,
                 "soil growth may not join two blobs");
+  cmd->add_option("--soil-growth-trim-z", ev.soil_growth_trim_z,
+                  "soil growth: leave soil samples this many sds above the soil out (0: keep all)")
+      ->check(CLI::Range(0.0, 20.0));
+  cmd->add_option("--soil-growth-reach-px", ev.soil_growth_reach_px,
+                  "soil growth: at most this many pixels from a blob")
+      ->check(CLI::Range(1, 50));
   cmd->add_option("--roc-csv", ev.roc_csv, "write the ROC curve to this CSV file");
   cmd->add_option("--errors-dir", ev.errors_dir,
                   "write each frame's errors there as PNG (missed plant red, soil taken blue)");

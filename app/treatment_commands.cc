@@ -44,6 +44,7 @@ struct TreatmentArgs {
   std::optional<double> hull_gain;
   std::optional<double> soil_growth_z;
   bool soil_growth_refuse_joins = false;
+  std::optional<double> soil_growth_trim_z;
   std::optional<double> size_height_sd_mm;
   std::optional<double> size_edge_loss_mm;
   std::optional<double> forward_sd_mm;
@@ -191,6 +192,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
   if (a.soil_growth_z) o.segmenter.soil_growth.z = *a.soil_growth_z;
   if (a.soil_growth_refuse_joins) o.segmenter.soil_growth.refuse_joins = true;
+  if (a.soil_growth_trim_z) o.segmenter.soil_growth.trim_z = *a.soil_growth_trim_z;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
   if (a.no_split_merged) o.treatment.split_merged = false;
@@ -321,6 +323,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.0, 20.0));
   cmd->add_flag("--soil-growth-refuse-joins", args.soil_growth_refuse_joins,
                 "segmentation: soil growth may not join two blobs");
+  cmd->add_option("--soil-growth-trim-z", args.soil_growth_trim_z,
+                  "segmentation: soil growth leaves soil samples this many sds above the soil out "
+                  "(0: keeps all)")
+      ->check(CLI::Range(0.0, 20.0));
   cmd->add_option("--split-cover-m", args.split_cover_m,
                   "merged blobs: a part with plant matter this close to its predicted crop is "
                   "that crop (0: the gate alone)")

@@ -232,14 +232,15 @@ TEST(TreatmentSystem, FieldSprayWeedSparesTheCrop) {
 }
 
 // Crop pixels labelled crop (thesis tables 7.5–7.8: 95.1, 78.9, 81.7, 55.0 %
-// on A–D). Issue target ≥ 95 % on every preset: met on A and C over 5 seeds
-// (96.5, 97.5 %), not on B and D (91.9, 91.5 %), where segmentation loses
-// 7.4–7.7 % of the crop pixels to soil (README). Blobs that miss every
-// association region are split among the predicted crops, which lifts A
-// (touching plants merged) from 48 %. On 10 m, 1 seed: 94.7 / 91.2 / 96.6 /
-// 90.2 % (94.6 / 89.5 / 96.5 / 88.2 % before lone small crops were crop;
-// 85.6 / 85.0 / 90.6 / 84.1 % before the hull growth and the plants beyond
-// the view's border); bounds 2–4 points below.
+// on A–D). Issue target ≥ 95 % on every preset: met over 5 seeds (A 97.2,
+// B 97.9, C 99.0, D 95.2 %) since soil growth (engine/vision/soil_growth.h)
+// took back shaded leaf at the plants' rims; before it B and D were 91.9
+// and 91.5 %, segmentation losing 7.4–7.7 % of their crop pixels to soil.
+// Blobs that miss every association region are split among the predicted
+// crops, which lifts A (touching plants merged) from 48 %. On 10 m, 1 seed:
+// 94.8 / 97.0 / 98.7 / 93.9 % (93.8 / 91.2 / 96.6 / 90.2 % without soil
+// growth; 85.6 / 85.0 / 90.6 / 84.1 % before the hull growth and the plants
+// beyond the view's border); bounds 2–2.5 points below.
 struct PixelCase {
   const char* preset;
   double at_least;
@@ -255,8 +256,8 @@ TEST_P(TreatmentPixels, CropPixelsLabelledCrop) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Presets, TreatmentPixels,
-                         ::testing::Values(PixelCase{"A", 0.925}, PixelCase{"B", 0.875},
-                                           PixelCase{"C", 0.945}, PixelCase{"D", 0.86}),
+                         ::testing::Values(PixelCase{"A", 0.925}, PixelCase{"B", 0.95},
+                                           PixelCase{"C", 0.965}, PixelCase{"D", 0.915}),
                          [](const auto& test_param) { return std::string(test_param.param.preset); });
 
 }  // namespace

@@ -48,37 +48,6 @@ int HoleFiller::Fill(cv::Mat& mask, int max_area_px) {
 
 namespace {
 
-// out = in dilated (kDilate) or eroded by one pixel along u; `in` holds
-// rows of `words` words one after the other. One flat pass over every word
-// (vectorised), then the first and last word of each row are redone
-// without their neighbour across the row's ends (pixels beyond the image
-// are soil); bits past `width` are cleared.
-template <bool kDilate>
-void StepAlongU(const std::vector<uint64_t>& in, int words, int rows, int width,
-                std::vector<uint64_t>& out) {
-  out.resize(in.size());
-  const size_t n = in.size();
-  const uint64_t* __restrict x = in.data();
-  uint64_t* __restrict o = out.data();
-  for (size_t i = 1; i + 1 < n; ++i) {
-    const uint64_t up = (x[i] << 1) | (x[i - 1] >> 63), down = (x[i] >> 1) | (x[i + 1] << 63);
-    o[i] = kDilate ? (x[i] | up | down) : (x[i] & up & down);
-  }
-  const uint64_t last = width % 64 == 0 ? ~uint64_t{0} : (uint64_t{1} << (width % 64)) - 1;
-  const auto one = [&](size_t i, bool first, bool final) {
-    const uint64_t up = (x[i] << 1) | (first ? 0 : x[i - 1] >> 63);
-    const uint64_t down = (x[i] >> 1) | (final ? 0 : x[i + 1] << 63);
-    o[i] = kDilate ? (x[i] | up | down) : (x[i] & up & down);
-  };
-  for (int v = 0; v < rows; ++v) {
-    const size_t begin = static_cast<size_t>(v) * static_cast<size_t>(words);
-    const size_t end = begin + static_cast<size_t>(words) - 1;
-    one(begin, true, begin == end);
-    if (end != begin) one(end, false, true);
-    o[end] &= last;
-  }
-}
-
 // The lower (sign 1) or upper (sign −1) convex envelope of the points
 // (v, rows[.][column]) of `rows` (v descending), as points (x = v, y = u)
 // in ascending v: Andrew's monotone chain, the points already sorted.
@@ -134,7 +103,7 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   // Dilation: OR over the disk's rows of each row dilated by its half-width.
   steps_[0] = mask_bits_;
   for (int k = 1; k <= r; ++k) {
-    StepAlongU<true>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
+    detail::StepAlongU<true>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
   }
   scratch_.assign(mask_bits_.size(), 0);
   for (int v = 0; v < height; ++v) {
@@ -150,7 +119,7 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   // rows beyond the image count as soil.
   steps_[0] = scratch_;
   for (int k = 1; k <= r; ++k) {
-    StepAlongU<false>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
+    detail::StepAlongU<false>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
   }
   closed_bits_.assign(mask_bits_.size(), 0);
   for (int v = r; v < height - r; ++v) {

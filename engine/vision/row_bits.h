@@ -146,4 +146,35 @@ void LabelRuns(int width, int height, bool diagonal, RowWords&& row_words,
   ResolveRoots(parent);
 }
 
+// out = in dilated (kDilate) or eroded by one pixel along u; `in` holds
+// rows of `words` words one after the other. One flat pass over every word
+// (vectorised), then the first and last word of each row are redone
+// without their neighbour across the row's ends (pixels beyond the image
+// are soil); bits past `width` are cleared.
+template <bool kDilate>
+inline void StepAlongU(const std::vector<uint64_t>& in, int words, int rows, int width,
+                std::vector<uint64_t>& out) {
+  out.resize(in.size());
+  const size_t n = in.size();
+  const uint64_t* __restrict x = in.data();
+  uint64_t* __restrict o = out.data();
+  for (size_t i = 1; i + 1 < n; ++i) {
+    const uint64_t up = (x[i] << 1) | (x[i - 1] >> 63), down = (x[i] >> 1) | (x[i + 1] << 63);
+    o[i] = kDilate ? (x[i] | up | down) : (x[i] & up & down);
+  }
+  const uint64_t last = width % 64 == 0 ? ~uint64_t{0} : (uint64_t{1} << (width % 64)) - 1;
+  const auto one = [&](size_t i, bool first, bool final) {
+    const uint64_t up = (x[i] << 1) | (first ? 0 : x[i - 1] >> 63);
+    const uint64_t down = (x[i] >> 1) | (final ? 0 : x[i + 1] << 63);
+    o[i] = kDilate ? (x[i] | up | down) : (x[i] & up & down);
+  };
+  for (int v = 0; v < rows; ++v) {
+    const size_t begin = static_cast<size_t>(v) * static_cast<size_t>(words);
+    const size_t end = begin + static_cast<size_t>(words) - 1;
+    one(begin, true, begin == end);
+    if (end != begin) one(end, false, true);
+    o[end] &= last;
+  }
+}
+
 }  // namespace plantscale::vision::detail

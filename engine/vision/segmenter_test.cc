@@ -49,10 +49,10 @@ TEST(Segmenter, SimulatedFrameAgainstLabels) {
   const double recall = tp / cv::countNonZero(plant);
   const double precision = tp / (tp + fp);
   // Hull and soil growth (SegmenterOptions::hull_gain, soil_growth) trade
-  // a little precision for recall: 0.984 / 0.931 measured on this frame
-  // (0.969 / 0.943 with hull growth alone).
-  EXPECT_GT(recall, 0.97);
-  EXPECT_GT(precision, 0.92);
+  // precision for recall: 0.988 / 0.906 measured on this frame (0.969 /
+  // 0.943 with hull growth alone).
+  EXPECT_GT(recall, 0.975);
+  EXPECT_GT(precision, 0.89);
   int big_crops = 0;
   for (const sim::PlantTruth& p : frame.truth.plants) {
     if (p.cls == sim::PlantClass::kCrop && p.area_px > 400) ++big_crops;
