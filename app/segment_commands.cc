@@ -30,7 +30,7 @@ struct EvaluateArgs {
   int close_notches_px = -1;
   double hull_gain = -1.0;
   double soil_growth_z = -1.0;
-  bool soil_growth_refuse_joins = false;
+  int soil_growth_join_min_area_px = -1;
   double soil_growth_trim_z = -1.0;
   int soil_growth_reach_px = -1;
   std::string errors_dir;
@@ -132,7 +132,9 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.close_notches_px >= 0) o.segmenter.close_notches_px = a.close_notches_px;
   if (a.hull_gain >= 0) o.segmenter.hull_gain = a.hull_gain;
   if (a.soil_growth_z >= 0) o.segmenter.soil_growth.z = a.soil_growth_z;
-  if (a.soil_growth_refuse_joins) o.segmenter.soil_growth.refuse_joins = true;
+  if (a.soil_growth_join_min_area_px >= 0) {
+    o.segmenter.soil_growth.join_min_area_px = a.soil_growth_join_min_area_px;
+  }
   if (a.soil_growth_trim_z >= 0) o.segmenter.soil_growth.trim_z = a.soil_growth_trim_z;
   if (a.soil_growth_reach_px >= 0) o.segmenter.soil_growth.reach_px = a.soil_growth_reach_px;
   o.errors_dir = a.errors_dir;
@@ -229,8 +231,9 @@ void AddSegmentCommands(CommandRegistry& registry) {
   cmd->add_option("--soil-growth-z", ev.soil_growth_z,
                   "blobs grow into pixels this many soil sds above the soil around them (0: off)")
       ->check(CLI::Range(0.0, 20.0));
-  cmd->add_flag("--soil-growth-refuse-joins", ev.soil_growth_refuse_joins,
-                "soil growth may not join two blobs");
+  cmd->add_option("--soil-growth-join-min-area-px", ev.soil_growth_join_min_area_px,
+                  "soil growth joins blobs only when each has this many pixels (0: any)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--soil-growth-trim-z", ev.soil_growth_trim_z,
                   "soil growth: leave soil samples this many sds above the soil out (0: keep all)")
       ->check(CLI::Range(0.0, 20.0));

@@ -153,7 +153,8 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   }
   runner.AddStage(std::make_unique<tm::OdometryStage>());
   auto segmentation = std::make_unique<tm::SegmentationStage>(
-      vision::SegmenterOptions{}, tracker ? &tracker->camera : nullptr);
+      treatment::SegmenterOptionsFor(treatment::TreatmentOptions{}.scheduler.mode),
+      tracker ? &tracker->camera : nullptr);
   const tm::SegmentationStage* blobs = segmentation.get();
   runner.AddStage(std::move(segmentation));
   if (tracker) {

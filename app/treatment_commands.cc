@@ -43,7 +43,7 @@ struct TreatmentArgs {
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
   std::optional<double> soil_growth_z;
-  bool soil_growth_refuse_joins = false;
+  int soil_growth_join_min_area_px = -1;
   std::optional<double> soil_growth_trim_z;
   std::optional<double> size_height_sd_mm;
   std::optional<double> size_edge_loss_mm;
@@ -191,7 +191,9 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
   if (a.soil_growth_z) o.segmenter.soil_growth.z = *a.soil_growth_z;
-  if (a.soil_growth_refuse_joins) o.segmenter.soil_growth.refuse_joins = true;
+  if (a.soil_growth_join_min_area_px >= 0) {
+    o.segmenter.soil_growth.join_min_area_px = a.soil_growth_join_min_area_px;
+  }
   if (a.soil_growth_trim_z) o.segmenter.soil_growth.trim_z = *a.soil_growth_trim_z;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
@@ -321,8 +323,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                   "segmentation: blobs grow into pixels this many soil sds above the soil around "
                   "them (0: off)")
       ->check(CLI::Range(0.0, 20.0));
-  cmd->add_flag("--soil-growth-refuse-joins", args.soil_growth_refuse_joins,
-                "segmentation: soil growth may not join two blobs");
+  cmd->add_option("--soil-growth-join-min-area-px", args.soil_growth_join_min_area_px,
+                  "segmentation: soil growth joins blobs only when each has this many pixels "
+                  "(0: any)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--soil-growth-trim-z", args.soil_growth_trim_z,
                   "segmentation: soil growth leaves soil samples this many sds above the soil out "
                   "(0: keeps all)")

@@ -325,7 +325,9 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);
     tracking::TrackerOptions our_tracker = ProductTrackerOptions(so);
     if (options.adjust_tracker) options.adjust_tracker(our_tracker);
-    Chain ours(simulator, options.segmenter, our_tracker, options.treatment, latency);
+    Chain ours(simulator,
+               treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
+               our_tracker, options.treatment, latency);
     ours.collect_samples = options.mrroc;
     std::optional<Chain> thesis;
     treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so);

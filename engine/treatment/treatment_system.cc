@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace plantscale::treatment {
 
@@ -404,6 +405,13 @@ TickResult TreatmentSystem::Tick(int64_t utime, const BedPose& pose, const Safet
     map_.MarkTreated(t.x0, t.x1, t.y0, t.y1);
   }
   return r;
+}
+
+vision::SegmenterOptions SegmenterOptionsFor(SprayMode mode, vision::SegmenterOptions base) {
+  if (mode == SprayMode::kWeed) {
+    base.soil_growth.join_min_area_px = std::numeric_limits<int>::max();
+  }
+  return base;
 }
 
 }  // namespace plantscale::treatment

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -597,6 +599,22 @@ TEST(PlantRegistry, LeafFragmentsOfOneGridPlantMakeOneRecord) {
   EXPECT_NEAR(reg.records()[0].grid_bed_m.x(), (0.0 + 0.004 - 0.003) / 3.0, 1e-12);
   EXPECT_NEAR(reg.records()[0].grid_bed_m.y(), (1.0 + 1.003 + 0.998) / 3.0, 1e-12);
   EXPECT_FALSE(reg.records()[2].grid_plant);
+}
+
+// Spray-weed mode's segmentation joins no blobs by soil growth, so that a
+// weed against a crop's rim keeps its own blob; the rest of the options is
+// the caller's.
+TEST(SegmenterForMode, SprayWeedModeJoinsNoBlobsBySoilGrowth) {
+  vision::SegmenterOptions base;
+  base.soil_growth.z = 2.5;
+  base.hull_gain = 1.7;
+  const vision::SegmenterOptions crop = SegmenterOptionsFor(SprayMode::kCrop, base);
+  const vision::SegmenterOptions weed = SegmenterOptionsFor(SprayMode::kWeed, base);
+  EXPECT_EQ(crop.soil_growth.join_min_area_px, 0);
+  EXPECT_EQ(weed.soil_growth.join_min_area_px, std::numeric_limits<int>::max());
+  EXPECT_DOUBLE_EQ(weed.soil_growth.z, 2.5);
+  EXPECT_DOUBLE_EQ(weed.hull_gain, 1.7);
+  EXPECT_TRUE(weed.Validate().empty());
 }
 
 }  // namespace

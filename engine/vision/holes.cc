@@ -151,7 +151,8 @@ void GrowthWithoutJoins::LabelMask(const std::vector<uint64_t>& mask_bits, int w
 
 int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
                             const std::vector<uint64_t>& grown_bits,
-                            const std::vector<uint8_t>* counted, cv::Mat& mask) {
+                            const std::vector<uint8_t>* counted, cv::Mat& mask,
+                            const std::vector<uint8_t>* small) {
   const int width = width_, height = height_;
   const auto words = static_cast<size_t>((width + 63) / 64);
   LabelRuns(
@@ -159,6 +160,7 @@ int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
       grown_runs_, grown_parent_, &grown_row_start_);
   first_blob_.assign(grown_runs_.size(), -1);
   joins_.assign(grown_runs_.size(), 0);
+  small_.assign(grown_runs_.size(), 0);
   for (int v = 0; v < height; ++v) {
     int g = grown_row_start_[static_cast<size_t>(v)];
     const int g_end = grown_row_start_[static_cast<size_t>(v) + 1];
@@ -170,6 +172,7 @@ int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
       while (g < g_end && grown_runs_[static_cast<size_t>(g)].u_end <= mask_runs_[static_cast<size_t>(m)].u_begin) ++g;
       PLANTSCALE_CHECK(g < g_end, "growth lost a pixel of the mask");
       const auto root = static_cast<size_t>(grown_parent_[static_cast<size_t>(g)]);
+      if (small && (*small)[static_cast<size_t>(blob)]) small_[root] = 1;
       if (first_blob_[root] < 0) {
         first_blob_[root] = blob;
       } else if (first_blob_[root] != blob) {
@@ -181,7 +184,8 @@ int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
   // nothing.
   int added = 0;
   for (size_t i = 0; i < grown_runs_.size(); ++i) {
-    if (joins_[static_cast<size_t>(grown_parent_[i])]) continue;
+    const auto root = static_cast<size_t>(grown_parent_[i]);
+    if (joins_[root] && (small == nullptr || small_[root])) continue;
     const RowRun& run = grown_runs_[i];
     const size_t base = static_cast<size_t>(run.v) * words;
     uint8_t* row = mask.ptr<uint8_t>(run.v);

@@ -39,9 +39,12 @@ class GrowthWithoutJoins {
   // Sets to 255 the pixels of `mask` (the image of the labelled bits) that
   // are in `grown_bits` but not the mask's bits, in regions of the grown
   // bits holding at most one counted blob; `counted` (per mask root run,
-  // null: all) says which blobs count. Returns the number of pixels set.
+  // null: all) says which blobs count. With `small` (per mask root run), a
+  // region holding two or more counted blobs is still kept unless one of
+  // them is small. Returns the number of pixels set.
   int Add(const std::vector<uint64_t>& mask_bits, const std::vector<uint64_t>& grown_bits,
-          const std::vector<uint8_t>* counted, cv::Mat& mask);
+          const std::vector<uint8_t>* counted, cv::Mat& mask,
+          const std::vector<uint8_t>* small = nullptr);
 
  private:
   int width_ = 0, height_ = 0;
@@ -49,6 +52,7 @@ class GrowthWithoutJoins {
   std::vector<int> mask_parent_, grown_parent_, mask_row_start_, grown_row_start_;
   std::vector<int> first_blob_;  // per grown root: a counted blob's root inside it, −1 before
   std::vector<uint8_t> joins_;   // per grown root: holds two or more counted blobs
+  std::vector<uint8_t> small_;   // per grown root: holds a small counted blob
 };
 
 }  // namespace detail

@@ -24,6 +24,7 @@ OptionErrors SoilGrowthOptions::Validate() const {
   if (clearance_px < 0 || clearance_px > 50) e.push_back({"clearance_px", "must be in [0, 50]"});
   if (min_soil_samples < 2) e.push_back({"min_soil_samples", "must be >= 2"});
   if (min_area_px < 1) e.push_back({"min_area_px", "must be >= 1"});
+  if (join_min_area_px < 0) e.push_back({"join_min_area_px", "must be >= 0"});
   return e;
 }
 
@@ -252,20 +253,24 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
     area_[static_cast<size_t>(parent[i])] += runs[i].u_end - runs[i].u_begin;
   }
   seed_bits_.assign(mask_bits_.size(), 0);
-  std::vector<uint8_t>& counted = counted_;
-  counted.assign(runs.size(), 0);
+  counted_.assign(runs.size(), 0);
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto root = static_cast<size_t>(parent[i]);
     if (area_[root] < options_.min_area_px) continue;
-    counted[root] = 1;
+    counted_[root] = 1;
     detail::SetBits(seed_bits_.data() + static_cast<size_t>(runs[i].v) * words, runs[i].u_begin,
                     runs[i].u_end);
   }
   GrowBits(width, height);
 
-  if (options_.refuse_joins) {
+  if (options_.join_min_area_px > 0) {
+    small_.assign(runs.size(), 0);
+    for (size_t i = 0; i < runs.size(); ++i) {
+      const auto root = static_cast<size_t>(parent[i]);
+      small_[root] = area_[root] < options_.join_min_area_px ? 1 : 0;
+    }
     for (size_t i = 0; i < grown_bits_.size(); ++i) grown_bits_[i] |= mask_bits_[i];
-    return keep_.Add(mask_bits_, grown_bits_, &counted, mask);
+    return keep_.Add(mask_bits_, grown_bits_, &counted_, mask, &small_);
   }
   int added = 0;
   for (int v = 0; v < height; ++v) {

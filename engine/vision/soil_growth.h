@@ -54,12 +54,12 @@ struct SoilGrowthOptions {
   int clearance_px = 4;       // soil samples lie further than this from the mask
   int min_soil_samples = 12;  // fewer samples in the box: no candidate
   int min_area_px = 30;       // blobs that grow
-  // Growth that joins two blobs of at least min_area_px is refused
-  // (holes.h, GrowthWithoutJoins). Off by default: most joins it refuses
-  // are the two halves of one plant that a band of shade split (preset B
-  // recall 0.954 with it, 0.977 without, precision 0.942 and 0.941), and
-  // the tracker measures the blobs from before any growth.
-  bool refuse_joins = false;
+  // Growth may join blobs (of min_area_px or more) only when each of them
+  // has at least this many pixels (0: any join; larger than any blob:
+  // none). Shade splits a plant
+  // into halves that should join again, but a weed beside a crop should not
+  // join it: in spray-weed mode the crop's blob would take it.
+  int join_min_area_px = 0;
 
   bool enabled() const { return z > 0.0; }
   OptionErrors Validate() const;
@@ -102,6 +102,7 @@ class SoilGrower {
       grown_bits_;
   std::vector<int> area_;         // per root run of the mask
   std::vector<uint8_t> counted_;  // per root run: the blob grows
+  std::vector<uint8_t> small_;    // per root run: under join_min_area_px
   detail::GrowthWithoutJoins keep_;
 };
 

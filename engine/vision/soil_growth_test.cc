@@ -5,9 +5,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "engine/common/rng.h"
-#include "engine/geometry/test_cameras.h"
-#include "engine/sim/simulator.h"
-#include "engine/vision/segmenter.h"
 
 namespace plantscale::vision {
 namespace {
@@ -111,7 +108,7 @@ TEST(SoilGrowth, JoinsAreRefusedOnlyWhenAsked) {
   grower.Grow(plant, joined);
   EXPECT_EQ(cv::countNonZero(joined(bridge)), bridge.area());
   SoilGrowthOptions o;
-  o.refuse_joins = true;
+  o.join_min_area_px = 1000;
   cv::Mat apart = mask.clone();
   SoilGrower refusing(o);
   refusing.Grow(plant, apart);
@@ -144,39 +141,6 @@ TEST(SoilGrowth, BadOptionsAndImagesAreNamed) {
   SoilGrower none(off);
   EXPECT_EQ(none.Grow(s.plant, s.mask), 0);
   EXPECT_EQ(cv::countNonZero(s.mask != before), 0);
-}
-
-// In the segmenter: soil growth only adds to the mask, and the tracker's
-// blobs are the same as without it.
-TEST(SoilGrowth, SegmenterKeepsTheTrackersBlobs) {
-  sim::SimulatorOptions o;
-  o.camera = geometry::testing::ThesisCamera();
-  o.field.crop_radius_m = 0.14;
-  o.render.leaf_shadow_fraction = 0.2;
-  o.render.plant_shadow_depth = 0.2;
-  o.seed = 7;
-  sim::Simulator simulator(o);
-  sim::SimFrame frame;
-  for (int i = 0; i < 10; ++i) ASSERT_TRUE(simulator.Next(frame));
-  SegmenterOptions without;
-  without.soil_growth.z = 0.0;
-  Segmenter plain(without), grown({});
-  const Segmentation& a = plain.Process(frame.rendered.image, simulator.camera());
-  const Segmentation& b = grown.Process(frame.rendered.image, simulator.camera());
-  EXPECT_EQ(cv::countNonZero(a.mask & ~b.mask), 0);
-  const cv::Mat plant = frame.rendered.labels != 0;
-  const int gained = cv::countNonZero(b.mask & ~a.mask);
-  const int gained_plant = cv::countNonZero(b.mask & ~a.mask & plant);
-  // About half of what it adds is plant on this frame, whose plants are
-  // 14 cm across with deep leaf shadows: 2379 of 4687 pixels (51 %) at the
-  // default z = 2, 1819 of 2953 (62 %) at z = 3. The rest is soil at the
-  // plants' rims, which the treatment map's footprints cover anyway.
-  EXPECT_GT(gained, 1000);
-  EXPECT_GT(gained_plant, 0.45 * gained) << gained_plant << " of " << gained;
-  ASSERT_EQ(a.track_blobs.size(), b.track_blobs.size());
-  for (size_t i = 0; i < a.track_blobs.size(); ++i) {
-    EXPECT_EQ(a.track_blobs[i].area_px, b.track_blobs[i].area_px);
-  }
 }
 
 }  // namespace
