@@ -79,7 +79,7 @@ vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
   o.fill_holes_max_fraction = 0.0;
   o.close_notches_px = 0;
   o.hull_gain = 0.0;
-  o.soil_growth.z = 0.0;  // its growth is into the simulator's shaded leaf, too
+  o.soil_growth.z = 0.0;  // as the hull growth: soil beside a real plant is soil
   std::string method = r.method == "auto" ? (colour ? "exg" : "nir") : r.method;
   if (method == "nir" && colour) {
     throw DataError("--method nir needs a near-infrared (single-channel) image; this one is "

@@ -43,7 +43,7 @@ struct TreatmentArgs {
   std::optional<int> close_notches_px;
   std::optional<double> hull_gain;
   std::optional<double> soil_growth_z;
-  int soil_growth_join_min_area_px = -1;
+  std::optional<int> soil_growth_join_min_area_px;
   std::optional<double> soil_growth_trim_z;
   std::optional<double> size_height_sd_mm;
   std::optional<double> size_edge_loss_mm;
@@ -191,8 +191,8 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
   if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
   if (a.soil_growth_z) o.segmenter.soil_growth.z = *a.soil_growth_z;
-  if (a.soil_growth_join_min_area_px >= 0) {
-    o.segmenter.soil_growth.join_min_area_px = a.soil_growth_join_min_area_px;
+  if (a.soil_growth_join_min_area_px) {
+    o.segmenter.soil_growth.join_min_area_px = *a.soil_growth_join_min_area_px;
   }
   if (a.soil_growth_trim_z) o.segmenter.soil_growth.trim_z = *a.soil_growth_trim_z;
   o.baseline_thesis = a.baseline == "thesis";
@@ -325,7 +325,7 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.0, 20.0));
   cmd->add_option("--soil-growth-join-min-area-px", args.soil_growth_join_min_area_px,
                   "segmentation: soil growth joins blobs only when each has this many pixels "
-                  "(0: any)")
+                  "(0: any; spray-weed mode joins none)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--soil-growth-trim-z", args.soil_growth_trim_z,
                   "segmentation: soil growth leaves soil samples this many sds above the soil out "
