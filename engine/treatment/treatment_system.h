@@ -174,9 +174,9 @@ BedPose TrackerPose(const tracking::GridTracker& tracker, int64_t utime, bool sp
 // The segmentation a spray mode wants, from `base`: in spray-weed mode soil
 // growth (vision/soil_growth.h) joins no blobs. A weed against a crop's rim
 // would join the crop's blob and be spared with it: field, 5 seeds, weeds
-// clear of crop hit 65.0 % with joins, 71.7 % without, 73.0 % with no soil
+// clear of crop hit 65.0 % with joins, 72.6 % without, 73.0 % with no soil
 // growth at all (spray-crop mode keeps the joins: they reunite plants that
-// shade split, preset B plant recall 0.977 against 0.954).
+// shade split, preset B plant recall 0.977 against 0.950).
 vision::SegmenterOptions SegmenterOptionsFor(SprayMode mode, vision::SegmenterOptions base = {});
 
 

@@ -253,11 +253,9 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
     area_[static_cast<size_t>(parent[i])] += runs[i].u_end - runs[i].u_begin;
   }
   seed_bits_.assign(mask_bits_.size(), 0);
-  counted_.assign(runs.size(), 0);
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto root = static_cast<size_t>(parent[i]);
     if (area_[root] < options_.min_area_px) continue;
-    counted_[root] = 1;
     detail::SetBits(seed_bits_.data() + static_cast<size_t>(runs[i].v) * words, runs[i].u_begin,
                     runs[i].u_end);
   }
@@ -270,7 +268,7 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
       small_[root] = area_[root] < options_.join_min_area_px ? 1 : 0;
     }
     for (size_t i = 0; i < grown_bits_.size(); ++i) grown_bits_[i] |= mask_bits_[i];
-    return keep_.Add(mask_bits_, grown_bits_, &counted_, mask, &small_);
+    return keep_.Add(mask_bits_, grown_bits_, nullptr, mask, &small_);
   }
   int added = 0;
   for (int v = 0; v < height; ++v) {
