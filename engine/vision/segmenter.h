@@ -72,9 +72,9 @@ struct SegmenterOptions {
   double hull_gain = 1.8;
   int hull_min_area_px = 30;
   // Local method only, last: blobs grow into the shaded rim that stands
-  // out of the soil around them (soil_growth.h; z 0: off). Presets, 5
-  // seeds, treatment crop pixels labelled crop: see soil_growth.h and the
-  // README. The tracker measures the blobs before it, as before hull growth.
+  // out of the soil around them (soil_growth.h, with its pixel figures;
+  // z 0: off; treatment figures in the README). The tracker measures the
+  // blobs before it, as before hull growth.
   SoilGrowthOptions soil_growth;
   BlobOptions blobs;
 
