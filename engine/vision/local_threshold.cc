@@ -5,6 +5,7 @@
 
 #include "engine/common/check.h"
 #include "engine/common/vectorise.h"
+#include "engine/vision/cell_grid.h"
 
 namespace plantscale::vision {
 
@@ -94,15 +95,6 @@ void Extremum(const cv::Mat& in, int r, std::vector<uint8_t>& buffer, cv::Mat& o
   }
 }
 
-// Fractional position of pixel centre i among cell centres of `cell` pixels.
-void CellCoordinate(int i, int cell, int cells, int& c0, int& c1, int& w256) {
-  const double c = (i + 0.5) / cell - 0.5;
-  const double clamped = std::clamp(c, 0.0, static_cast<double>(cells - 1));
-  c0 = static_cast<int>(clamped);
-  c1 = std::min(c0 + 1, cells - 1);
-  w256 = static_cast<int>((clamped - c0) * 256.0 + 0.5);
-}
-
 // out = 255 where in >= the threshold interpolated between rows a and b with
 // weight w/256. 16-bit arithmetic: a·(256 − w) + b·w + 128 ≤ 65408.
 PLANTSCALE_VECTOR_CLONES
@@ -115,29 +107,6 @@ void CompareRow(const uint8_t* __restrict in, const uint8_t* __restrict a,
     const auto t = static_cast<uint8_t>(sum >> 8);
     out[u] = in[u] >= t ? 255 : 0;
   }
-}
-
-// One cell row of thresholds interpolated along u when the row is a whole
-// number of cells of even size K: the K pixels between two cell centres take
-// the same weights (w = (2j + 1)·128/K, as CellCoordinate gives), and the
-// half cells at either end the end cells' values.
-template <int K>
-void ExpandRow(const uint8_t* __restrict t, int cells, uint8_t* __restrict out) {
-  static_assert(K % 2 == 0);
-  uint16_t wb[K], wa[K];
-  for (int j = 0; j < K; ++j) {
-    wb[j] = static_cast<uint16_t>(((2 * j + 1) * 256 + K) / (2 * K));
-    wa[j] = static_cast<uint16_t>(256 - wb[j]);
-  }
-  std::fill(out, out + K / 2, t[0]);
-  for (int c = 0; c + 1 < cells; ++c) {
-    uint8_t* o = out + c * K + K / 2;
-    const uint16_t a = t[c], b = t[c + 1];
-    for (int j = 0; j < K; ++j) {
-      o[j] = static_cast<uint8_t>(static_cast<uint16_t>(a * wa[j] + b * wb[j] + 128) >> 8);
-    }
-  }
-  std::fill(out + (cells - 1) * K + K / 2, out + cells * K, t[cells - 1]);
 }
 
 }  // namespace
@@ -195,32 +164,7 @@ void LocalThreshold::Estimate(const cv::Mat& grey) {
 void LocalThreshold::ExpandThresholdRows(int width, const cv::Mat& gain_lut, cv::Mat& cells_out,
                                          cv::Mat& expanded) {
   cv::LUT(opened_, gain_lut, cells_out);
-  const int cells = cells_out.cols;
-  if (columns_.size() != static_cast<size_t>(width) || columns_cells_ != cells) {
-    columns_.resize(static_cast<size_t>(width));
-    for (int u = 0; u < width; ++u) {
-      Column& c = columns_[static_cast<size_t>(u)];
-      CellCoordinate(u, options_.cell_px, cells, c.c0, c.c1, c.w);
-    }
-    columns_cells_ = cells;
-  }
-  expanded.create(cells_out.rows, width, CV_8UC1);
-  for (int r = 0; r < cells_out.rows; ++r) {
-    const auto* t = cells_out.ptr<uint8_t>(r);
-    auto* out = expanded.ptr<uint8_t>(r);
-    if (width == cells * options_.cell_px) {
-      switch (options_.cell_px) {
-        case 4: ExpandRow<4>(t, cells, out); continue;
-        case 8: ExpandRow<8>(t, cells, out); continue;
-        case 16: ExpandRow<16>(t, cells, out); continue;
-        default: break;
-      }
-    }
-    for (int u = 0; u < width; ++u) {
-      const Column& c = columns_[static_cast<size_t>(u)];
-      out[u] = static_cast<uint8_t>((t[c.c0] * (256 - c.w) + t[c.c1] * c.w + 128) >> 8);
-    }
-  }
+  expander_.Expand(cells_out, options_.cell_px, width, expanded);
 }
 
 void LocalThreshold::CompareRows(const cv::Mat& grey, const cv::Mat& expanded,

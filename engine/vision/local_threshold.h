@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/vision/cell_grid.h"
 
 namespace plantscale::vision {
 
@@ -65,11 +66,7 @@ class LocalThreshold {
   std::vector<uint16_t> column_sums_;
   std::vector<uint8_t> extremum_buffer_;
   cv::Mat expanded_;  // CV_8UC1: α·B per cell row, interpolated along u
-  struct Column {
-    int c0, c1, w;  // neighbouring cell columns and the weight of c1 (/256)
-  };
-  std::vector<Column> columns_;
-  int columns_cells_ = 0;
+  CellRowExpander expander_;
 };
 
 }  // namespace plantscale::vision

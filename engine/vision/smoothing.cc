@@ -87,7 +87,43 @@ void AddRow(const uint16_t* row, int width, uint16_t* sum) {
   for (int u = 0; u < width; ++u) sum[u] = static_cast<uint16_t>(sum[u] + row[u]);
 }
 
+// col[i] = a[i] + 2·b[i] + c[i]: the vertical taps of the 3×3 Gaussian.
+PLANTSCALE_VECTOR_CLONES
+void VerticalTaps(const uint8_t* __restrict a, const uint8_t* __restrict b,
+                  const uint8_t* __restrict c, int n, uint16_t* __restrict col) {
+  for (int i = 0; i < n; ++i) col[i] = static_cast<uint16_t>(a[i] + 2 * b[i] + c[i]);
+}
+
+// out[i] = (col[i] + 2·col[i + 1] + col[i + 2] + 8) / 16: the horizontal
+// taps, rounded as cv::GaussianBlur's fixed-point 3×3 kernel rounds.
+PLANTSCALE_VECTOR_CLONES
+void HorizontalTaps(const uint16_t* __restrict col, int n, uint8_t* __restrict out) {
+  for (int i = 0; i < n; ++i) {
+    out[i] = static_cast<uint8_t>(
+        static_cast<uint16_t>(col[i] + 2 * col[i + 1] + col[i + 2] + 8) >> 4);
+  }
+}
+
 }  // namespace
+
+void Gaussian3x3Span(const cv::Mat& grey, int v, int u0, int u1, std::vector<uint16_t>& col,
+                     uint8_t* out) {
+  const int width = grey.cols, height = grey.rows;
+  PLANTSCALE_CHECK(grey.type() == CV_8UC1 && v >= 0 && v < height && 0 <= u0 && u0 < u1 &&
+                       u1 <= width,
+                   "Gaussian3x3Span needs CV_8UC1 and a span inside the image");
+  const uint8_t* above = grey.ptr<uint8_t>(std::max(v - 1, 0));
+  const uint8_t* row = grey.ptr<uint8_t>(v);
+  const uint8_t* below = grey.ptr<uint8_t>(std::min(v + 1, height - 1));
+  // col[k] holds the vertical taps of pixel u0 − 1 + k, the end pixels
+  // replicated.
+  col.resize(static_cast<size_t>(u1 - u0) + 2);
+  const int lo = std::max(u0 - 1, 0), hi = std::min(u1 + 1, width);
+  VerticalTaps(above + lo, row + lo, below + lo, hi - lo, col.data() + (lo - u0 + 1));
+  if (u0 == 0) col[0] = col[1];
+  if (u1 == width) col[static_cast<size_t>(u1 - u0 + 1)] = col[static_cast<size_t>(u1 - u0)];
+  HorizontalTaps(col.data(), u1 - u0, out + u0);
+}
 
 int TentBoxForSigma(double sigma_px) {
   for (int n = 3; n <= 7; n += 2) {

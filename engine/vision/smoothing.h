@@ -20,6 +20,14 @@ namespace plantscale::vision {
 // when there is none in the range this smoother supports (n = 3, 5, 7).
 int TentBoxForSigma(double sigma_px);
 
+// Pixels [u0, u1) of row v of the 3×3 Gaussian of `grey` (CV_8UC1; kernel
+// [1 2 1]/4 each way, borders replicated) into out[u0, u1): the same bytes
+// as cv::GaussianBlur(grey, out, {3, 3}, 0, 0, cv::BORDER_REPLICATE), for a
+// part of a row (soil_growth.h smooths only where it looks). `col` is a
+// buffer, reused.
+void Gaussian3x3Span(const cv::Mat& grey, int v, int u0, int u1, std::vector<uint16_t>& col,
+                     uint8_t* out);
+
 class Smoother {
  public:
   // σ in pixels (> 0).

@@ -72,6 +72,30 @@ TEST(Smoothing, CloseToTheGaussianOfTheSameSigma) {
   EXPECT_EQ(cv::norm(tent, gauss, cv::NORM_INF), 0.0);
 }
 
+TEST(Smoothing, Gaussian3x3SpansAreOpenCvsBytes) {
+  // Odd sizes, so spans end off any vector width; every span touching an
+  // edge replicates it as BORDER_REPLICATE does.
+  cv::Mat grey(37, 131, CV_8UC1);
+  cv::randu(grey, 0, 256);
+  cv::Mat expected;
+  cv::GaussianBlur(grey, expected, cv::Size(3, 3), 0.0, 0.0, cv::BORDER_REPLICATE);
+  cv::Mat out(grey.size(), CV_8UC1, cv::Scalar(0));
+  std::vector<uint16_t> col;
+  for (int v = 0; v < grey.rows; ++v) {
+    // The whole row on even rows; three spans (the ends and a middle) on odd.
+    const std::vector<std::pair<int, int>> spans =
+        v % 2 == 0 ? std::vector<std::pair<int, int>>{{0, 131}}
+                   : std::vector<std::pair<int, int>>{{0, 1}, {1, 64}, {64, 131}};
+    for (const auto& [u0, u1] : spans) Gaussian3x3Span(grey, v, u0, u1, col, out.ptr<uint8_t>(v));
+  }
+  EXPECT_EQ(cv::countNonZero(out != expected), 0);
+  // A span leaves the rest of its row alone.
+  cv::Mat part(grey.size(), CV_8UC1, cv::Scalar(7));
+  Gaussian3x3Span(grey, 5, 40, 50, col, part.ptr<uint8_t>(5));
+  EXPECT_EQ(cv::countNonZero(part.row(5) != 7), 10 - cv::countNonZero(expected.row(5).colRange(40, 50) == 7));
+  EXPECT_THROW(Gaussian3x3Span(grey, 5, 50, 40, col, part.ptr<uint8_t>(5)), std::exception);
+}
+
 TEST(Smoothing, BuffersAreReusedAcrossFrames) {
   cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(30)), out;
   Smoother smoother(2.0);

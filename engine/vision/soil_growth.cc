@@ -1,12 +1,16 @@
 #include "engine/vision/soil_growth.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
+#include "engine/common/vectorise.h"
+#include "engine/vision/cell_grid.h"
 #include "engine/vision/row_bits.h"
+#include "engine/vision/smoothing.h"
 
 namespace plantscale::vision {
 
@@ -15,8 +19,8 @@ OptionErrors SoilGrowthOptions::Validate() const {
   RequireInRange(e, "z", z, 0.0, 20.0);
   RequireInRange(e, "trim_z", trim_z, 0.0, 20.0);
   if (reach_px < 1 || reach_px > 50) e.push_back({"reach_px", "must be in [1, 50]"});
-  if (cell_px < 4 || cell_px > 64 || !std::has_single_bit(static_cast<unsigned>(cell_px))) {
-    e.push_back({"cell_px", "must be a power of two in [4, 64]"});
+  if (cell_px < 8 || cell_px > 64 || !std::has_single_bit(static_cast<unsigned>(cell_px))) {
+    e.push_back({"cell_px", "must be a power of two in [8, 64]"});
   }
   if (window_cells < 1 || window_cells > 101 || window_cells % 2 == 0) {
     e.push_back({"window_cells", "must be odd and in [1, 101]"});
@@ -55,31 +59,152 @@ void StepAlongV(const std::vector<uint64_t>& in, size_t words, int rows,
   }
 }
 
-// out(r, c) = the sum of in over rows r ± h and columns c ± h within the
-// grid (CV_64F), from a summed-area table (`table`, reused): a few
-// operations per cell.
-void BoxSum(const cv::Mat& in, int h, std::vector<double>& table, cv::Mat& out) {
-  const int rows = in.rows, cols = in.cols;
-  table.assign(static_cast<size_t>(rows + 1) * static_cast<size_t>(cols + 1), 0.0);
-  const auto at = [&](int r, int c) -> double& {
-    return table[static_cast<size_t>(r) * static_cast<size_t>(cols + 1) + static_cast<size_t>(c)];
-  };
-  for (int r = 0; r < rows; ++r) {
-    const double* x = in.ptr<double>(r);
-    double row_sum = 0.0;
-    for (int c = 0; c < cols; ++c) {
-      row_sum += x[c];
-      at(r + 1, c + 1) = at(r, c + 1) + row_sum;
+// out[i](r, c) = the sum of in[i] (rows × cols, row-major) over rows r ± h
+// and columns c ± h within the grid, for the three grids at once: running
+// sums down the columns (all columns at once), then along each row, in
+// 64-bit integers (exact, and without a floating-point add's latency in
+// the running sums). The column sums' rows are padded with h + 1 zeros
+// before and h after, so the running sums along a row need no bounds.
+void BoxSums(const std::array<const std::vector<int32_t>*, 3>& in, int rows, int cols, int h,
+             std::array<std::vector<int64_t>, 3>& down,
+             const std::array<std::vector<double>*, 3>& out) {
+  const auto c = static_cast<size_t>(cols), half = static_cast<size_t>(h);
+  const size_t stride = c + 2 * half + 1;
+  for (size_t i = 0; i < 3; ++i) {
+    const auto row = [&](int r) { return in[i]->data() + static_cast<size_t>(r) * c; };
+    down[i].assign(static_cast<size_t>(rows) * stride, 0);
+    out[i]->resize(static_cast<size_t>(rows) * c);
+    int64_t* first = down[i].data() + half + 1;
+    for (int r = 0; r < std::min(h, rows); ++r) {
+      const int32_t* x = row(r);
+      for (size_t k = 0; k < c; ++k) first[k] += x[k];
+    }
+    for (int r = 0; r < rows; ++r) {
+      int64_t* d = down[i].data() + static_cast<size_t>(r) * stride + half + 1;
+      if (r > 0) std::copy(d - stride, d - stride + c, d);
+      if (r + h < rows) {
+        const int32_t* x = row(r + h);
+        for (size_t k = 0; k < c; ++k) d[k] += x[k];
+      }
+      if (r - h - 1 >= 0) {
+        const int32_t* x = row(r - h - 1);
+        for (size_t k = 0; k < c; ++k) d[k] -= x[k];
+      }
     }
   }
-  out.create(rows, cols, CV_64F);
   for (int r = 0; r < rows; ++r) {
-    const int r0 = std::max(r - h, 0), r1 = std::min(r + h + 1, rows);
-    double* o = out.ptr<double>(r);
-    for (int c = 0; c < cols; ++c) {
-      const int c0 = std::max(c - h, 0), c1 = std::min(c + h + 1, cols);
-      o[c] = at(r1, c1) - at(r0, c1) - at(r1, c0) + at(r0, c0);
+    // p[j] is column j − h − 1; out(r, k) sums p[k + 1 .. k + 2h + 1].
+    const size_t offset = static_cast<size_t>(r) * stride;
+    const int64_t* p0 = down[0].data() + offset;
+    const int64_t* p1 = down[1].data() + offset;
+    const int64_t* p2 = down[2].data() + offset;
+    double* o0 = out[0]->data() + static_cast<size_t>(r) * c;
+    double* o1 = out[1]->data() + static_cast<size_t>(r) * c;
+    double* o2 = out[2]->data() + static_cast<size_t>(r) * c;
+    int64_t s0 = 0, s1 = 0, s2 = 0;
+    for (size_t j = 1; j <= 2 * half; ++j) {
+      s0 += p0[j];
+      s1 += p1[j];
+      s2 += p2[j];
     }
+    for (size_t k = 0; k < c; ++k) {
+      const size_t add = k + 2 * half + 1;
+      s0 += p0[add] - p0[k];
+      s1 += p1[add] - p1[k];
+      s2 += p2[add] - p2[k];
+      o0[k] = static_cast<double>(s0);
+      o1[k] = static_cast<double>(s1);
+      o2[k] = static_cast<double>(s2);
+    }
+  }
+}
+
+// The samples among 16 pixels (bit k of `samples`: pixel k is one) at or
+// below their group's cap (pixels 0–7 `cap_a`, 8–15 `cap_b`): count, sum
+// and sum of squares of each 8-pixel group, added to n, s1 and s2 [0] and
+// [1]. SSE2: a masked sum of absolute differences and a multiply-add.
+inline void AddGroupSums(const uint8_t* px, uint32_t samples, uint8_t cap_a, uint8_t cap_b,
+                         int32_t* n, int32_t* s1, int32_t* s2) {
+#if defined(__SSE2__)
+  constexpr uint64_t kSpread = 0x0101010101010101ULL;
+  const auto lanes = [](uint64_t high, uint64_t low) {
+    return _mm_set_epi64x(static_cast<long long>(high), static_cast<long long>(low));
+  };
+  const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(px));
+  const __m128i bit = lanes(0x8040201008040201ULL, 0x8040201008040201ULL);
+  __m128i keep = lanes(((samples >> 8) & 0xFFu) * kSpread, (samples & 0xFFu) * kSpread);
+  keep = _mm_cmpeq_epi8(_mm_and_si128(keep, bit), bit);
+  const __m128i cap = lanes(cap_b * kSpread, cap_a * kSpread);
+  keep = _mm_and_si128(keep, _mm_cmpeq_epi8(_mm_min_epu8(x, cap), x));
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i y = _mm_and_si128(x, keep);
+  const __m128i sum = _mm_sad_epu8(y, zero);
+  const __m128i qa = _mm_madd_epi16(_mm_unpacklo_epi8(y, zero), _mm_unpacklo_epi8(y, zero));
+  const __m128i qb = _mm_madd_epi16(_mm_unpackhi_epi8(y, zero), _mm_unpackhi_epi8(y, zero));
+  __m128i q = _mm_add_epi32(_mm_unpacklo_epi32(qa, qb), _mm_unpackhi_epi32(qa, qb));
+  q = _mm_add_epi32(q, _mm_srli_si128(q, 8));
+  const __m128i count = _mm_sad_epu8(_mm_and_si128(keep, _mm_set1_epi8(1)), zero);
+  n[0] += _mm_cvtsi128_si32(count);
+  n[1] += _mm_extract_epi16(count, 4);
+  s1[0] += _mm_cvtsi128_si32(sum);
+  s1[1] += _mm_extract_epi16(sum, 4);
+  s2[0] += _mm_cvtsi128_si32(q);
+  s2[1] += _mm_cvtsi128_si32(_mm_srli_si128(q, 4));
+#else
+  for (int k = 0; k < 16; ++k) {
+    const int value = px[k], g = k / 8;
+    if (((samples >> k) & 1u) == 0 || value > (g == 0 ? cap_a : cap_b)) continue;
+    ++n[g];
+    s1[g] += value;
+    s2[g] += value * value;
+  }
+#endif
+}
+
+// mean = s1 / n and sd = max(√(s2 / n − mean²), 1) per cell; both −1
+// where n < min_n (no statistics). Branch-free, so vectorised (with
+// -fno-math-errno: sqrt sets no errno).
+PLANTSCALE_VECTOR_CLONES
+void MeanAndSd(const double* __restrict n, const double* __restrict s1,
+               const double* __restrict s2, size_t cells, double min_n, double* __restrict mean,
+               double* __restrict sd) {
+  for (size_t i = 0; i < cells; ++i) {
+    const double count = std::max(n[i], 1.0);
+    const double m = s1[i] / count;
+    const double s = std::max(std::sqrt(std::max(s2[i] / count - m * m, 0.0)), 1.0);
+    const bool valid = n[i] >= min_n;
+    mean[i] = valid ? m : -1.0;
+    sd[i] = valid ? s : -1.0;
+  }
+}
+
+// out[u] = 255 where in[u] reaches the threshold interpolated between the
+// expanded cell rows a and b (weight w/256 of b) and that threshold is not
+// 255 (no statistics), else 0. 16-bit arithmetic, as cell_grid.h's.
+PLANTSCALE_VECTOR_CLONES
+void CandidateRow(const uint8_t* __restrict in, const uint8_t* __restrict a,
+                  const uint8_t* __restrict b, int w, int n, uint8_t* __restrict out) {
+  const auto wb = static_cast<uint16_t>(w), wa = static_cast<uint16_t>(256 - w);
+  for (int u = 0; u < n; ++u) {
+    const auto sum = static_cast<uint16_t>(static_cast<uint16_t>(a[u] * wa) +
+                                           static_cast<uint16_t>(b[u] * wb) + 128);
+    const auto t = static_cast<uint8_t>(sum >> 8);
+    out[u] = in[u] >= t && t != 255 ? 255 : 0;
+  }
+}
+
+// Calls f(w0, w1) for each run [w0, w1) of nonzero bytes of need[0, words).
+template <typename F>
+void ForEachRunOfWords(const uint8_t* need, size_t words, F&& f) {
+  size_t w = 0;
+  while (w < words) {
+    if (need[w] == 0) {
+      ++w;
+      continue;
+    }
+    const size_t w0 = w;
+    while (w < words && need[w] != 0) ++w;
+    f(w0, w);
   }
 }
 
@@ -88,114 +213,168 @@ void BoxSum(const cv::Mat& in, int h, std::vector<double>& table, cv::Mat& out) 
 SoilGrower::SoilGrower(const SoilGrowthOptions& options) : options_(Validated(options)) {}
 
 void SoilGrower::ClearanceBits(int width, int height) {
-  // The mask dilated by a (2c + 1)² square: c steps along u, then along v.
+  // The mask dilated by a (2c + 1)² square, on the sampled rows only (the
+  // only ones the statistics read): c steps along u, then the OR of the
+  // rows within c.
   const auto words = static_cast<size_t>((width + 63) / 64);
-  near_bits_ = mask_bits_;
-  for (int k = 0; k < options_.clearance_px; ++k) {
-    detail::StepAlongU<true>(near_bits_, static_cast<int>(words), height, width, scratch_);
-    near_bits_.swap(scratch_);
+  const int c = options_.clearance_px;
+  scratch_ = mask_bits_;
+  for (int k = 0; k < c; ++k) {
+    detail::StepAlongU<true>(scratch_, static_cast<int>(words), height, width, near_bits_);
+    scratch_.swap(near_bits_);
   }
-  for (int k = 0; k < options_.clearance_px; ++k) {
-    StepAlongV(near_bits_, words, height, scratch_);
-    near_bits_.swap(scratch_);
+  near_bits_.assign(scratch_.size(), 0);
+  for (int v = 0; v < height; v += kRowStride) {
+    uint64_t* out = near_bits_.data() + static_cast<size_t>(v) * words;
+    for (int j = std::max(v - c, 0); j <= std::min(v + c, height - 1); ++j) {
+      const uint64_t* in = scratch_.data() + static_cast<size_t>(j) * words;
+      for (size_t w = 0; w < words; ++w) out[w] |= in[w];
+    }
   }
 }
 
-void SoilGrower::SoilStatistics(const cv::Mat* limit) {
-  n_.create(cells_h_, cells_w_, CV_64F);
-  s1_.create(cells_h_, cells_w_, CV_64F);
-  s2_.create(cells_h_, cells_w_, CV_64F);
-  n_.setTo(0.0);
-  s1_.setTo(0.0);
-  s2_.setTo(0.0);
+void SoilGrower::SoilStatistics(bool capped) {
+  const auto cells = static_cast<size_t>(cells_w_) * static_cast<size_t>(cells_h_);
+  n_.assign(cells, 0);
+  s1_.assign(cells, 0);
+  s2_.assign(cells, 0);
   const int width = smooth_.cols, height = smooth_.rows, cell = options_.cell_px;
+  const int shift = std::countr_zero(static_cast<unsigned>(cell / 8));  // 8-px groups to cells
   const auto words = static_cast<size_t>((width + 63) / 64);
-  // Every second pixel of every fourth row.
+  uint8_t tail[16] = {};
+  // Every second pixel of every fourth row, 16 at a time.
   for (int v = 0; v < height; v += kRowStride) {
     const uint8_t* x = smooth_.ptr<uint8_t>(v);
     const uint64_t* near = near_bits_.data() + static_cast<size_t>(v) * words;
-    const int r = v / cell;
-    double* n = n_.ptr<double>(r);
-    double* s1 = s1_.ptr<double>(r);
-    double* s2 = s2_.ptr<double>(r);
-    const double* top = limit ? limit->ptr<double>(r) : nullptr;
-    for (int c = 0; c < cells_w_; ++c) {
-      // The cell's samples (its even pixels) that are clear of the mask, as
-      // bits: a cell lies within one word, since cell_px is a power of two.
-      const int u0 = c * cell;
-      const uint64_t word = near[u0 / 64] >> (u0 % 64);
-      const int span = std::min(cell, width - u0);
-      const uint64_t cell_bits = span == 64 ? ~uint64_t{0} : (uint64_t{1} << span) - 1;
-      uint64_t clear = ~word & cell_bits & 0x5555555555555555ULL;
-      if (clear == 0) continue;
-      int count = 0, sum = 0, sum_sq = 0;
-      const int cap = top ? static_cast<int>(std::floor(std::min(top[c], 256.0))) : 256;
-      while (clear != 0) {
-        const int value = x[u0 + std::countr_zero(clear)];
-        clear &= clear - 1;
-        if (value > cap) continue;
-        ++count;
-        sum += value;
-        sum_sq += value * value;
+    const size_t row = static_cast<size_t>(v / cell) * static_cast<size_t>(cells_w_);
+    int32_t* n = n_.data() + row;
+    int32_t* s1 = s1_.data() + row;
+    int32_t* s2 = s2_.data() + row;
+    const uint8_t* cap = capped ? cap_.data() + row : nullptr;
+    for (int u = 0; u < width; u += 16) {
+      auto samples = static_cast<uint32_t>((~near[u / 64] >> (u % 64)) & 0x5555u);
+      const uint8_t* px = x + u;
+      if (width - u < 16) {
+        samples &= (1u << (width - u)) - 1;
+        std::copy(x + u, x + width, tail);
+        px = tail;
       }
-      n[c] += count;
-      s1[c] += sum;
-      s2[c] += sum_sq;
+      if (samples == 0) continue;
+      const int a = (u / 8) >> shift, b = std::min((u / 8 + 1) >> shift, cells_w_ - 1);
+      int32_t gn[2] = {0, 0}, gs1[2] = {0, 0}, gs2[2] = {0, 0};
+      AddGroupSums(px, samples, cap ? cap[a] : uint8_t{255}, cap ? cap[b] : uint8_t{255}, gn, gs1,
+                   gs2);
+      n[a] += gn[0];
+      n[b] += gn[1];
+      s1[a] += gs1[0];
+      s1[b] += gs1[1];
+      s2[a] += gs2[0];
+      s2[b] += gs2[1];
     }
   }
-  BoxSum(n_, options_.window_cells / 2, table_, box_n_);
-  BoxSum(s1_, options_.window_cells / 2, table_, box_s1_);
-  BoxSum(s2_, options_.window_cells / 2, table_, box_s2_);
-  mean_.create(cells_h_, cells_w_, CV_64F);
-  sd_.create(cells_h_, cells_w_, CV_64F);
-  for (int r = 0; r < cells_h_; ++r) {
-    const double* n = box_n_.ptr<double>(r);
-    const double* s1 = box_s1_.ptr<double>(r);
-    const double* s2 = box_s2_.ptr<double>(r);
-    double* mean = mean_.ptr<double>(r);
-    double* sd = sd_.ptr<double>(r);
-    for (int c = 0; c < cells_w_; ++c) {
-      if (n[c] < options_.min_soil_samples) {
-        mean[c] = sd[c] = -1.0;  // no statistics
-        continue;
-      }
-      mean[c] = s1[c] / n[c];
-      sd[c] = std::max(std::sqrt(std::max(s2[c] / n[c] - mean[c] * mean[c], 0.0)), 1.0);
+  const int h = options_.window_cells / 2;
+  BoxSums({&n_, &s1_, &s2_}, cells_h_, cells_w_, h, down_, {&box_n_, &box_s1_, &box_s2_});
+  mean_.resize(cells);
+  sd_.resize(cells);
+  MeanAndSd(box_n_.data(), box_s1_.data(), box_s2_.data(), cells,
+            static_cast<double>(options_.min_soil_samples), mean_.data(), sd_.data());
+}
+
+void SoilGrower::NeededWords(size_t words, int height) {
+  // A word is needed when a seed lies in it or a word beside it (reach_px
+  // < 64) on a row within reach_px: running counts down each word column.
+  const int reach = options_.reach_px;
+  need_.assign(words * static_cast<size_t>(height), 0);
+  counts_.assign(words, 0);
+  const auto add = [&](int v, int sign) {
+    const uint64_t* seeds = seed_bits_.data() + static_cast<size_t>(v) * words;
+    for (size_t w = 0; w < words; ++w) {
+      if (seeds[w] == 0) continue;
+      for (size_t k = w == 0 ? 0 : w - 1; k <= std::min(w + 1, words - 1); ++k) counts_[k] += sign;
     }
+  };
+  for (int v = 0; v < height + reach; ++v) {
+    if (v < height) add(v, 1);
+    if (v - 2 * reach - 1 >= 0) add(v - 2 * reach - 1, -1);
+    if (v - reach < 0) continue;
+    uint8_t* need = need_.data() + static_cast<size_t>(v - reach) * words;
+    for (size_t w = 0; w < words; ++w) need[w] = counts_[w] > 0 ? 1 : 0;
+  }
+}
+
+void SoilGrower::Smooth(const cv::Mat& plant, bool everywhere) {
+  const int width = plant.cols, height = plant.rows;
+  const auto words = static_cast<size_t>((width + 63) / 64);
+  smooth_.create(plant.size(), CV_8UC1);
+  for (int v = 0; v < height; ++v) {
+    uint8_t* out = smooth_.ptr<uint8_t>(v);
+    const auto span = [&](int u0, int u1) { Gaussian3x3Span(plant, v, u0, u1, col_, out); };
+    if (everywhere || v % kRowStride == 0) {
+      span(0, width);
+      continue;
+    }
+    ForEachRunOfWords(need_.data() + static_cast<size_t>(v) * words, words, [&](size_t w0, size_t w1) {
+      span(static_cast<int>(64 * w0), std::min(static_cast<int>(64 * w1), width));
+    });
   }
 }
 
 void SoilGrower::Thresholds() {
   // Per cell: ceil(μ + z·σ), 255 where there are no statistics or it is at
-  // least 255 (then no pixel is a candidate: valid_ below).
+  // least 255 (then no pixel is a candidate: CandidateRow).
   cell_threshold_.create(cells_h_, cells_w_, CV_8U);
   for (int r = 0; r < cells_h_; ++r) {
-    const double* mean = mean_.ptr<double>(r);
-    const double* sd = sd_.ptr<double>(r);
+    const size_t row = static_cast<size_t>(r) * static_cast<size_t>(cells_w_);
     uint8_t* t = cell_threshold_.ptr<uint8_t>(r);
     for (int c = 0; c < cells_w_; ++c) {
-      const double level = std::ceil(mean[c] + options_.z * sd[c]);
-      t[c] = mean[c] < 0.0 || level >= 255.0 ? uint8_t{255} : static_cast<uint8_t>(level);
+      const double mean = mean_[row + static_cast<size_t>(c)];
+      const double level = std::ceil(mean + options_.z * sd_[row + static_cast<size_t>(c)]);
+      t[c] = mean < 0.0 || level >= 255.0 ? uint8_t{255} : static_cast<uint8_t>(level);
     }
   }
-  const int cell = options_.cell_px;
-  cv::resize(cell_threshold_, threshold_, cv::Size(cells_w_ * cell, cells_h_ * cell), 0.0, 0.0,
-             cv::INTER_LINEAR);
-  const cv::Mat t = threshold_(cv::Rect(0, 0, smooth_.cols, smooth_.rows));
-  cv::compare(smooth_, t, candidate_, cv::CMP_GE);
-  cv::compare(t, 255, valid_, cv::CMP_LT);
-  cv::bitwise_and(candidate_, valid_, candidate_);
+  expander_.Expand(cell_threshold_, options_.cell_px, smooth_.cols, expanded_);
+}
+
+void SoilGrower::CandidateBits(bool everywhere, std::vector<uint64_t>& bits) {
+  const int width = smooth_.cols, height = smooth_.rows;
+  const auto words = static_cast<size_t>((width + 63) / 64);
+  bits.assign(mask_bits_.size(), 0);
+  row_.resize(words * 64);
+  all_.assign(words, 1);
+  for (int v = 0; v < height; ++v) {
+    int r0, r1, w;
+    CellCoordinate(v, options_.cell_px, cells_h_, r0, r1, w);
+    const uint8_t* a = expanded_.ptr<uint8_t>(r0);
+    const uint8_t* b = expanded_.ptr<uint8_t>(r1);
+    const uint8_t* x = smooth_.ptr<uint8_t>(v);
+    const size_t row = static_cast<size_t>(v) * words;
+    const uint8_t* need = everywhere ? all_.data() : need_.data() + row;
+    ForEachRunOfWords(need, words, [&](size_t w0, size_t w1) {
+      const int u0 = static_cast<int>(64 * w0), u1 = std::min(static_cast<int>(64 * w1), width);
+      CandidateRow(x + u0, a + u0, b + u0, w, u1 - u0, row_.data());
+      detail::RowBits(row_.data(), u1 - u0, bits.data() + row + w0);
+    });
+    for (size_t k = 0; k < words; ++k) bits[row + k] &= ~mask_bits_[row + k];
+  }
+}
+
+cv::Mat SoilGrower::Candidates() {
+  cv::Mat out(plant_.size(), CV_8UC1, cv::Scalar(0));
+  if (expanded_.empty() || plant_.empty()) return out;
+  Smooth(plant_, true);
+  CandidateBits(true, all_bits_);
+  const auto words = static_cast<size_t>((plant_.cols + 63) / 64);
+  for (int v = 0; v < plant_.rows; ++v) {
+    uint8_t* o = out.ptr<uint8_t>(v);
+    detail::ForEachRun(all_bits_.data() + static_cast<size_t>(v) * words, plant_.cols,
+                       [&](int u0, int u1) { std::fill(o + u0, o + u1, uint8_t{255}); });
+  }
+  return out;
 }
 
 void SoilGrower::GrowBits(int width, int height) {
   const auto words = static_cast<size_t>((width + 63) / 64);
-  candidate_bits_.resize(mask_bits_.size());
-  for (int v = 0; v < height; ++v) {
-    uint64_t* c = candidate_bits_.data() + static_cast<size_t>(v) * words;
-    detail::RowBits(candidate_.ptr<uint8_t>(v), width, c);
-    const uint64_t* m = mask_bits_.data() + static_cast<size_t>(v) * words;
-    for (size_t w = 0; w < words; ++w) c[w] &= ~m[w];
-  }
+  CandidateBits(false, candidate_bits_);
   // Geodesic growth: one 3×3 dilation a step, kept to the seeds and the
   // candidates.
   grown_bits_ = seed_bits_;
@@ -224,26 +403,9 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
     detail::RowBits(mask.ptr<uint8_t>(v), width, mask_bits_.data() + static_cast<size_t>(v) * words);
   }
   keep_.LabelMask(mask_bits_, width, height);
+  plant_ = plant;
+  expanded_.release();  // Candidates(): none judged yet
   if (mask.empty() || !options_.enabled()) return 0;
-
-  cv::GaussianBlur(plant, smooth_, cv::Size(3, 3), 0.0, 0.0, cv::BORDER_REPLICATE);
-  cells_w_ = (width + options_.cell_px - 1) / options_.cell_px;
-  cells_h_ = (height + options_.cell_px - 1) / options_.cell_px;
-  ClearanceBits(width, height);
-  SoilStatistics(nullptr);
-  if (options_.trim_z > 0.0) {
-    limit_.create(cells_h_, cells_w_, CV_64F);
-    for (int r = 0; r < cells_h_; ++r) {
-      const double* mean = mean_.ptr<double>(r);
-      const double* sd = sd_.ptr<double>(r);
-      double* top = limit_.ptr<double>(r);
-      for (int c = 0; c < cells_w_; ++c) {
-        top[c] = mean[c] < 0.0 ? 256.0 : mean[c] + options_.trim_z * sd[c];
-      }
-    }
-    SoilStatistics(&limit_);
-  }
-  Thresholds();
 
   // Seeds: the blobs of at least min_area_px pixels.
   const std::vector<detail::RowRun>& runs = keep_.runs();
@@ -253,12 +415,34 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
     area_[static_cast<size_t>(parent[i])] += runs[i].u_end - runs[i].u_begin;
   }
   seed_bits_.assign(mask_bits_.size(), 0);
+  bool seeds = false;
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto root = static_cast<size_t>(parent[i]);
     if (area_[root] < options_.min_area_px) continue;
     detail::SetBits(seed_bits_.data() + static_cast<size_t>(runs[i].v) * words, runs[i].u_begin,
                     runs[i].u_end);
+    seeds = true;
   }
+  if (!seeds) return 0;
+
+  // The soil statistics need the smoothed image on the sampled rows, the
+  // candidates only within reach of a seed.
+  NeededWords(words, height);
+  Smooth(plant, false);
+  cells_w_ = (width + options_.cell_px - 1) / options_.cell_px;
+  cells_h_ = (height + options_.cell_px - 1) / options_.cell_px;
+  ClearanceBits(width, height);
+  SoilStatistics(false);
+  if (options_.trim_z > 0.0) {
+    // Caps of the second pass: ⌊μ + trim_z·σ⌋ (255 keeps every sample).
+    cap_.resize(mean_.size());
+    for (size_t i = 0; i < mean_.size(); ++i) {
+      const double top = mean_[i] < 0.0 ? 255.0 : std::min(mean_[i] + options_.trim_z * sd_[i], 255.0);
+      cap_[i] = static_cast<uint8_t>(std::floor(top));
+    }
+    SoilStatistics(true);
+  }
+  Thresholds();
   GrowBits(width, height);
 
   if (options_.join_min_area_px > 0) {

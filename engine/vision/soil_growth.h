@@ -33,10 +33,12 @@
 // treatment (bed treated, weeds hit) is in the README's Treatment section.
 
 #include <opencv2/core.hpp>
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/vision/cell_grid.h"
 #include "engine/vision/holes.h"
 
 namespace plantscale::vision {
@@ -77,9 +79,11 @@ class SoilGrower {
   // and returns how many. Throws DataError on a type or size mismatch.
   int Grow(const cv::Mat& plant, cv::Mat& mask);
 
-  // The candidates of the last Grow (CV_8UC1, 255 candidate), for tests and
-  // figures.
-  const cv::Mat& candidates() const { return candidate_; }
+  // The candidates over the whole image by the last Grow's thresholds
+  // (CV_8UC1, 255 candidate; all 0 when that Grow had no blob to grow), for
+  // tests and figures. Grow itself judges only the pixels within 64 px
+  // across and reach_px down of a blob, the only ones growth can get to.
+  cv::Mat Candidates();
   const SoilGrowthOptions& options() const { return options_; }
   // The mask's runs and blobs as they were before the last Grow (its
   // labelling, for BlobExtractor::ExtractLabelled).
@@ -88,21 +92,36 @@ class SoilGrower {
 
  private:
   void ClearanceBits(int width, int height);
-  // Adds the samples at or below `limit` (per cell; null: all) to the
-  // cells' sums, then box-sums them into mean_ and sd_.
-  void SoilStatistics(const cv::Mat* limit);
+  // Sums the samples (capped: those at or below their cell's cap_) per
+  // cell, then box-sums them into mean_ and sd_.
+  void SoilStatistics(bool capped);
+  // need_: the 64-px words within reach of a seed.
+  void NeededWords(size_t words, int height);
+  // smooth_ on the sampled rows and the needed words (everywhere: all).
+  void Smooth(const cv::Mat& plant, bool everywhere);
   void Thresholds();
+  // Candidate pixels outside the mask as bits, in the needed words
+  // (everywhere: all).
+  void CandidateBits(bool everywhere, std::vector<uint64_t>& bits);
   void GrowBits(int width, int height);
 
   SoilGrowthOptions options_;
   int cells_w_ = 0, cells_h_ = 0;
-  cv::Mat smooth_;                           // 3×3 Gaussian of the plant image
-  cv::Mat n_, s1_, s2_, box_n_, box_s1_, box_s2_, mean_, sd_, limit_;  // per cell, CV_64F
-  std::vector<double> table_;  // summed-area table of a cell grid
-  cv::Mat cell_threshold_, threshold_, valid_;  // CV_8U: per cell, per pixel
-  cv::Mat candidate_;
+  cv::Mat plant_;   // the last Grow's plant image (a header)
+  cv::Mat smooth_;  // 3×3 Gaussian of the plant image where needed
+  // Per cell, row-major: sample sums, their box sums, soil mean and sd (−1:
+  // no statistics), the second pass's caps.
+  std::vector<int32_t> n_, s1_, s2_;
+  std::array<std::vector<int64_t>, 3> down_;  // column sums of the boxes
+  std::vector<double> box_n_, box_s1_, box_s2_, mean_, sd_;
+  std::vector<uint8_t> cap_;
+  cv::Mat cell_threshold_, expanded_;  // CV_8U: per cell, per cell row along u
+  CellRowExpander expander_;
   std::vector<uint64_t> mask_bits_, near_bits_, scratch_, candidate_bits_, seed_bits_,
-      grown_bits_;
+      grown_bits_, all_bits_;
+  std::vector<uint8_t> need_, all_, row_;  // per row and word; a row of bytes
+  std::vector<int> counts_;                // per word: seed rows within reach
+  std::vector<uint16_t> col_;              // vertical taps of the smoothing
   std::vector<int> area_;         // per root run of the mask
   std::vector<uint8_t> small_;    // per root run: under join_min_area_px
   detail::GrowthWithoutJoins keep_;

@@ -69,12 +69,46 @@ TEST(SoilGrowth, BrightSoilNotReachedFromABlobStaysSoil) {
   s.mask(cv::Rect(134, 94, 4, 4)).setTo(255);
   SoilGrower grower;
   grower.Grow(s.plant, s.mask);
+  const cv::Mat candidates = grower.Candidates();
   // Both are candidates (bright against their soil) ...
-  EXPECT_EQ(cv::countNonZero(grower.candidates()(cv::Rect(112, 52, 6, 6))), 36);
-  EXPECT_GT(cv::countNonZero(grower.candidates()(cv::Rect(131, 91, 10, 10))), 50);
+  EXPECT_EQ(cv::countNonZero(candidates(cv::Rect(112, 52, 6, 6))), 36);
+  EXPECT_GT(cv::countNonZero(candidates(cv::Rect(131, 91, 10, 10))), 50);
   // ... but neither is reached from a blob of 30 px or more.
   EXPECT_EQ(cv::countNonZero(s.mask(cv::Rect(100, 40, 30, 30))), 0);
   EXPECT_EQ(cv::countNonZero(s.mask(cv::Rect(128, 88, 16, 16))), 16);
+}
+
+TEST(SoilGrowth, JudgingOnlyWithinReachOfABlobLosesNoGrowth) {
+  // Plants whose shaded rims cross the 64-px words' edges (u = 64, 128)
+  // where the blob itself does not, one across u = 192, others against the
+  // image's right and bottom edges, and bright soil touching a rim: Grow judges only the pixels growth can get
+  // to, so it must match a geodesic growth over the candidates judged
+  // everywhere.
+  cv::Mat plant = Soil(260, 150, 6);
+  cv::Mat mask(plant.size(), CV_8UC1, cv::Scalar(0)), rim = mask.clone();
+  for (const cv::Point centre : {cv::Point(50, 40), cv::Point(141, 100), cv::Point(190, 30),
+                                 cv::Point(250, 90), cv::Point(100, 145)}) {
+    cv::circle(rim, centre, 17, cv::Scalar(255), cv::FILLED);
+    cv::circle(mask, centre, 12, cv::Scalar(255), cv::FILLED);
+  }
+  rim.setTo(0, mask);
+  plant.setTo(120, rim);
+  plant(cv::Rect(66, 36, 4, 8)).setTo(115);  // bright soil from the first rim on
+  plant.setTo(200, mask);
+  cv::Mat grown = mask.clone();
+  SoilGrower grower;
+  const int added = grower.Grow(plant, grown);
+  // The reference: six 3×3 dilations of the blobs, each kept to the blobs
+  // and the candidates.
+  const cv::Mat allowed = mask | grower.Candidates();
+  cv::Mat expected = mask.clone();
+  for (int k = 0; k < grower.options().reach_px; ++k) {
+    cv::dilate(expected, expected, cv::Mat::ones(3, 3, CV_8UC1));
+    expected &= allowed;
+  }
+  EXPECT_GT(added, 2000);  // the rims: 5 × π(17² − 12²) ≈ 2280 px less the cut edges
+  EXPECT_EQ(added, cv::countNonZero(expected) - cv::countNonZero(mask));
+  EXPECT_EQ(cv::countNonZero(grown != expected), 0);
 }
 
 TEST(SoilGrowth, GrowthStopsAfterItsReach) {
