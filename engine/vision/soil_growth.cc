@@ -178,33 +178,99 @@ void MeanAndSd(const double* __restrict n, const double* __restrict s1,
   }
 }
 
-// out[u] = 255 where in[u] reaches the threshold interpolated between the
-// expanded cell rows a and b (weight w/256 of b) and that threshold is not
-// 255 (no statistics), else 0. 16-bit arithmetic, as cell_grid.h's.
-PLANTSCALE_VECTOR_CLONES
-void CandidateRow(const uint8_t* __restrict in, const uint8_t* __restrict a,
-                  const uint8_t* __restrict b, int w, int n, uint8_t* __restrict out) {
-  const auto wb = static_cast<uint16_t>(w), wa = static_cast<uint16_t>(256 - w);
-  for (int u = 0; u < n; ++u) {
-    const auto sum = static_cast<uint16_t>(static_cast<uint16_t>(a[u] * wa) +
-                                           static_cast<uint16_t>(b[u] * wb) + 128);
-    const auto t = static_cast<uint8_t>(sum >> 8);
-    out[u] = in[u] >= t && t != 255 ? 255 : 0;
+// Bit u of the result is set where bit u of `want` is (u < n ≤ 64) and
+// in[u] reaches the threshold interpolated between the expanded cell rows
+// a and b (wb/256 of b, wa = 256 − wb of a), unless that threshold is 255
+// (no statistics). 16-bit arithmetic, as cell_grid.h's Interpolate; SSE2,
+// 16 pixels a compare, for the 16-pixel chunks of a whole word that hold a
+// wanted bit (the rest of in, a and b is not read).
+uint64_t CandidateWord(const uint8_t* in, const uint8_t* a, const uint8_t* b,
+                       [[maybe_unused]] uint16_t wa, uint16_t wb, int n, uint64_t want) {
+  uint64_t bits = 0;
+#if defined(__SSE2__)
+  if (n == 64) {
+    const __m128i zero = _mm_setzero_si128(), round = _mm_set1_epi16(128);
+    const __m128i va = _mm_set1_epi16(static_cast<short>(wa));
+    const __m128i vb = _mm_set1_epi16(static_cast<short>(wb));
+    const __m128i none = _mm_set1_epi8(static_cast<char>(255));
+    const auto half = [&](__m128i x, __m128i y) {
+      return _mm_srli_epi16(
+          _mm_add_epi16(_mm_add_epi16(_mm_mullo_epi16(x, va), _mm_mullo_epi16(y, vb)), round), 8);
+    };
+    for (int u = 0; u < 64; u += 16) {
+      if (((want >> u) & 0xFFFFu) == 0) continue;
+      const auto load = [&](const uint8_t* p) {
+        return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + u));
+      };
+      const __m128i x = load(in), ta = load(a), tb = load(b);
+      const __m128i t = _mm_packus_epi16(
+          half(_mm_unpacklo_epi8(ta, zero), _mm_unpacklo_epi8(tb, zero)),
+          half(_mm_unpackhi_epi8(ta, zero), _mm_unpackhi_epi8(tb, zero)));
+      const __m128i reaches = _mm_cmpeq_epi8(_mm_max_epu8(x, t), x);
+      const __m128i yes = _mm_andnot_si128(_mm_cmpeq_epi8(t, none), reaches);
+      bits |= static_cast<uint64_t>(static_cast<uint32_t>(_mm_movemask_epi8(yes))) << u;
+    }
+    return bits & want;
+  }
+#endif
+  for (uint64_t left = want & (n == 64 ? ~uint64_t{0} : (uint64_t{1} << n) - 1); left != 0;
+       left &= left - 1) {
+    const int u = std::countr_zero(left);
+    const uint8_t t = Interpolate(a[u], b[u], wb);
+    if (in[u] >= t && t != 255) bits |= uint64_t{1} << u;
+  }
+  return bits;
+}
+
+// bits dilated by `r` pixels along u (rows of `words` words; bits past
+// `width` cleared): shifted copies ORed in with radii 1, 3, 7, ... up to r
+// (r < 64), over the whole buffer as one bit string (vectorised), then each
+// row's end words again without the carries across rows.
+void DilateAlongU(std::vector<uint64_t>& bits, size_t words, int rows, int width, int r,
+                  std::vector<uint64_t>& scratch) {
+  const uint64_t last = width % 64 == 0 ? ~uint64_t{0} : (uint64_t{1} << (width % 64)) - 1;
+  const size_t n = bits.size();
+  for (int c = 0; c < r;) {
+    const int s = std::min(c + 1, r - c);
+    scratch.resize(n);
+    const uint64_t* __restrict x = bits.data();
+    uint64_t* __restrict o = scratch.data();
+    for (size_t i = 1; i + 1 < n; ++i) {
+      o[i] = x[i] | (x[i] << s) | (x[i - 1] >> (64 - s)) | (x[i] >> s) | (x[i + 1] << (64 - s));
+    }
+    for (int v = 0; v < rows; ++v) {
+      const size_t first = static_cast<size_t>(v) * words, end = first + words - 1;
+      const auto one = [&](size_t i) {
+        uint64_t y = x[i] | (x[i] << s) | (x[i] >> s);
+        if (i > first) y |= x[i - 1] >> (64 - s);
+        if (i < end) y |= x[i + 1] << (64 - s);
+        o[i] = y;
+      };
+      one(first);
+      if (end != first) one(end);
+      o[end] &= last;
+    }
+    bits.swap(scratch);
+    c += s;
   }
 }
 
-// Calls f(w0, w1) for each run [w0, w1) of nonzero bytes of need[0, words).
-template <typename F>
-void ForEachRunOfWords(const uint8_t* need, size_t words, F&& f) {
-  size_t w = 0;
-  while (w < words) {
-    if (need[w] == 0) {
-      ++w;
-      continue;
+// The same along v: rows v − s and v + s ORed in, radii 1, 3, 7, ... up to r.
+void DilateAlongV(std::vector<uint64_t>& bits, size_t words, int rows, int r,
+                  std::vector<uint64_t>& scratch) {
+  for (int c = 0; c < r;) {
+    const int s = std::min(c + 1, r - c);
+    scratch = bits;
+    for (int v = 0; v < rows; ++v) {
+      uint64_t* o = scratch.data() + static_cast<size_t>(v) * words;
+      for (const int j : {v - s, v + s}) {
+        if (j < 0 || j >= rows) continue;
+        const uint64_t* x = bits.data() + static_cast<size_t>(j) * words;
+        for (size_t w = 0; w < words; ++w) o[w] |= x[w];
+      }
     }
-    const size_t w0 = w;
-    while (w < words && need[w] != 0) ++w;
-    f(w0, w);
+    bits.swap(scratch);
+    c += s;
   }
 }
 
@@ -280,26 +346,13 @@ void SoilGrower::SoilStatistics(bool capped) {
             static_cast<double>(options_.min_soil_samples), mean_.data(), sd_.data());
 }
 
-void SoilGrower::NeededWords(size_t words, int height) {
-  // A word is needed when a seed lies in it or a word beside it (reach_px
-  // < 64) on a row within reach_px: running counts down each word column.
-  const int reach = options_.reach_px;
-  need_.assign(words * static_cast<size_t>(height), 0);
-  counts_.assign(words, 0);
-  const auto add = [&](int v, int sign) {
-    const uint64_t* seeds = seed_bits_.data() + static_cast<size_t>(v) * words;
-    for (size_t w = 0; w < words; ++w) {
-      if (seeds[w] == 0) continue;
-      for (size_t k = w == 0 ? 0 : w - 1; k <= std::min(w + 1, words - 1); ++k) counts_[k] += sign;
-    }
-  };
-  for (int v = 0; v < height + reach; ++v) {
-    if (v < height) add(v, 1);
-    if (v - 2 * reach - 1 >= 0) add(v - 2 * reach - 1, -1);
-    if (v - reach < 0) continue;
-    uint8_t* need = need_.data() + static_cast<size_t>(v - reach) * words;
-    for (size_t w = 0; w < words; ++w) need[w] = counts_[w] > 0 ? 1 : 0;
-  }
+void SoilGrower::Band(int width, int height) {
+  // The seeds dilated by a (2·reach_px + 1)² square, less the mask.
+  const auto words = static_cast<size_t>((width + 63) / 64);
+  band_ = seed_bits_;
+  DilateAlongU(band_, words, height, width, options_.reach_px, scratch_);
+  DilateAlongV(band_, words, height, options_.reach_px, scratch_);
+  for (size_t i = 0; i < band_.size(); ++i) band_[i] &= ~mask_bits_[i];
 }
 
 void SoilGrower::Smooth(const cv::Mat& plant, bool everywhere) {
@@ -313,15 +366,23 @@ void SoilGrower::Smooth(const cv::Mat& plant, bool everywhere) {
       span(0, width);
       continue;
     }
-    ForEachRunOfWords(need_.data() + static_cast<size_t>(v) * words, words, [&](size_t w0, size_t w1) {
-      span(static_cast<int>(64 * w0), std::min(static_cast<int>(64 * w1), width));
-    });
+    // Whole words of the band: fewer, longer spans than its chunks.
+    const uint64_t* band = band_.data() + static_cast<size_t>(v) * words;
+    for (size_t w = 0; w < words;) {
+      if (band[w] == 0) {
+        ++w;
+        continue;
+      }
+      const size_t w0 = w;
+      while (w < words && band[w] != 0) ++w;
+      span(static_cast<int>(64 * w0), std::min(static_cast<int>(64 * w), width));
+    }
   }
 }
 
 void SoilGrower::Thresholds() {
   // Per cell: ceil(μ + z·σ), 255 where there are no statistics or it is at
-  // least 255 (then no pixel is a candidate: CandidateRow).
+  // least 255 (then no pixel is a candidate: CandidateWord).
   cell_threshold_.create(cells_h_, cells_w_, CV_8U);
   for (int r = 0; r < cells_h_; ++r) {
     const size_t row = static_cast<size_t>(r) * static_cast<size_t>(cells_w_);
@@ -339,8 +400,6 @@ void SoilGrower::CandidateBits(bool everywhere, std::vector<uint64_t>& bits) {
   const int width = smooth_.cols, height = smooth_.rows;
   const auto words = static_cast<size_t>((width + 63) / 64);
   bits.assign(mask_bits_.size(), 0);
-  row_.resize(words * 64);
-  all_.assign(words, 1);
   for (int v = 0; v < height; ++v) {
     int r0, r1, w;
     CellCoordinate(v, options_.cell_px, cells_h_, r0, r1, w);
@@ -348,13 +407,13 @@ void SoilGrower::CandidateBits(bool everywhere, std::vector<uint64_t>& bits) {
     const uint8_t* b = expanded_.ptr<uint8_t>(r1);
     const uint8_t* x = smooth_.ptr<uint8_t>(v);
     const size_t row = static_cast<size_t>(v) * words;
-    const uint8_t* need = everywhere ? all_.data() : need_.data() + row;
-    ForEachRunOfWords(need, words, [&](size_t w0, size_t w1) {
-      const int u0 = static_cast<int>(64 * w0), u1 = std::min(static_cast<int>(64 * w1), width);
-      CandidateRow(x + u0, a + u0, b + u0, w, u1 - u0, row_.data());
-      detail::RowBits(row_.data(), u1 - u0, bits.data() + row + w0);
-    });
-    for (size_t k = 0; k < words; ++k) bits[row + k] &= ~mask_bits_[row + k];
+    const auto wb = static_cast<uint16_t>(w), wa = static_cast<uint16_t>(256 - w);
+    for (size_t k = 0; k < words; ++k) {
+      const uint64_t want = everywhere ? ~mask_bits_[row + k] : band_[row + k];
+      if (want == 0) continue;
+      const int u0 = static_cast<int>(64 * k), n = std::min(64, width - u0);
+      bits[row + k] = CandidateWord(x + u0, a + u0, b + u0, wa, wb, n, want);
+    }
   }
 }
 
@@ -426,8 +485,8 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
   if (!seeds) return 0;
 
   // The soil statistics need the smoothed image on the sampled rows, the
-  // candidates only within reach of a seed.
-  NeededWords(words, height);
+  // candidates only within reach of a seed (band_).
+  Band(width, height);
   Smooth(plant, false);
   cells_w_ = (width + options_.cell_px - 1) / options_.cell_px;
   cells_h_ = (height + options_.cell_px - 1) / options_.cell_px;

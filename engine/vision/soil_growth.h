@@ -81,8 +81,8 @@ class SoilGrower {
 
   // The candidates over the whole image by the last Grow's thresholds
   // (CV_8UC1, 255 candidate; all 0 when that Grow had no blob to grow), for
-  // tests and figures. Grow itself judges only the pixels within 64 px
-  // across and reach_px down of a blob, the only ones growth can get to.
+  // tests and figures. Grow itself judges only the pixels within reach_px
+  // of a blob, the only ones growth can get to.
   cv::Mat Candidates();
   const SoilGrowthOptions& options() const { return options_; }
   // The mask's runs and blobs as they were before the last Grow (its
@@ -95,13 +95,15 @@ class SoilGrower {
   // Sums the samples (capped: those at or below their cell's cap_) per
   // cell, then box-sums them into mean_ and sd_.
   void SoilStatistics(bool capped);
-  // need_: the 64-px words within reach of a seed.
-  void NeededWords(size_t words, int height);
-  // smooth_ on the sampled rows and the needed words (everywhere: all).
+  // band_: the pixels outside the mask within reach_px (a square) of a
+  // seed, the only ones growth can get to.
+  void Band(int width, int height);
+  // smooth_ on the sampled rows and the band's 16-px chunks (everywhere:
+  // all).
   void Smooth(const cv::Mat& plant, bool everywhere);
   void Thresholds();
-  // Candidate pixels outside the mask as bits, in the needed words
-  // (everywhere: all).
+  // Candidate pixels as bits, in the band (everywhere: all outside the
+  // mask).
   void CandidateBits(bool everywhere, std::vector<uint64_t>& bits);
   void GrowBits(int width, int height);
 
@@ -118,9 +120,7 @@ class SoilGrower {
   cv::Mat cell_threshold_, expanded_;  // CV_8U: per cell, per cell row along u
   CellRowExpander expander_;
   std::vector<uint64_t> mask_bits_, near_bits_, scratch_, candidate_bits_, seed_bits_,
-      grown_bits_, all_bits_;
-  std::vector<uint8_t> need_, all_, row_;  // per row and word; a row of bytes
-  std::vector<int> counts_;                // per word: seed rows within reach
+      grown_bits_, all_bits_, band_;
   std::vector<uint16_t> col_;              // vertical taps of the smoothing
   std::vector<int> area_;         // per root run of the mask
   std::vector<uint8_t> small_;    // per root run: under join_min_area_px
