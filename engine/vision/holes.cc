@@ -105,15 +105,16 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
   for (int k = 1; k <= r; ++k) {
     detail::StepAlongU<true>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
   }
+  // One pass over the buffer per row offset dv (rows v and v + dv both in
+  // the image: one contiguous block), so the loop is long and vectorised.
   scratch_.assign(mask_bits_.size(), 0);
-  for (int v = 0; v < height; ++v) {
-    uint64_t* o = scratch_.data() + static_cast<size_t>(v) * words;
-    for (int dv = -r; dv <= r; ++dv) {
-      if (v + dv < 0 || v + dv >= height) continue;
-      const uint64_t* in = steps_[static_cast<size_t>(half(dv))].data() +
-                           static_cast<size_t>(v + dv) * words;
-      for (size_t w = 0; w < words; ++w) o[w] |= in[w];
-    }
+  for (int dv = -r; dv <= r; ++dv) {
+    const int v0 = std::max(0, -dv), v1 = std::min(height, height - dv);
+    uint64_t* __restrict o = scratch_.data() + static_cast<size_t>(v0) * words;
+    const uint64_t* __restrict in =
+        steps_[static_cast<size_t>(half(dv))].data() + static_cast<size_t>(v0 + dv) * words;
+    const size_t n = static_cast<size_t>(v1 - v0) * words;
+    for (size_t i = 0; i < n; ++i) o[i] |= in[i];
   }
   // Erosion: AND over the disk's rows of each row eroded by its half-width;
   // rows beyond the image count as soil.
@@ -122,14 +123,13 @@ int NotchCloser::Close(cv::Mat& mask, int radius_px) {
     detail::StepAlongU<false>(steps_[static_cast<size_t>(k - 1)], words_per_row, height, width, steps_[static_cast<size_t>(k)]);
   }
   closed_bits_.assign(mask_bits_.size(), 0);
-  for (int v = r; v < height - r; ++v) {
-    uint64_t* o = closed_bits_.data() + static_cast<size_t>(v) * words;
-    std::fill(o, o + words, ~uint64_t{0});
-    for (int dv = -r; dv <= r; ++dv) {
-      const uint64_t* in = steps_[static_cast<size_t>(half(dv))].data() +
-                           static_cast<size_t>(v + dv) * words;
-      for (size_t w = 0; w < words; ++w) o[w] &= in[w];
-    }
+  const size_t inner = static_cast<size_t>(height - 2 * r) * words;
+  std::fill_n(closed_bits_.data() + static_cast<size_t>(r) * words, inner, ~uint64_t{0});
+  for (int dv = -r; dv <= r; ++dv) {
+    uint64_t* __restrict o = closed_bits_.data() + static_cast<size_t>(r) * words;
+    const uint64_t* __restrict in =
+        steps_[static_cast<size_t>(half(dv))].data() + static_cast<size_t>(r + dv) * words;
+    for (size_t i = 0; i < inner; ++i) o[i] &= in[i];
   }
   for (size_t i = 0; i < closed_bits_.size(); ++i) closed_bits_[i] |= mask_bits_[i];
   // A closed region keeps its new pixels only when it holds one blob.
