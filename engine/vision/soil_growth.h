@@ -61,7 +61,7 @@ struct SoilGrowthOptions {
   // without.
   double trim_z = 2.5;
   int reach_px = 6;           // growth steps from a blob (pixels)
-  int cell_px = 8;            // soil statistics grid
+  int cell_px = 8;            // soil statistics grid (a power of two, 8–64)
   int window_cells = 7;       // soil statistics box, cells (odd)
   int clearance_px = 4;       // soil samples lie further than this from the mask
   int min_soil_samples = 12;  // fewer samples in the box: no candidate
@@ -91,8 +91,9 @@ class SoilGrower {
 
   // The candidates over the whole image by the last Grow's thresholds
   // (CV_8UC1, 255 candidate; all 0 when that Grow had no blob to grow), for
-  // tests and figures. Grow itself judges only the pixels within reach_px
-  // of a blob, the only ones growth can get to.
+  // tests and figures, while that Grow's plant image is unchanged. Grow
+  // itself judges only the pixels within reach_px of a blob, the only ones
+  // growth can get to.
   cv::Mat Candidates();
   const SoilGrowthOptions& options() const { return options_; }
   // The mask's runs and blobs as they were before the last Grow (its
@@ -108,7 +109,7 @@ class SoilGrower {
   // band_: the pixels outside the mask within reach_px (a square) of a
   // seed, the only ones growth can get to.
   void Band(int width, int height);
-  // smooth_ on the sampled rows and the band's 16-px chunks (everywhere:
+  // smooth_ on the sampled rows and the band's 64-px words (everywhere:
   // all).
   void Smooth(const cv::Mat& plant, bool everywhere);
   void Thresholds();
@@ -119,7 +120,7 @@ class SoilGrower {
 
   SoilGrowthOptions options_;
   int cells_w_ = 0, cells_h_ = 0;
-  cv::Mat plant_;   // the last Grow's plant image (a header)
+  cv::Mat plant_;   // the last Grow's plant image (a header: Candidates() reads it)
   cv::Mat smooth_;  // 3×3 Gaussian of the plant image where needed
   // Per cell, row-major: sample sums, their box sums, soil mean and sd (−1:
   // no statistics), the second pass's caps.
