@@ -44,19 +44,19 @@ const SoilGrowthOptions& Validated(const SoilGrowthOptions& options) {
   return options;
 }
 
-// out = in dilated by one pixel along v (rows of `words` words).
-void StepAlongV(const std::vector<uint64_t>& in, size_t words, int rows,
-                std::vector<uint64_t>& out) {
-  out.resize(in.size());
-  for (int v = 0; v < rows; ++v) {
-    const size_t row = static_cast<size_t>(v) * words;
-    for (size_t w = 0; w < words; ++w) {
-      uint64_t x = in[row + w];
-      if (v > 0) x |= in[row - words + w];
-      if (v + 1 < rows) x |= in[row + words + w];
-      out[row + w] = x;
-    }
-  }
+// out = in with rows v − s and v + s ORed into row v (rows of `words`
+// words, the rows beyond the image empty): two passes over the buffer, each
+// one contiguous block, so the loops are long and vectorised.
+void ShiftOrAlongV(const std::vector<uint64_t>& in, size_t words, int s,
+                   std::vector<uint64_t>& out) {
+  out = in;
+  const size_t shift = static_cast<size_t>(s) * words;
+  if (shift >= in.size()) return;
+  const size_t n = in.size() - shift;
+  const uint64_t* __restrict x = in.data();
+  uint64_t* __restrict o = out.data();
+  for (size_t i = 0; i < n; ++i) o[i + shift] |= x[i];
+  for (size_t i = 0; i < n; ++i) o[i] |= x[i + shift];
 }
 
 // out[i](r, c) = the sum of in[i] (rows × cols, row-major) over rows r ± h
@@ -255,20 +255,12 @@ void DilateAlongU(std::vector<uint64_t>& bits, size_t words, int rows, int width
   }
 }
 
-// The same along v: rows v − s and v + s ORed in, radii 1, 3, 7, ... up to r.
-void DilateAlongV(std::vector<uint64_t>& bits, size_t words, int rows, int r,
+// The same along v, radii 1, 3, 7, ... up to r.
+void DilateAlongV(std::vector<uint64_t>& bits, size_t words, int r,
                   std::vector<uint64_t>& scratch) {
   for (int c = 0; c < r;) {
     const int s = std::min(c + 1, r - c);
-    scratch = bits;
-    for (int v = 0; v < rows; ++v) {
-      uint64_t* o = scratch.data() + static_cast<size_t>(v) * words;
-      for (const int j : {v - s, v + s}) {
-        if (j < 0 || j >= rows) continue;
-        const uint64_t* x = bits.data() + static_cast<size_t>(j) * words;
-        for (size_t w = 0; w < words; ++w) o[w] |= x[w];
-      }
-    }
+    ShiftOrAlongV(bits, words, s, scratch);
     bits.swap(scratch);
     c += s;
   }
@@ -351,7 +343,7 @@ void SoilGrower::Band(int width, int height) {
   const auto words = static_cast<size_t>((width + 63) / 64);
   band_ = seed_bits_;
   DilateAlongU(band_, words, height, width, options_.reach_px, scratch_);
-  DilateAlongV(band_, words, height, options_.reach_px, scratch_);
+  DilateAlongV(band_, words, options_.reach_px, scratch_);
   for (size_t i = 0; i < band_.size(); ++i) band_[i] &= ~mask_bits_[i];
 }
 
@@ -436,13 +428,12 @@ void SoilGrower::GrowBits(int width, int height) {
   CandidateBits(false, candidate_bits_);
   // Geodesic growth: one 3×3 dilation a step, kept to the seeds and the
   // candidates.
+  for (size_t i = 0; i < candidate_bits_.size(); ++i) candidate_bits_[i] |= seed_bits_[i];
   grown_bits_ = seed_bits_;
   for (int k = 0; k < options_.reach_px; ++k) {
     detail::StepAlongU<true>(grown_bits_, static_cast<int>(words), height, width, scratch_);
-    StepAlongV(scratch_, words, height, grown_bits_);
-    for (size_t i = 0; i < grown_bits_.size(); ++i) {
-      grown_bits_[i] &= seed_bits_[i] | candidate_bits_[i];
-    }
+    ShiftOrAlongV(scratch_, words, 1, grown_bits_);
+    for (size_t i = 0; i < grown_bits_.size(); ++i) grown_bits_[i] &= candidate_bits_[i];
   }
 }
 
