@@ -29,11 +29,11 @@
 // the statistics need every cell. Bit rows (64 pixels a word) for the
 // clearance, the band, the seeds and the growth, as holes.h; SSE2 for the
 // samples' sums and the candidates' compare; buffers are kept. The step
-// takes 201 µs on the benchmark frame (`BM_StageGrowIntoSoilOfDefaultMask`;
+// takes 202 µs on the benchmark frame (`BM_StageGrowIntoSoilOfDefaultMask`;
 // 375 µs when it smoothed, thresholded and compared the whole image
-// through OpenCV): the two statistics passes 39, their box sums 23 and
-// means 9, the growth 31, labelling the mask 17, smoothing 18, the band 15,
-// the candidates 16, the clearance 12, the thresholds 12 µs.
+// through OpenCV): the two statistics passes 40, their box sums 23 and
+// means 10, the growth 28, labelling the mask 18, smoothing 18, the
+// candidates 16, the clearance 15, the band 13, the thresholds 12 µs.
 //
 // Measured (`evaluate segmentation`, 5 seeds × 20 frames, after notches,
 // holes and hull growth), plant pixel recall / precision, off → default:
