@@ -272,15 +272,12 @@ SoilGrower::SoilGrower(const SoilGrowthOptions& options) : options_(Validated(op
 
 void SoilGrower::ClearanceBits(int width, int height) {
   // The mask dilated by a (2c + 1)² square, on the sampled rows only (the
-  // only ones the statistics read): c steps along u, then the OR of the
-  // rows within c.
+  // only ones the statistics read): dilated along u as the band is, then
+  // the OR of the rows within c.
   const auto words = static_cast<size_t>((width + 63) / 64);
   const int c = options_.clearance_px;
   scratch_ = mask_bits_;
-  for (int k = 0; k < c; ++k) {
-    detail::StepAlongU<true>(scratch_, static_cast<int>(words), height, width, near_bits_);
-    scratch_.swap(near_bits_);
-  }
+  DilateAlongU(scratch_, words, height, width, c, near_bits_);
   near_bits_.assign(scratch_.size(), 0);
   for (int v = 0; v < height; v += kRowStride) {
     uint64_t* out = near_bits_.data() + static_cast<size_t>(v) * words;
