@@ -55,7 +55,7 @@ CameraFrameSource::CameraFrameSource(const CameraSourceOptions& options,
   }
 }
 
-bool CameraFrameSource::ReadFolderImage(telemetry::VehicleFrame& frame) {
+bool CameraFrameSource::ReadFolderImage(vehicle::VehicleFrame& frame) {
   while (next_ < images_.size()) {
     const size_t i = next_++;
     frame.utime = epoch_utime_ + static_cast<int64_t>(1e6 * static_cast<double>(i) /
@@ -69,7 +69,7 @@ bool CameraFrameSource::ReadFolderImage(telemetry::VehicleFrame& frame) {
   return false;
 }
 
-bool CameraFrameSource::ReadDevice(telemetry::VehicleFrame& frame) {
+bool CameraFrameSource::ReadDevice(vehicle::VehicleFrame& frame) {
   if (!capture_.read(frame.image) || frame.image.empty()) {
     last_fault_ = "camera: " + options_.camera + " stopped delivering frames";
     return false;
@@ -79,7 +79,7 @@ bool CameraFrameSource::ReadDevice(telemetry::VehicleFrame& frame) {
   return true;
 }
 
-bool CameraFrameSource::Next(telemetry::VehicleFrame& frame) {
+bool CameraFrameSource::Next(vehicle::VehicleFrame& frame) {
   const bool ok = images_.empty() ? ReadDevice(frame) : ReadFolderImage(frame);
   while (transport_.Handle(0)) {
   }

@@ -2,7 +2,7 @@
 // Frame sources of `plantscale run`: a V4L2 camera (a /dev/video* path or a
 // device number, through OpenCV's videoio) or a folder of images (sorted by
 // name, stamped at a fixed frame rate), with wheel odometry from
-// PLANTSCALE_ODOMETRY_IN (telemetry/odometry_input.h) attached to each
+// PLANTSCALE_ODOMETRY_IN (app/vehicle/odometry_input.h) attached to each
 // frame: every sample received since the previous frame.
 
 #include <filesystem>
@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "telemetry/odometry_input.h"
-#include "telemetry/runner.h"
+#include "app/vehicle/odometry_input.h"
+#include "app/vehicle/runner.h"
 
 namespace plantscale::app {
 
@@ -21,24 +21,24 @@ struct CameraSourceOptions {
   double folder_frame_rate_hz = 12.5;  // stamps of folder images
 };
 
-class CameraFrameSource : public telemetry::FrameSource {
+class CameraFrameSource : public vehicle::FrameSource {
  public:
   // Throws std::runtime_error naming the camera when it cannot be opened or
   // the folder holds no images. `transport` is polled for odometry.
   CameraFrameSource(const CameraSourceOptions& options, telemetry::Transport& transport,
                     int64_t epoch_utime);
-  bool Next(telemetry::VehicleFrame& frame) override;
+  bool Next(vehicle::VehicleFrame& frame) override;
   int dropped_frames() const override { return dropped_; }
   std::string name() const override { return "run"; }
   std::vector<std::string> faults(int64_t now_utime) const override;
 
  private:
-  bool ReadFolderImage(telemetry::VehicleFrame& frame);
-  bool ReadDevice(telemetry::VehicleFrame& frame);
+  bool ReadFolderImage(vehicle::VehicleFrame& frame);
+  bool ReadDevice(vehicle::VehicleFrame& frame);
 
   CameraSourceOptions options_;
   telemetry::Transport& transport_;
-  telemetry::OdometryInput odometry_;
+  vehicle::OdometryInput odometry_;
   int64_t epoch_utime_;
   std::vector<std::filesystem::path> images_;  // folder mode
   cv::VideoCapture capture_;                   // device mode

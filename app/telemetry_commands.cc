@@ -11,14 +11,15 @@
 
 #include "app/camera_source.h"
 #include "app/config_loader.h"
+#include "app/vehicle/runner.h"
+#include "app/vehicle/spray_bar_stage.h"
+#include "app/vehicle/stages.h"
 #include "app/tracking_eval.h"
+#include "app/treatment_eval.h"
 #include "telemetry/can/spray_bar.h"
-#include "telemetry/can/spray_bar_stage.h"
 #include "telemetry/log.h"
 #include "telemetry/log_stats.h"
 #include "telemetry/replay.h"
-#include "telemetry/runner.h"
-#include "telemetry/stages.h"
 
 namespace plantscale::app {
 namespace {
@@ -100,26 +101,27 @@ tm::can::SprayBarOptions BarOptionsOfTreatment() {
 }
 
 using SourceFactory =
-    std::function<std::unique_ptr<tm::FrameSource>(tm::Transport& transport, int64_t boot)>;
+    std::function<std::unique_ptr<vehicle::FrameSource>(tm::Transport& transport, int64_t boot)>;
 
-// The vehicle process: LCM (and the log) around a runner with the stages
-// that exist today; the simulator's truth stage only when `sim_truth`.
-// With a calibrated camera the grid tracker runs too.
-struct TrackerSetup {
+// The vehicle process: LCM (and the log) around a runner with its stages;
+// the simulator's truth stage only when `sim_truth`. With a calibrated
+// camera the vehicle pipeline runs (segmentation, tracking, treatment and
+// the bar); without one, segmentation alone for the thumbnails.
+struct PipelineSetup {
   const geometry::CameraModel& camera;
-  tracking::TrackerOptions options;
+  pipeline::PipelineOptions options;
   treatment::NozzleSink nozzle_sink = {};  // a spray bar: every tick's open mask
 };
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
                const std::string& title, const SprayBarEndpoint& endpoint,
-               const std::optional<TrackerSetup>& tracker = {}) {
+               const std::optional<PipelineSetup>& tracker = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
   std::unique_ptr<tm::LoggingTransport> logged;
   tm::Transport* transport = &lcm;
-  const tm::VehicleRunner* clock = nullptr;
+  const vehicle::VehicleRunner* clock = nullptr;
   if (!args.log.empty()) {
     log = std::make_unique<tm::LogWriter>(args.log);
     logged = std::make_unique<tm::LoggingTransport>(
@@ -127,8 +129,8 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
     transport = logged.get();
   }
   tm::Publisher publisher(*transport, tm::PublisherOptions{});
-  std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
-  tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
+  std::unique_ptr<vehicle::FrameSource> source = make_source(*transport, boot);
+  vehicle::VehicleRunner runner(publisher, vehicle::RunnerOptions{!args.fast}, boot);
   clock = &runner;
   runner.ListenForCommands(*transport);  // start, pause and mode from the station
   // The spray bar (--can): with the treatment stage (a calibrated camera)
@@ -149,33 +151,33 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
         to_bar(utime, mask);
       };
     }
-    runner.AddStage(std::make_unique<tm::can::SprayBarStage>(*bar, !scheduler_drives_bar));
+    runner.AddStage(std::make_unique<vehicle::SprayBarStage>(*bar, !scheduler_drives_bar));
   }
-  runner.AddStage(std::make_unique<tm::OdometryStage>());
-  auto segmentation = std::make_unique<tm::SegmentationStage>(
-      treatment::SegmenterOptionsFor(treatment::TreatmentOptions{}.scheduler.mode),
-      tracker ? &tracker->camera : nullptr);
-  const tm::SegmentationStage* blobs = segmentation.get();
-  runner.AddStage(std::move(segmentation));
+  runner.AddStage(std::make_unique<vehicle::OdometryStage>());
+  const vehicle::BlobView* blobs = nullptr;
   if (tracker) {
-    auto grid = std::make_unique<tm::TrackerStage>(tracker->camera, tracker->options, *blobs);
-    const tm::TrackerStage& tracked = *grid;
-    runner.AddStage(std::move(grid));
-    runner.AddStage(std::make_unique<tm::TreatmentStage>(
-        tracker->camera, treatment::TreatmentOptions{}, *blobs, tracked, nozzle_sink));
+    auto stage =
+        std::make_unique<vehicle::PipelineStage>(tracker->camera, tracker->options, nozzle_sink);
+    blobs = stage.get();
+    runner.AddStage(std::move(stage));
+  } else {
+    auto stage = std::make_unique<vehicle::SegmentationStage>(
+        treatment::SegmenterOptionsFor(treatment::TreatmentOptions{}.scheduler.mode));
+    blobs = stage.get();
+    runner.AddStage(std::move(stage));
   }
   // After every stage that reports faults or the fail-safe state this frame
   // (the runner starts each frame's fault list afresh from the source).
-  runner.AddStage(std::make_unique<tm::HealthStage>());
-  runner.AddStage(std::make_unique<tm::ThumbnailStage>(tm::ThumbnailOptions{}, blobs));
+  runner.AddStage(std::make_unique<vehicle::HealthStage>());
+  runner.AddStage(std::make_unique<vehicle::ThumbnailStage>(vehicle::ThumbnailOptions{}, blobs));
   if (endpoint.simulated) {
-    runner.AddStage(std::make_unique<tm::can::SimulatedBarStage>(*endpoint.simulated));
+    runner.AddStage(std::make_unique<vehicle::SimulatedBarStage>(*endpoint.simulated));
   }
-  if (sim_truth) runner.AddStage(std::make_unique<tm::SimTruthStage>());
+  if (sim_truth) runner.AddStage(std::make_unique<vehicle::SimTruthStage>());
   g_stop = false;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
-  const tm::RunSummary s = runner.Run(*source, &g_stop);
+  const vehicle::RunSummary s = runner.Run(*source, &g_stop);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   std::cout << title << ", " << s.frames << " frames (" << s.dropped_frames << " dropped) over "
@@ -224,12 +226,12 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
   return RunVehicle(
       args,
       [&simulator](tm::Transport&, int64_t boot) {
-        return std::make_unique<tm::SimFrameSource>(simulator, boot);
+        return std::make_unique<vehicle::SimFrameSource>(simulator, boot);
       },
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      bar, TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
+      bar, PipelineSetup{simulator.camera(), ProductPipelineOptions(options)});
 }
 
 namespace {

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "engine/common/stats.h"
+#include "engine/pipeline/pipeline.h"
 #include "engine/tracking/blob_features.h"
 
 namespace plantscale::app {
@@ -21,12 +22,12 @@ int RowsEachSide(const sim::SimulatorOptions& s) { return (s.field.rows - 1) / 2
 
 // One tracker under test on one run, with its error sums.
 struct Scorer {
-  tracking::GridTracker tracker;
-  vision::Segmenter segmenter;
+  pipeline::Pipeline pipe;  // segmentation and tracking
+  const tracking::GridTracker& tracker;
   const TrackingEvalOptions& options;
   std::ostream* trace = nullptr;  // ours only
   uint64_t seed = 0;
-  std::vector<tracking::Feature> features;
+  std::span<const tracking::Feature> features;  // the last frame's, as the tracker measured them
   bool ever_tracked = false;
   double init_distance_m = 0.0;
   int start_frame = 0;
@@ -43,16 +44,30 @@ struct Scorer {
 
   Scorer(const sim::Simulator& sim, const tracking::TrackerOptions& tracker_options,
          const vision::SegmenterOptions& segmenter_options, const TrackingEvalOptions& o)
-      : tracker(sim.camera(), tracker_options), segmenter(segmenter_options), options(o) {}
+      : pipe(sim.camera(), Options(segmenter_options, tracker_options)),
+        tracker(pipe.tracker()),
+        options(o) {}
 
-  void Frame(const sim::SimFrame& frame, int index, const geometry::CameraModel& camera) {
-    const auto& seg = segmenter.Process(frame.rendered.image, camera);
-    tracking::FeaturesFromBlobs(seg.track_blobs, camera.width(), camera.height(), features,
-                                tracker.centroid_heights());
+  static pipeline::PipelineOptions Options(const vision::SegmenterOptions& segmenter,
+                                           const tracking::TrackerOptions& tracker) {
+    pipeline::PipelineOptions p;
+    p.segmenter = segmenter;
+    p.tracker = tracker;
+    p.treat = false;
+    return p;
+  }
+
+  void AddOdometry(const sim::OdometrySample& o) {
+    pipe.AddOdometry({o.utime, o.left_m_s, o.right_m_s});
+  }
+
+  void Frame(const sim::SimFrame& frame, int index) {
     const bool was_tracking = tracker.mode() == tracking::TrackerMode::kTracking;
-    const tracking::FrameReport r = tracker.ProcessFrame(
-        frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
-    const geometry::GridState est = tracker.state();
+    const pipeline::FrameResult& f =
+        pipe.ProcessFrame(frame.truth.utime, frame.truth.index, frame.rendered.image);
+    const tracking::FrameReport& r = f.report;
+    features = f.track_features;
+    const geometry::GridState est = f.state;
     const geometry::GridState& truth = frame.truth.grid;
     if (r.initialised_now && !ever_tracked) {
       ever_tracked = true;
@@ -289,8 +304,8 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     // after it, so that the estimate is scored at the time of its truth.
     std::vector<sim::OdometrySample> later;
     const auto add = [&](const sim::OdometrySample& o) {
-      ours.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
-      if (thesis) thesis->tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+      ours.AddOdometry(o);
+      if (thesis) thesis->AddOdometry(o);
       probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
     };
     while (simulator.Next(frame)) {
@@ -303,8 +318,8 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
           later.push_back(o);
         }
       }
-      ours.Frame(frame, index, simulator.camera());
-      if (thesis) thesis->Frame(frame, index, simulator.camera());
+      ours.Frame(frame, index);
+      if (thesis) thesis->Frame(frame, index);
       // The initialisation probe reuses ours's features of this frame.
       if (!probe.active && frame.truth.distance_m >= probe.next_at_m) {
         probe.tracker.Reset();

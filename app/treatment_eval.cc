@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <map>
 #include <tuple>
@@ -11,7 +12,7 @@
 #include "app/segmentation_eval.h"
 #include "app/tracking_eval.h"
 #include "app/treatment_score.h"
-#include "engine/tracking/blob_features.h"
+#include "engine/pipeline/pipeline.h"
 #include "engine/treatment/simulated_bar.h"
 #include "engine/vision/roc.h"
 #include "engine/vision/segmenter.h"
@@ -33,14 +34,11 @@ enum WeedReason : uint8_t {
   kReasons
 };
 
-// One treatment chain under test on one run.
+// One treatment chain under test on one run: the vehicle's pipeline into a
+// simulated bar, with its scores.
 struct Chain {
-  vision::Segmenter segmenter;
-  tracking::GridTracker tracker;
-  treatment::TreatmentSystem system;
   treatment::SimulatedBar bar;
-  std::vector<tracking::Feature> features;
-  std::vector<int> blob_of_feature;
+  pipeline::Pipeline pipe;
   Confusion confusion{};
   std::array<double, kReasons> crop_as_weed_by{};
   std::vector<classify::ClassifierSample> samples;
@@ -53,43 +51,37 @@ struct Chain {
   Chain(const sim::Simulator& sim, const vision::SegmenterOptions& seg,
         const tracking::TrackerOptions& track, const treatment::TreatmentOptions& treat,
         double true_latency_s)
-      : segmenter(seg),
-        tracker(sim.camera(), track),
-        system(sim.camera(), treat),
-        bar(treat.scheduler.bar, true_latency_s, treat.scheduler.tick_s) {
-    system.set_sink(bar.Sink());
+      : bar(treat.scheduler.bar, true_latency_s, treat.scheduler.tick_s),
+        pipe(sim.camera(), pipeline::PipelineOptions{seg, track, treat}) {
+    pipe.set_sink(bar.Sink());
   }
 
-  void Odometry(const sim::OdometrySample& o) {
-    const bool ok = tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s).accepted;
-    for (const treatment::TickResult& r :
-         system.OnPose(o.utime, tracker, ok)) {
+  const treatment::TreatmentSystem& system() const { return *pipe.treatment(); }
+
+  void Count(std::span<const treatment::TickResult> results) {
+    for (const treatment::TickResult& r : results) {
       ++ticks;
       if (r.fail_reasons) ++ticks_fail_safe;
     }
   }
 
-  void Frame(const sim::SimFrame& frame, const geometry::CameraModel& camera, const cv::Mat& roi) {
-    const vision::Segmentation& seg = segmenter.Process(frame.rendered.image, camera);
-    tracking::FeaturesFromBlobs(seg.track_blobs, camera.width(), camera.height(), features,
-                                tracker.centroid_heights());
-    const tracking::FrameReport report = tracker.ProcessFrame(
-        frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, features);
-    tracking::FeaturesFromBlobs(seg.blobs, camera.width(), camera.height(), features,
-                                tracker.centroid_heights());
-    treatment::FeatureBlobIndices(seg.blobs, blob_of_feature);
-    const treatment::FrameTreatment& t =
-        system.OnFrame(frame.truth.utime, tracker, report, seg.blobs, features, blob_of_feature,
-                       seg.mask);
-    if (!t.classified) return;
+  void Odometry(const sim::OdometrySample& o) {
+    Count(pipe.AddOdometry({o.utime, o.left_m_s, o.right_m_s}).ticks);
+  }
+
+  void Frame(const sim::SimFrame& frame, const cv::Mat& roi) {
+    const pipeline::FrameResult& r =
+        pipe.ProcessFrame(frame.truth.utime, frame.truth.index, frame.rendered.image);
+    Count(r.ticks);
+    if (!r.treatment || !r.treatment->classified) return;
     if (std::isnan(first_classified_y)) first_classified_y = frame.truth.pose.y_m;
     ++frames_classified;
-    ScorePixels(seg, t, frame.rendered.labels, roi);
+    ScorePixels(r, *r.treatment, frame.rendered.labels, roi);
   }
 
   // Labels every blob's pixels C or W by its decision, and counts them
   // against the label image (thesis tables 7.5–7.8).
-  void ScorePixels(const vision::Segmentation& seg, const treatment::FrameTreatment& t,
+  void ScorePixels(const pipeline::FrameResult& seg, const treatment::FrameTreatment& t,
                    const cv::Mat& labels, const cv::Mat& roi) {
     const int n = cv::connectedComponentsWithStats(seg.mask, components, stats, centroids, 8,
                                                    CV_32S);
@@ -105,7 +97,7 @@ struct Chain {
     label_of[0] = 0;
     std::vector<int> feature_of(static_cast<size_t>(n), -1);
     for (size_t i = 0; i < t.decisions.size(); ++i) {
-      const vision::Blob& b = seg.blobs[static_cast<size_t>(blob_of_feature[i])];
+      const vision::Blob& b = seg.blobs[static_cast<size_t>(seg.blob_of_feature[i])];
       const auto it = by_box.find({b.bbox_px.x, b.bbox_px.y, b.bbox_px.width, b.bbox_px.height,
                                    b.area_px});
       if (it == by_box.end()) continue;
@@ -181,9 +173,9 @@ void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
   sums.ticks += c.ticks;
   sums.ticks_fail_safe += c.ticks_fail_safe;
   sums.shots += shots;
-  sums.map_resets += c.system.map_resets();
-  sums.plants += static_cast<int>(c.system.registry().records().size());
-  for (const treatment::PlantRecord& r : c.system.registry().records()) sums.confirmed += r.confirmed();
+  sums.map_resets += c.system().map_resets();
+  sums.plants += static_cast<int>(c.system().registry().records().size());
+  for (const treatment::PlantRecord& r : c.system().registry().records()) sums.confirmed += r.confirmed();
 }
 
 double Ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
@@ -264,12 +256,21 @@ OptionErrors TreatmentEvalOptions::Validate() const {
   e.insert(e.end(), g.begin(), g.end());
   if (seeds < 1) e.push_back({"seeds", "must be >= 1"});
   if (true_valve_latency_s > 1.0) e.push_back({"true_valve_latency_s", "must be <= 1 s"});
+  RequireInRange(e, "frame_lag_s", frame_lag_s, 0.0, 0.15);
   RequirePositive(e, "costs_ratio", costs_ratio);
   return e;
 }
 
 treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions&) {
   return treatment::TreatmentOptions{};
+}
+
+pipeline::PipelineOptions ProductPipelineOptions(const sim::SimulatorOptions& sim) {
+  pipeline::PipelineOptions o;
+  o.treatment = OurTreatmentOptions(sim);
+  o.segmenter = treatment::SegmenterOptionsFor(o.treatment.scheduler.mode);
+  o.tracker = ProductTrackerOptions(sim);
+  return o;
 }
 
 treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& s) {
@@ -339,25 +340,32 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
       thesis.emplace(simulator, thesis_seg, ThesisTrackerOptions(so), thesis_options, latency);
     }
     std::vector<treatment::FieldPose> track;
+    // The odometry goes in in time order; each frame goes in once the
+    // odometry has passed its capture by frame_lag_s (the frame reaches the
+    // pipeline that much late: the camera's latency and segmentation).
+    const int64_t lag_us = std::llround(options.frame_lag_s * 1e6);
+    std::deque<sim::SimFrame> pending;
+    const auto process = [&] {
+      const sim::SimFrame& f = pending.front();
+      ours.Frame(f, roi);
+      if (thesis) thesis->Frame(f, roi);
+      pending.pop_front();
+    };
     sim::SimFrame frame;
     while (simulator.Next(frame)) {
-      // In time order: the odometry up to the capture, the frame, the rest
-      // (the simulator's last sample of a frame may fall after its capture).
-      const auto odometry = [&](bool before) {
-        for (const sim::OdometrySample& o : frame.odometry) {
-          if ((o.utime <= frame.truth.utime) != before) continue;
-          ours.Odometry(o);
-          if (thesis) thesis->Odometry(o);
-        }
-      };
-      odometry(true);
       track.push_back({frame.truth.utime, frame.truth.pose.x_m, frame.truth.pose.y_m,
                        frame.truth.pose.heading_rad});
-      ours.Frame(frame, simulator.camera(), roi);
-      if (thesis) thesis->Frame(frame, simulator.camera(), roi);
-      odometry(false);
       result.distance_m = frame.truth.distance_m;
+      std::vector<sim::OdometrySample> odometry = std::move(frame.odometry);
+      pending.push_back(std::move(frame));
+      frame = sim::SimFrame{};
+      for (const sim::OdometrySample& o : odometry) {
+        while (!pending.empty() && pending.front().truth.utime + lag_us < o.utime) process();
+        ours.Odometry(o);
+        if (thesis) thesis->Odometry(o);
+      }
     }
+    while (!pending.empty()) process();
     const double last_y = track.empty() ? 0.0 : track.back().y_m;
     const auto score = [&](Chain& c, const treatment::TreatmentOptions& t, Sums& sums) {
       const std::vector<treatment::Shot> shots = c.bar.Shots(track);
@@ -368,8 +376,8 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     score(ours, options.treatment, ours_sums);
     if (thesis) score(*thesis, thesis_options, thesis_sums);
     if (k == 0) {
-      ours.system.Explain();
-      const auto& records = ours.system.registry().records();
+      ours.pipe.treatment()->Explain();
+      const auto& records = ours.system().registry().records();
       for (size_t i = 0; i < records.size() && result.example_why.size() < 4; i += 37) {
         result.example_why.push_back(records[i].why);
       }

@@ -15,6 +15,7 @@
 
 #include "app/treatment_score.h"
 #include "engine/classify/mrroc.h"
+#include "engine/pipeline/pipeline.h"
 #include "engine/sim/simulator.h"
 #include "engine/tracking/grid_tracker.h"
 #include "engine/treatment/treatment_system.h"
@@ -29,6 +30,10 @@ struct TreatmentEvalOptions {
   treatment::TreatmentOptions treatment;
   double true_valve_latency_s = -1.0;  // the simulated valves' latency; < 0: as scheduled
   bool baseline_thesis = false;
+  // Each frame reaches the pipeline this long after its capture, after the
+  // odometry samples up to then (the camera's and segmentation's latency);
+  // at most the tracker's max_frame_lag_s less a frame.
+  double frame_lag_s = 0.0;
   bool mrroc = false;
   double costs_ratio = 1.0;  // Φ for the MRROC operating point
   // Changes to our tracker's options (ProductTrackerOptions of each run's
@@ -40,6 +45,9 @@ struct TreatmentEvalOptions {
 
 // The product's treatment options for a simulated vehicle and field.
 treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions& sim);
+// The product's whole pipeline for a simulated vehicle and field: what
+// `simulate --publish` runs and `evaluate treatment` measures.
+pipeline::PipelineOptions ProductPipelineOptions(const sim::SimulatorOptions& sim);
 // The thesis's chain (§8.2): whole bounding boxes, 50-pixel size filter.
 treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& sim);
 

@@ -120,6 +120,7 @@ GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptio
 }
 
 void GridTracker::Reset() {
+  held_lag_ = false;
   mode_ = TrackerMode::kInitialising;
   x_ = Eigen::VectorXd::Zero(head());
   x_(GridState::kForward) = options_.plant_spacing_m;
@@ -163,6 +164,7 @@ Matrix5d GridTracker::covariance() const {
 }
 
 void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& covariance) {
+  held_lag_ = false;
   const double distance_before = was_lost_ ? distance_at_loss_m_ + dr_since_loss_m_ : 0.0;
   offsets_.clear();
   // What was learnt of the wheels' scale outlives a loss of the grid.
@@ -198,6 +200,7 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
 }
 
 InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double right_m_s) {
+  CatchUp();
   InputStatus status;
   std::string problem;
   if (!std::isfinite(left_m_s) || !std::isfinite(right_m_s)) {
@@ -463,6 +466,20 @@ void GridTracker::DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& i
 
 FrameReport GridTracker::ProcessFrame(int64_t utime, int width, int height,
                                       std::span<const Feature> features) {
+  FrameReport report = UpdateAtCapture(utime, width, height, features);
+  CatchUp();
+  return report;
+}
+
+void GridTracker::CatchUp() {
+  if (!held_lag_) return;
+  held_lag_ = false;
+  if (mode_ == TrackerMode::kTracking) x_.head<3>() = caught_up_;
+}
+
+FrameReport GridTracker::UpdateAtCapture(int64_t utime, int width, int height,
+                                         std::span<const Feature> features) {
+  CatchUp();
   FrameReport report;
   report.mode = mode_;
   if (width != camera_.width() || height != camera_.height()) {
@@ -531,10 +548,18 @@ FrameReport GridTracker::ProcessFrame(int64_t utime, int width, int height,
   p_(GridState::kBearing, GridState::kBearing) += std::pow(options_.frame_bearing_sd_rad, 2);
   ShiftReference(report);
   const bool rewind = lag_s > 0.0 && have_speeds_ && mode_ == TrackerMode::kTracking;
-  if (rewind) MoveMean({-lag.left_m, -lag.right_m});
+  // A state initialised from this frame already stands at its capture.
+  if (rewind && !report.initialised_now) MoveMean({-lag.left_m, -lag.right_m});
   Update(valid, report);
+  const Eigen::Vector3d at_capture = x_.head<3>();
   if (rewind) MoveMean(lag);
   CheckLost(utime, report);
+  if (rewind && mode_ == TrackerMode::kTracking) {
+    // Held at capture; CatchUp puts back the mean driven over the lag.
+    caught_up_ = x_.head<3>();
+    x_.head<3>() = at_capture;
+    held_lag_ = true;
+  }
   report.mode = mode_;
   return report;
 }

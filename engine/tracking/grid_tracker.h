@@ -247,8 +247,21 @@ class GridTracker {
   // Dead reckoning: measured wheel speeds over the period ending at utime.
   InputStatus AddOdometry(int64_t utime, double left_m_s, double right_m_s);
   // Vision: the features of a frame captured at utime with this image size.
+  // UpdateAtCapture then CatchUp.
   FrameReport ProcessFrame(int64_t utime, int image_width_px, int image_height_px,
                            std::span<const Feature> features);
+  // The update alone, leaving the mean where the grid was at the frame's
+  // capture: a frame captured before the newest odometry (the camera's
+  // latency, odometry that arrived while it was segmented) is compared with
+  // the grid at capture, and what else reads the same frame (classifying and
+  // placing its blobs) must read the grid there too. `held_lag()` is true
+  // until CatchUp (or the next odometry sample, which catches up first).
+  FrameReport UpdateAtCapture(int64_t utime, int image_width_px, int image_height_px,
+                              std::span<const Feature> features);
+  // Drives the mean forward over the lag UpdateAtCapture held back, to the
+  // newest odometry's time. Nothing when none is held.
+  void CatchUp();
+  bool held_lag() const { return held_lag_; }
   // Start tracking from a known state (tests, hand initialisation).
   void Initialise(int64_t utime, const geometry::GridState& state,
                   const geometry::Matrix5d& covariance);
@@ -356,6 +369,8 @@ class GridTracker {
   double right_m_s_ = 0.0;
   bool have_speeds_ = false;
   WheelIncrement since_frame_;  // wheel motion since the last frame (initialisation)
+  Eigen::Vector3d caught_up_ = Eigen::Vector3d::Zero();  // (t_x, Y, Ψ) at utime_ while held
+  bool held_lag_ = false;       // the mean stands at the last frame's capture (CatchUp)
   int64_t last_update_utime_ = -1;
   int lines_in_view_ = -1;
   int first_line_in_view_ = 0;

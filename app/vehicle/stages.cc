@@ -1,4 +1,4 @@
-#include "telemetry/stages.h"
+#include "app/vehicle/stages.h"
 
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
@@ -9,11 +9,20 @@
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
-#include "engine/tracking/blob_features.h"
 #include "telemetry/channels.h"
 #include "telemetry/convert.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
+
+namespace channels = telemetry::channels;
+using telemetry::FilterMode;
+using telemetry::GridEstimate;
+using telemetry::Health;
+using telemetry::MapTileDelta;
+using telemetry::NozzleBar;
+using telemetry::PlantKind;
+using telemetry::PlantObservation;
+using telemetry::ToLcm;
 
 void HealthStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
   constexpr size_t kWindow = 25;
@@ -40,29 +49,21 @@ OptionErrors ThumbnailOptions::Validate() const {
   return errors;
 }
 
-SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options,
-                                     const geometry::CameraModel* camera)
-    : segmenter_(options), camera_(camera) {}
+SegmentationStage::SegmentationStage(const vision::SegmenterOptions& options)
+    : segmenter_(options) {}
 
 void SegmentationStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher&) {
   blobs_ = {};
-  track_blobs_ = {};
-  mask_ = cv::Mat();
   if (frame.image.empty()) return;
   try {
-    const vision::Segmentation& seg =
-        camera_ ? segmenter_.Process(frame.image, *camera_) : segmenter_.Process(frame.image);
-    blobs_ = seg.blobs;
-    track_blobs_ = seg.track_blobs;
-    mask_ = seg.mask;
+    blobs_ = segmenter_.Process(frame.image).blobs;
   } catch (const DataError& e) {
     status.faults.push_back(std::string("segmentation: ") + e.what());
   }
 }
 
-ThumbnailStage::ThumbnailStage(const ThumbnailOptions& options,
-                               const SegmentationStage* segmentation)
-    : options_(options), segmentation_(segmentation) {
+ThumbnailStage::ThumbnailStage(const ThumbnailOptions& options, const BlobView* blobs)
+    : options_(options), blobs_(blobs) {
   ThrowIfInvalid("thumbnail options", options_.Validate());
 }
 
@@ -80,8 +81,8 @@ void ThumbnailStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& p
   m.height = static_cast<int16_t>(small.rows);
   cv::imencode(".jpg", small, m.jpeg, {cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality});
   m.jpeg_size = static_cast<int32_t>(m.jpeg.size());
-  if (segmentation_ != nullptr) {
-    for (const vision::Blob& b : segmentation_->blobs()) {
+  if (blobs_ != nullptr) {
+    for (const vision::Blob& b : blobs_->blobs()) {
       plantscale_blob_t blob{};
       blob.u = static_cast<float>(b.centroid_px.x());
       blob.v = static_cast<float>(b.centroid_px.y());
@@ -95,7 +96,7 @@ void ThumbnailStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& p
 }
 
 void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
-  for (const sim::OdometrySample& s : frame.odometry) {
+  for (const pipeline::OdometrySample& s : frame.odometry) {
     if (last_utime_ >= 0) {
       status.distance_m +=
           0.5 * (s.left_m_s + s.right_m_s) * 1e-6 * static_cast<double>(s.utime - last_utime_);
@@ -103,7 +104,7 @@ void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
     last_utime_ = s.utime;
   }
   if (frame.odometry.empty()) return;
-  const sim::OdometrySample& latest = frame.odometry.back();
+  const pipeline::OdometrySample& latest = frame.odometry.back();
   plantscale_odometry_t m{};
   m.utime = latest.utime;
   m.left_m_s = latest.left_m_s;
@@ -116,53 +117,43 @@ void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
 void SimTruthStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& publisher) {
   if (!frame.truth) return;
   publisher.Publish(channels::kSimTruth,
-                    TruthToLcm(frame.truth->grid, frame.utime, frame.frame_index));
+                    telemetry::TruthToLcm(frame.truth->grid, frame.utime, frame.frame_index));
   const sim::Pose2& p = frame.truth->pose;
   publisher.Publish(channels::kSimTruthPose,
-                    ToLcm(Pose{p.x_m, p.y_m, p.heading_rad, Eigen::Matrix3d::Zero()}, frame.utime));
+                    ToLcm(telemetry::Pose{p.x_m, p.y_m, p.heading_rad, Eigen::Matrix3d::Zero()}, frame.utime));
 }
 
-TrackerStage::TrackerStage(const geometry::CameraModel& camera,
-                           const tracking::TrackerOptions& options,
-                           const SegmentationStage& segmentation)
-    : tracker_(camera, options), segmentation_(segmentation) {}
+PipelineStage::PipelineStage(const geometry::CameraModel& camera,
+                             const pipeline::PipelineOptions& options, treatment::NozzleSink sink)
+    : pipeline_(camera, options, std::move(sink)) {
+  const auto n = static_cast<size_t>(options.treatment.scheduler.bar.nozzles);
+  open_since_.assign(n, -1);
+  open_sum_.assign(n, Eigen::Vector2d::Zero());
+  open_ticks_.assign(n, 0);
+}
 
-void TrackerStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
-  for (const sim::OdometrySample& o : frame.odometry) {
-    const tracking::InputStatus in = tracker_.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
-    if (!in.accepted) status.faults.push_back("tracker: " + in.reason);
-  }
-  if (frame.image.empty()) return;
-  tracking::FeaturesFromBlobs(segmentation_.track_blobs(), frame.image.cols, frame.image.rows,
-                              features_, tracker_.centroid_heights());
-  const tracking::FrameReport r =
-      tracker_.ProcessFrame(frame.utime, frame.image.cols, frame.image.rows, features_);
-  if (!r.input.accepted) status.faults.push_back("tracker: " + r.input.reason);
-  initialised_now_ = r.initialised_now;
-  if (r.mode == tracking::TrackerMode::kLost) {
-    status.faults.push_back("tracker: " + r.skipped_reason);
-  }
+void PipelineStage::PublishGrid(const pipeline::FrameResult& r, Publisher& publisher) {
   GridEstimate e;
-  e.utime = frame.utime;
-  e.frame_index = frame.frame_index;
-  e.state = tracker_.state();
-  e.covariance = tracker_.covariance();
+  e.utime = r.utime;
+  e.frame_index = r.frame_index;
+  e.state = r.state;
+  e.covariance = r.covariance;
   switch (r.mode) {
     case tracking::TrackerMode::kInitialising: e.mode = FilterMode::kInitialising; break;
     case tracking::TrackerMode::kLost: e.mode = FilterMode::kLost; break;
     case tracking::TrackerMode::kTracking:
-      e.mode = r.updated ? FilterMode::kTracking : FilterMode::kDeadReckoning;
+      e.mode = r.report.updated ? FilterMode::kTracking : FilterMode::kDeadReckoning;
       break;
   }
-  for (const tracking::Association& a : r.associations) {
+  for (const tracking::Association& a : r.report.associations) {
     if (std::find(e.lines_in_view.begin(), e.lines_in_view.end(), a.m) == e.lines_in_view.end()) {
       e.lines_in_view.push_back(a.m);
     }
   }
   std::sort(e.lines_in_view.begin(), e.lines_in_view.end());
-  e.observations = static_cast<int>(features_.size());
-  e.validated = r.matched;
-  e.innovation_nis = r.nis;
+  e.observations = static_cast<int>(r.track_features.size());
+  e.validated = r.report.matched;
+  e.innovation_nis = r.report.nis;
   publisher.Publish(channels::kGrid, ToLcm(e));
 }
 
@@ -200,96 +191,73 @@ PlantObservation Observation(const treatment::PlantRecord& r, int why) {
 
 }  // namespace
 
-TreatmentStage::TreatmentStage(const geometry::CameraModel& camera,
-                               const treatment::TreatmentOptions& options,
-                               const SegmentationStage& segmentation, const TrackerStage& tracker,
-                               treatment::NozzleSink sink)
-    : system_(camera, options, std::move(sink)), segmentation_(segmentation), tracker_(tracker) {
-  const auto n = static_cast<size_t>(options.scheduler.bar.nozzles);
-  open_since_.assign(n, -1);
-  open_sum_.assign(n, Eigen::Vector2d::Zero());
-  open_ticks_.assign(n, 0);
-}
-
-void TreatmentStage::Tick(const sim::OdometrySample& o, RunStatus& status) {
-  const tracking::GridTracker& tracker = tracker_.tracker();
-  const double speed = 0.5 * (o.left_m_s + o.right_m_s);
-  const bool odometry_ok = std::isfinite(speed) && std::abs(speed) <=
-                                                       tracker.options().max_wheel_speed_m_s;
-  const treatment::BedPose pose = treatment::TrackerPose(tracker, o.utime, odometry_ok);
-  treatment::SafetyInputs safety;
-  safety.pose_utime = std::min(tracker.utime(), o.utime);
-  safety.last_frame_utime = system_.last_frame_utime();
-  safety.odometry_valid = odometry_ok;
-  safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
-  safety.held = status.commands.held();
-  const int8_t mode = status.commands.mode;
-  if (mode != 0) {
-    system_.set_mode(mode == plantscale_command_t::MODE_SPRAY_WEED ? treatment::SprayMode::kWeed
-                                                                   : treatment::SprayMode::kCrop);
-  }
-  // The scheduler's ticks until the next pose, each led from this one.
-  bool failsafe = false;
-  for (const treatment::TickResult& tick : system_.TicksFrom(o.utime, pose, safety)) {
+// The fail-safe state of the frame's last tick, and why the bar is closed
+// (the tracker and the operator report their own states; before the first
+// frame the bar is closed by design, not by a fault).
+void PipelineStage::ReportTicks(RunStatus& status) {
+  for (const treatment::TickResult& tick : ticks_) {
     last_tick_ = tick;
-    failsafe |= tick.fail_reasons != 0;
-    RecordShots(tick.utime);
+    ticked_ = true;
+    RecordShots(tick);
   }
-  status.failsafe = failsafe;
-  // The tracker reports its own loss; before the first frame the bar is
-  // closed by design, not by a fault.
-  if (safety.last_frame_utime >= 0) {
-    for (const std::string& m : last_tick_.messages) {
-      if (m.rfind("tracker", 0) != 0 && m.rfind("held", 0) != 0) {
-        status.faults.push_back("treatment: bar closed: " + m);
-      }
+  if (!ticked_) return;
+  status.failsafe = last_tick_.fail_reasons != 0;
+  if (pipeline_.treatment()->last_frame_utime() < 0) return;
+  for (const std::string& m : last_tick_.messages) {
+    if (m.rfind("tracker", 0) != 0 && m.rfind("held", 0) != 0) {
+      status.faults.push_back("treatment: bar closed: " + m);
     }
   }
 }
 
-void TreatmentStage::RecordShots(int64_t utime) {
+void PipelineStage::RecordShots(const treatment::TickResult& tick) {
   std::vector<Eigen::Vector2d> centre(open_since_.size(), Eigen::Vector2d::Zero());
-  for (const treatment::NozzleTarget& t : last_tick_.opened) {
+  for (const treatment::NozzleTarget& t : tick.opened) {
     centre[static_cast<size_t>(t.nozzle)] = {0.5 * (t.x0 + t.x1), 0.5 * (t.y0 + t.y1)};
   }
   for (size_t i = 0; i < open_since_.size(); ++i) {
-    const bool open = (last_tick_.open_mask >> i) & 1u;
+    const bool open = (tick.open_mask >> i) & 1u;
     if (open) {
-      if (open_since_[i] < 0) open_since_[i] = utime, open_sum_[i].setZero(), open_ticks_[i] = 0;
+      if (open_since_[i] < 0) open_since_[i] = tick.utime, open_sum_[i].setZero(), open_ticks_[i] = 0;
       open_sum_[i] += centre[i];
       ++open_ticks_[i];
     } else if (open_since_[i] >= 0) {
-      shots_.push_back({static_cast<int>(i), open_since_[i], utime,
+      shots_.push_back({static_cast<int>(i), open_since_[i], tick.utime,
                         open_sum_[i] / std::max(1, open_ticks_[i]), -1});
       open_since_[i] = -1;
     }
   }
 }
 
-void TreatmentStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
-  for (const sim::OdometrySample& o : frame.odometry) Tick(o, status);
-  if (frame.image.empty()) return;
-  const std::span<const vision::Blob> blobs = segmentation_.blobs();
-  tracking::FeaturesFromBlobs(blobs, frame.image.cols, frame.image.rows, features_,
-                              tracker_.tracker().centroid_heights());
-  treatment::FeatureBlobIndices(blobs, blob_of_feature_);
-  tracking::FrameReport report;
-  report.mode = tracker_.tracker().mode();
-  report.initialised_now = tracker_.initialised_now();
-  const treatment::FrameTreatment& t = system_.OnFrame(frame.utime, tracker_.tracker(), report,
-                                                       blobs, features_, blob_of_feature_,
-                                                       segmentation_.mask());
-  if (t.map_reset) next_tile_row_ = 0;
-  last_frame_index_ = frame.frame_index;
-  PublishPlants(frame, t, publisher);
+void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  const int8_t mode = status.commands.mode;
+  std::optional<treatment::SprayMode> spray;
+  if (mode != 0) {
+    spray = mode == plantscale_command_t::MODE_SPRAY_WEED ? treatment::SprayMode::kWeed
+                                                          : treatment::SprayMode::kCrop;
+  }
+  pipeline_.SetOperator(status.commands.held(), spray);
+  ticks_.clear();
+  const pipeline::FrameResult& r =
+      pipeline_.Step(frame.utime, frame.frame_index, frame.image, frame.odometry, &ticks_);
+  blobs_ = r.blobs;
+  status.faults.insert(status.faults.end(), r.faults.begin(), r.faults.end());
+  if (r.accepted) PublishGrid(r, publisher);
+  if (!pipeline_.treatment()) return;
+  ReportTicks(status);
+  if (r.treatment) {
+    if (r.treatment->map_reset) next_tile_row_ = 0;
+    last_frame_index_ = frame.frame_index;
+    PublishPlants(frame, *r.treatment, publisher);
+  }
   PublishNozzles(frame.utime, publisher);
-  PublishTiles(frame.utime, publisher);
+  if (r.treatment) PublishTiles(frame.utime, publisher);
 }
 
 // Plants whose record changed since the last message, every 0.5 s of
 // message time (the list is the largest channel: it must fit the budget),
 // leaving out records seen only once (leaf fragments, noise).
-void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
+void PipelineStage::PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
                                    Publisher& publisher) {
   if (t.map_reset) changed_plants_.clear();
   NoteNewlySprayed();
@@ -299,14 +267,14 @@ void TreatmentStage::PublishPlants(const VehicleFrame& frame, const treatment::F
   std::vector<PlantObservation> plants;
   for (int id : TakeChangedPlants()) {
     if (id < 0) continue;
-    const treatment::PlantRecord& r = system_.registry().records()[static_cast<size_t>(id)];
+    const treatment::PlantRecord& r = system().registry().records()[static_cast<size_t>(id)];
     if (r.confirmed()) plants.push_back(Observation(r, WhyCode(r)));
   }
   last_plants_utime_ = frame.utime;
   publisher.Publish(channels::kPlants, ToLcm(plants, frame.utime, frame.frame_index));
 }
 
-void TreatmentStage::PublishNozzles(int64_t utime, Publisher& publisher) {
+void PipelineStage::PublishNozzles(int64_t utime, Publisher& publisher) {
   NozzleBar bar;
   for (size_t i = 0; i < open_since_.size(); ++i) {
     bar.open.push_back(((last_tick_.open_mask >> i) & 1u) != 0);
@@ -321,13 +289,13 @@ void TreatmentStage::PublishNozzles(int64_t utime, Publisher& publisher) {
 // The run's end: the plant records changed since the last list, and every
 // plant the mode would spray that the bar had not yet reached, so that the
 // station, log and report tell them from misses; then the last tile rows.
-void TreatmentStage::Finish(int64_t utime, Publisher& publisher) {
+void PipelineStage::Finish(int64_t utime, Publisher& publisher) {
   const double bar_y = BarY();
-  const bool spray_crop = system_.options().scheduler.mode == treatment::SprayMode::kCrop;
+  const bool spray_crop = system().options().scheduler.mode == treatment::SprayMode::kCrop;
   NoteNewlySprayed();
   const std::vector<int> ids = TakeChangedPlants();
   std::vector<PlantObservation> plants;
-  const std::vector<treatment::PlantRecord>& records = system_.registry().records();
+  const std::vector<treatment::PlantRecord>& records = system().registry().records();
   for (const treatment::PlantRecord& r : records) {
     if (!r.confirmed()) continue;
     const bool target = r.crop() == spray_crop;
@@ -340,12 +308,12 @@ void TreatmentStage::Finish(int64_t utime, Publisher& publisher) {
   PublishTiles(utime, publisher, true);
 }
 
-void TreatmentStage::NoteNewlySprayed() {
-  const std::vector<int> sprayed = system_.TakeNewlySprayed();
+void PipelineStage::NoteNewlySprayed() {
+  const std::vector<int> sprayed = pipeline_.treatment()->TakeNewlySprayed();
   changed_plants_.insert(changed_plants_.end(), sprayed.begin(), sprayed.end());
 }
 
-std::vector<int> TreatmentStage::TakeChangedPlants() {
+std::vector<int> PipelineStage::TakeChangedPlants() {
   std::vector<int> ids = std::move(changed_plants_);
   changed_plants_.clear();
   std::sort(ids.begin(), ids.end());
@@ -353,12 +321,12 @@ std::vector<int> TreatmentStage::TakeChangedPlants() {
   return ids;
 }
 
-double TreatmentStage::BarY() const {
-  return tracker_.tracker().forward_distance_m() - system_.options().scheduler.bar.bar_offset_m;
+double PipelineStage::BarY() const {
+  return pipeline_.tracker().forward_distance_m() - system().options().scheduler.bar.bar_offset_m;
 }
 
-bool TreatmentStage::TileRowObserved(int tile_row) const {
-  const treatment::TreatmentMap& map = system_.map();
+bool PipelineStage::TileRowObserved(int tile_row) const {
+  const treatment::TreatmentMap& map = system().map();
   for (int r = tile_row * kTileCells; r < std::min(map.rows(), (tile_row + 1) * kTileCells); ++r) {
     for (int c = 0; c < map.columns(); ++c) {
       if (map.Observed(c, r)) return true;
@@ -369,10 +337,9 @@ bool TreatmentStage::TileRowObserved(int tile_row) const {
 
 // A tile row is sent once the bar has passed it: its cells are final. At
 // the end of the run, every row up to the last the camera saw.
-void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end) {
-  const tracking::GridTracker& tracker = tracker_.tracker();
-  if (!to_the_end && tracker.mode() != tracking::TrackerMode::kTracking) return;
-  const treatment::TreatmentMap& map = system_.map();
+void PipelineStage::PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end) {
+  if (!to_the_end && pipeline_.tracker().mode() != tracking::TrackerMode::kTracking) return;
+  const treatment::TreatmentMap& map = system().map();
   const double bar_y = BarY();
   const double edge = kTileCells * map.options().cell_m;
   int last_seen = -1;  // the last tile row with a cell the camera saw
@@ -417,4 +384,4 @@ void TreatmentStage::PublishTiles(int64_t utime, Publisher& publisher, bool to_t
   ++tile_revision_;
 }
 
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

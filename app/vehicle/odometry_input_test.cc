@@ -1,4 +1,4 @@
-#include "telemetry/odometry_input.h"
+#include "app/vehicle/odometry_input.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,13 @@
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
 namespace {
+
+namespace channels = telemetry::channels;
+using telemetry::Bytes;
+using telemetry::Encode;
+using telemetry::LcmTransport;
 
 plantscale_odometry_t Sample(int64_t utime, double left, int8_t valid = 1) {
   plantscale_odometry_t m{};
@@ -46,4 +51,4 @@ TEST(OdometryInput, QueuesValidSamplesAndReportsBadOnesAsFaults) {
 }
 
 }  // namespace
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

@@ -1,4 +1,4 @@
-#include "telemetry/odometry_input.h"
+#include "app/vehicle/odometry_input.h"
 
 #include <cmath>
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
@@ -6,7 +6,11 @@
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
+
+namespace channels = telemetry::channels;
+using telemetry::Decode;
+using telemetry::ReceivedMessage;
 
 void OdometryInput::Attach(Transport& transport) {
   transport.Subscribe(channels::kOdometryIn,
@@ -26,17 +30,17 @@ void OdometryInput::Feed(const std::string& channel, const void* data, size_t si
     last_problem_ = error;
     return;
   }
-  sim::OdometrySample s;
+  pipeline::OdometrySample s;
   s.utime = m->utime;
-  s.left_m_s = s.true_left_m_s = m->left_m_s;
-  s.right_m_s = s.true_right_m_s = m->right_m_s;
+  s.left_m_s = m->left_m_s;
+  s.right_m_s = m->right_m_s;
   pending_.push_back(s);
   last_utime_ = m->utime;
 }
 
-std::vector<sim::OdometrySample> OdometryInput::Take() {
+std::vector<pipeline::OdometrySample> OdometryInput::Take() {
   std::lock_guard lock(mutex_);
-  std::vector<sim::OdometrySample> out;
+  std::vector<pipeline::OdometrySample> out;
   out.swap(pending_);
   return out;
 }
@@ -63,4 +67,4 @@ int64_t OdometryInput::received() const {
   return received_;
 }
 
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

@@ -1,4 +1,4 @@
-#include "telemetry/runner.h"
+#include "app/vehicle/runner.h"
 
 #include <chrono>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
@@ -8,7 +8,9 @@
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
+
+namespace channels = telemetry::channels;
 
 SimFrameSource::SimFrameSource(sim::Simulator& simulator, int64_t epoch_utime)
     : simulator_(simulator), epoch_utime_(epoch_utime) {}
@@ -19,8 +21,10 @@ bool SimFrameSource::Next(VehicleFrame& frame) {
   frame.utime = epoch_utime_ + frame_.truth.utime;
   frame.frame_index = frame_.truth.index;
   frame.image = frame_.rendered.image;
-  frame.odometry = frame_.odometry;
-  for (sim::OdometrySample& s : frame.odometry) s.utime += epoch_utime_;
+  frame.odometry.clear();
+  for (const sim::OdometrySample& s : frame_.odometry) {
+    frame.odometry.push_back({epoch_utime_ + s.utime, s.left_m_s, s.right_m_s});
+  }
   frame.truth = &truth_;
   return true;
 }
@@ -48,7 +52,7 @@ void VehicleRunner::ListenForCommands(Transport& transport) {
 
 void VehicleRunner::Apply(const ReceivedMessage& m) {
   std::string error;
-  const auto c = Decode<plantscale_command_t>(m.channel, m.data, m.size, &error);
+  const auto c = telemetry::Decode<plantscale_command_t>(m.channel, m.data, m.size, &error);
   OperatorCommands& k = status_.commands;
   const auto refuse = [&](const std::string& why) {
     ++k.refused;
@@ -125,4 +129,4 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
   return summary;
 }
 
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

@@ -1,11 +1,11 @@
 #pragma once
-// The vehicle-side loop: takes frames from a FrameSource (the simulator
-// today; a camera for `plantscale run` later), paces them in real time or as
-// fast as possible, and passes each frame through a list of Stages that
-// publish what they know. The engine plugs in the same way: the grid tracker
-// (issue 5) becomes a Stage publishing PLANTSCALE_GRID, classification and
-// treatment (issue 6) Stages publishing plants, map tiles and nozzles, and
-// they report fail-safe state and faults through RunStatus.
+// The vehicle process's loop: takes frames from a FrameSource (the
+// simulator, or a camera for `plantscale run`), paces them in real time or
+// as fast as possible, and passes each frame through a list of Stages that
+// publish what they know. The engine runs in one of them (PipelineStage,
+// stages.h: the vehicle pipeline of engine/pipeline); the others publish the
+// heartbeat, thumbnails, odometry and the simulator's truth, or supervise
+// the spray bar. Stages report fail-safe state and faults through RunStatus.
 
 #include <atomic>
 #include <cstdint>
@@ -15,16 +15,21 @@
 #include <string>
 #include <vector>
 
+#include "engine/pipeline/pipeline.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/publisher.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
+
+using telemetry::Publisher;
+using telemetry::ReceivedMessage;
+using telemetry::Transport;
 
 struct VehicleFrame {
   int64_t utime = 0;  // capture time on the message clock (epoch microseconds)
   int frame_index = 0;
   cv::Mat image;
-  std::vector<sim::OdometrySample> odometry;  // since the previous frame, utime as above
+  std::vector<pipeline::OdometrySample> odometry;  // since the previous frame, utime as above
   const sim::FrameTruth* truth = nullptr;     // simulator only: never feed it to the engine
 };
 
@@ -122,4 +127,4 @@ class VehicleRunner {
   Transport* commands_ = nullptr;
 };
 
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

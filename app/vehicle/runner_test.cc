@@ -1,4 +1,4 @@
-#include "telemetry/runner.h"
+#include "app/vehicle/runner.h"
 
 #include <gtest/gtest.h>
 #include <plantscale_lcmtypes/plantscale_map_tile_t.hpp>
@@ -7,13 +7,24 @@
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 
+#include "app/vehicle/stages.h"
 #include "engine/geometry/test_cameras.h"
 #include "telemetry/channels.h"
-#include "telemetry/stages.h"
 #include "telemetry/subscriber.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
 namespace {
+
+namespace channels = telemetry::channels;
+using telemetry::Bytes;
+using telemetry::Decode;
+using telemetry::Encode;
+using telemetry::LcmTransport;
+using telemetry::PlantKind;
+using telemetry::PlantObservation;
+using telemetry::PublisherOptions;
+using telemetry::Subscriber;
+using telemetry::TelemetrySnapshot;
 
 sim::SimulatorOptions SmallPass() {
   sim::SimulatorOptions o;
@@ -56,10 +67,10 @@ Published RunFast() {
   return p;
 }
 
-// The treatment stage behind the tracker: a tick per odometry sample into
+// The pipeline stage: a tick per odometry sample into
 // the nozzle sink, the bar closed until the grid is tracked, then plants,
 // nozzle states and shots on their channels.
-TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
+TEST(VehicleRunner, PipelineStageSchedulesNozzlesFromTheTrackedGrid) {
   LcmTransport t("memq://");
   Subscriber sub;
   sub.Attach(t);
@@ -71,28 +82,25 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
   sim::Simulator simulator(so);
   SimFrameSource source(simulator, 1'700'000'000'000'000);
   VehicleRunner runner(publisher, RunnerOptions{false}, 1'700'000'000'000'000);
-  auto segmentation = std::make_unique<SegmentationStage>(vision::SegmenterOptions{},
-                                                          &simulator.camera());
-  const SegmentationStage& blobs = *segmentation;
-  runner.AddStage(std::move(segmentation));
-  tracking::TrackerOptions to;
-  to.rows_each_side = (so.field.rows - 1) / 2;
-  to.row_spacing_m = so.field.row_spacing_m;
-  to.plant_spacing_m = so.field.plant_spacing_m;
-  to.track_width_m = so.vehicle.track_width_m;
-  auto tracker = std::make_unique<TrackerStage>(simulator.camera(), to, blobs);
-  const TrackerStage& tracked = *tracker;
-  runner.AddStage(std::move(tracker));
+  pipeline::PipelineOptions po;
+  po.tracker.rows_each_side = (so.field.rows - 1) / 2;
+  po.tracker.row_spacing_m = so.field.row_spacing_m;
+  po.tracker.plant_spacing_m = so.field.plant_spacing_m;
+  po.tracker.track_width_m = so.vehicle.track_width_m;
   int ticks = 0, open_ticks = 0, open_while_lost = 0;
-  auto treat = std::make_unique<TreatmentStage>(
-      simulator.camera(), treatment::TreatmentOptions{}, blobs, tracked,
-      [&](int64_t, uint64_t mask) {
+  const PipelineStage* stage_ptr = nullptr;
+  auto stage_owned = std::make_unique<PipelineStage>(
+      simulator.camera(), po, [&](int64_t, uint64_t mask) {
         ++ticks;
         open_ticks += mask != 0;
-        open_while_lost += mask != 0 && tracked.tracker().mode() != tracking::TrackerMode::kTracking;
+        open_while_lost += mask != 0 && stage_ptr->pipeline().tracker().mode() !=
+                                            tracking::TrackerMode::kTracking;
       });
-  const TreatmentStage& stage = *treat;
-  runner.AddStage(std::move(treat));
+  stage_ptr = stage_owned.get();
+  const PipelineStage& stage = *stage_owned;
+  const tracking::GridTracker& tracker = stage.pipeline().tracker();
+  const treatment::TreatmentSystem& system = *stage.pipeline().treatment();
+  runner.AddStage(std::move(stage_owned));
   const RunSummary summary = runner.Run(source);
   while (t.Handle(0)) {
   }
@@ -100,7 +108,7 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
   ASSERT_GT(summary.frames, 100);
   // 50 Hz odometry over ≈ 8 m at the preset's speed: one tick per sample.
   EXPECT_GT(ticks, 4 * summary.frames - 10);
-  ASSERT_EQ(tracked.tracker().mode(), tracking::TrackerMode::kTracking);
+  ASSERT_EQ(tracker.mode(), tracking::TrackerMode::kTracking);
   EXPECT_GT(open_ticks, 20);  // crops passed under the bar
   EXPECT_EQ(open_while_lost, 0);
   EXPECT_GT(snap.channels.at(channels::kNozzles).received, 20);
@@ -110,10 +118,10 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
     EXPECT_EQ(stats.decode_failures + stats.invalid, 0) << name;
   }
   // Crop records the bar has passed were sprayed (bed frame).
-  const double bar_y = tracked.tracker().forward_distance_m() -
-                       stage.system().options().scheduler.bar.bar_offset_m;
+  const double bar_y = tracker.forward_distance_m() -
+                       system.options().scheduler.bar.bar_offset_m;
   int crops = 0, sprayed = 0;
-  for (const treatment::PlantRecord& r : stage.system().registry().records()) {
+  for (const treatment::PlantRecord& r : system.registry().records()) {
     if (!r.crop() || r.bed_m.y() > bar_y - 0.1) continue;
     ++crops;
     sprayed += r.sprayed;
@@ -164,7 +172,7 @@ TEST(VehicleRunner, TreatmentStageSchedulesNozzlesFromTheTrackedGrid) {
       }
     }
   }
-  EXPECT_GT(crop_max_y, tracked.tracker().forward_distance_m() + 0.5);
+  EXPECT_GT(crop_max_y, tracker.forward_distance_m() + 0.5);
 }
 
 TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {
@@ -209,10 +217,21 @@ TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {
 }
 
 }  // namespace
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
 namespace {
+
+namespace channels = telemetry::channels;
+using telemetry::Bytes;
+using telemetry::Decode;
+using telemetry::Encode;
+using telemetry::LcmTransport;
+using telemetry::PlantKind;
+using telemetry::PlantObservation;
+using telemetry::PublisherOptions;
+using telemetry::Subscriber;
+using telemetry::TelemetrySnapshot;
 
 // Plays the station: publishes a command while frame `at` is processed.
 class StationScript : public Stage {
@@ -286,4 +305,4 @@ TEST(VehicleRunner, ActsOnStationCommandsAndRefusesBadOnes) {
 }
 
 }  // namespace
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

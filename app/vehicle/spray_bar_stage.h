@@ -11,10 +11,12 @@
 
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
-#include "telemetry/runner.h"
-#include "telemetry/types.h"
+#include "app/vehicle/runner.h"
 
-namespace plantscale::telemetry::can {
+namespace plantscale::vehicle {
+
+using telemetry::can::SimulatedBar;
+using telemetry::can::SprayBar;
 
 class SprayBarStage : public Stage {
  public:
@@ -44,9 +46,4 @@ class SimulatedBarStage : public Stage {
   SimulatedBar& bar_;
 };
 
-// Open nozzles as the bar acknowledged them, per-nozzle fault codes
-// (plantscale_nozzles_t::FAULT_*: a silent bar is FAULT_NO_ANSWER on every
-// nozzle, any reported nozzle fault FAULT_STUCK) and the fail-safe flag.
-NozzleBar ToNozzleBar(const SprayBarStatus& status);
-
-}  // namespace plantscale::telemetry::can
+}  // namespace plantscale::vehicle

@@ -10,17 +10,19 @@
 #include <string>
 #include <vector>
 
-#include "engine/sim/vehicle.h"
+#include "engine/pipeline/pipeline.h"
 #include "telemetry/transport.h"
 
-namespace plantscale::telemetry {
+namespace plantscale::vehicle {
+
+using telemetry::Transport;
 
 class OdometryInput {
  public:
   void Attach(Transport& transport);
   void Feed(const std::string& channel, const void* data, size_t size);
   // Every valid sample received since the previous call, oldest first.
-  std::vector<sim::OdometrySample> Take();
+  std::vector<pipeline::OdometrySample> Take();
   // Faults: no odometry for more than `stale_s` before `now_utime`, invalid
   // samples, undecodable messages. Empty when all is well.
   std::vector<std::string> Faults(int64_t now_utime, double stale_s = 0.5) const;
@@ -28,11 +30,11 @@ class OdometryInput {
 
  private:
   mutable std::mutex mutex_;
-  std::vector<sim::OdometrySample> pending_;
+  std::vector<pipeline::OdometrySample> pending_;
   int64_t received_ = 0;
   int64_t rejected_ = 0;
   int64_t last_utime_ = -1;
   std::string last_problem_;
 };
 
-}  // namespace plantscale::telemetry
+}  // namespace plantscale::vehicle

@@ -1,16 +1,9 @@
-#include "telemetry/can/spray_bar_stage.h"
+#include "telemetry/can/nozzle_bar.h"
 
 #include <algorithm>
 #include <plantscale_lcmtypes/plantscale_nozzles_t.hpp>
 
 namespace plantscale::telemetry::can {
-
-void SprayBarStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher&) {
-  bar_.Poll(frame.utime);
-  if (command_closed_) bar_.Command(frame.utime, 0);
-  for (std::string& line : bar_.HealthFaults()) status.faults.push_back(std::move(line));
-  if (bar_.status().failsafe) status.failsafe = true;
-}
 
 NozzleBar ToNozzleBar(const SprayBarStatus& s) {
   NozzleBar bar;

@@ -1,0 +1,199 @@
+#include "engine/pipeline/pipeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <sstream>
+
+#include "engine/tracking/blob_features.h"
+
+namespace plantscale::pipeline {
+
+namespace {
+
+std::string Seconds(int64_t us) {
+  std::ostringstream out;
+  out.precision(3);
+  out << std::fixed << 1e-6 * static_cast<double>(us) << " s";
+  return out.str();
+}
+
+}  // namespace
+
+OptionErrors PipelineOptions::Validate() const {
+  OptionErrors e = Prefixed("segmenter", segmenter.Validate());
+  const OptionErrors t = Prefixed("tracker", tracker.Validate());
+  e.insert(e.end(), t.begin(), t.end());
+  if (treat) {
+    const OptionErrors r = Prefixed("treatment", treatment.Validate());
+    e.insert(e.end(), r.begin(), r.end());
+  }
+  RequirePositive(e, "max_odometry_age_s", max_odometry_age_s);
+  return e;
+}
+
+Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& options,
+                   treatment::NozzleSink sink)
+    : camera_(camera),
+      options_((ThrowIfInvalid("pipeline options", options.Validate()), options)),
+      segmenter_(options_.segmenter),
+      tracker_(camera, options_.tracker) {
+  if (options_.treat) {
+    system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
+  }
+}
+
+void Pipeline::set_sink(treatment::NozzleSink sink) {
+  if (system_) system_->set_sink(std::move(sink));
+}
+
+void Pipeline::SetOperator(bool held, std::optional<treatment::SprayMode> mode) {
+  held_ = held;
+  if (mode && system_) system_->set_mode(*mode);
+}
+
+treatment::SafetyInputs Pipeline::Safety(int64_t pose_utime, bool odometry_ok) const {
+  treatment::SafetyInputs s;
+  s.pose_utime = pose_utime;
+  s.last_frame_utime = system_ ? system_->last_frame_utime() : -1;
+  s.camera_ok = !camera_fault_;
+  s.odometry_valid = odometry_ok;
+  s.tracking = tracker_.mode() == tracking::TrackerMode::kTracking;
+  s.held = held_;
+  return s;
+}
+
+void Pipeline::KeepTicks(std::span<const treatment::TickResult> ticks) {
+  if (!ticks.empty()) last_tick_ = ticks.back();
+}
+
+const PoseResult& Pipeline::AddOdometry(const OdometrySample& o) {
+  pose_.input = tracker_.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+  pose_.ticks = {};
+  if (o.utime > last_odometry_utime_) last_odometry_utime_ = o.utime;
+  if (!system_) return pose_;
+  // The pose at the sample's time from the tracker's newest state; a refused
+  // sample leaves the wheels unknown (the bar closes on it).
+  const bool ok = pose_.input.accepted;
+  const treatment::BedPose pose = treatment::TrackerPose(tracker_, o.utime, ok);
+  pose_.ticks = system_->TicksFrom(o.utime, pose, Safety(std::min(tracker_.utime(), o.utime), ok));
+  KeepTicks(pose_.ticks);
+  return pose_;
+}
+
+void Pipeline::Refuse(const std::string& why) {
+  frame_.accepted = false;
+  frame_.faults.push_back(why);
+  camera_fault_ = true;
+}
+
+const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const cv::Mat& image) {
+  frame_.utime = utime;
+  frame_.frame_index = frame_index;
+  frame_.accepted = true;
+  frame_.faults.clear();
+  frame_.report = {};
+  frame_.blobs = {};
+  frame_.track_blobs = {};
+  frame_.mask = cv::Mat();
+  frame_.track_features = {};
+  frame_.features = {};
+  frame_.blob_of_feature = {};
+  frame_.treatment = nullptr;
+  frame_.ticks = {};
+  frame_ticks_.clear();
+  if (image.empty()) {
+    Refuse("camera: frame " + std::to_string(frame_index) + " has no image");
+  } else if (image.cols != camera_.width() || image.rows != camera_.height()) {
+    Refuse("camera: frame " + std::to_string(frame_index) + " is " + std::to_string(image.cols) +
+           "x" + std::to_string(image.rows) + " px, the calibration is " +
+           std::to_string(camera_.width()) + "x" + std::to_string(camera_.height()) + " px");
+  } else if (last_frame_utime_ >= 0 && utime <= last_frame_utime_) {
+    Refuse("camera: frame " + std::to_string(frame_index) + " out of time order (captured " +
+           Seconds(last_frame_utime_ - utime) + " before the previous frame)");
+  } else {
+    try {
+      const vision::Segmentation& seg = segmenter_.Process(image, camera_);
+      frame_.blobs = seg.blobs;
+      frame_.track_blobs = seg.track_blobs;
+      frame_.mask = seg.mask;
+    } catch (const std::exception& e) {
+      Refuse(std::string("segmentation: ") + e.what());
+    }
+  }
+  if (frame_.accepted) {
+    tracking::FeaturesFromBlobs(frame_.track_blobs, image.cols, image.rows, track_features_,
+                                tracker_.centroid_heights());
+    frame_.track_features = track_features_;
+    frame_.report = tracker_.UpdateAtCapture(utime, image.cols, image.rows, track_features_);
+    if (!frame_.report.input.accepted) {
+      Refuse("tracker: " + frame_.report.input.reason);
+    } else {
+      last_frame_utime_ = utime;
+      camera_fault_ = false;
+      if (!frame_.report.input.reason.empty()) frame_.faults.push_back("tracker: " + frame_.report.input.reason);
+    }
+  }
+  frame_.mode = tracker_.mode();
+  if (frame_.accepted && frame_.mode == tracking::TrackerMode::kLost) {
+    frame_.faults.push_back("tracker: " + frame_.report.skipped_reason);
+  }
+  frame_.state = tracker_.state();
+  frame_.covariance = tracker_.covariance();
+  frame_.forward_distance_m = tracker_.forward_distance_m();
+  if (frame_.accepted && system_) Treat();
+  tracker_.CatchUp();
+  CloseIfOdometryStopped();
+  frame_.ticks = frame_ticks_;
+  return frame_;
+}
+
+// Classification and mapping with the grid at capture (the tracker holds it
+// there until CatchUp).
+void Pipeline::Treat() {
+  tracking::FeaturesFromBlobs(frame_.blobs, camera_.width(), camera_.height(), features_,
+                              tracker_.centroid_heights());
+  treatment::FeatureBlobIndices(frame_.blobs, blob_of_feature_);
+  frame_.features = features_;
+  frame_.blob_of_feature = blob_of_feature_;
+  frame_.treatment = &system_->OnFrame(frame_.utime, tracker_, frame_.report, frame_.blobs,
+                                       features_, blob_of_feature_, frame_.mask);
+}
+
+// No odometry sample ticks the bar when the odometry has stopped: the frame
+// commands it closed, odometry invalid, at its capture.
+void Pipeline::CloseIfOdometryStopped() {
+  if (!system_) return;
+  const int64_t age = last_odometry_utime_ < 0 ? -1 : frame_.utime - last_odometry_utime_;
+  const bool stopped = last_odometry_utime_ < 0 || age * 1e-6 > options_.max_odometry_age_s;
+  if (!stopped) return;
+  frame_.faults.push_back(last_odometry_utime_ < 0
+                              ? std::string("odometry: none received")
+                              : "odometry: stopped " + Seconds(age) + " before the frame");
+  if (last_tick_ && last_tick_->utime >= frame_.utime) return;  // ticks stay in time order
+  const treatment::BedPose pose = treatment::TrackerPose(tracker_, frame_.utime, false);
+  for (const treatment::TickResult& t :
+       system_->TicksFrom(frame_.utime, pose, Safety(tracker_.utime(), false))) {
+    frame_ticks_.push_back(t);
+  }
+  KeepTicks(frame_ticks_);
+}
+
+const FrameResult& Pipeline::Step(int64_t utime, int frame_index, const cv::Mat& image,
+                                  std::span<const OdometrySample> odometry,
+                                  std::vector<treatment::TickResult>* ticks) {
+  const auto feed = [&](bool before) {
+    for (const OdometrySample& o : odometry) {
+      if ((o.utime <= utime) != before) continue;
+      const PoseResult& p = AddOdometry(o);
+      if (ticks) ticks->insert(ticks->end(), p.ticks.begin(), p.ticks.end());
+    }
+  };
+  feed(true);
+  ProcessFrame(utime, frame_index, image);
+  if (ticks) ticks->insert(ticks->end(), frame_.ticks.begin(), frame_.ticks.end());
+  feed(false);
+  return frame_;
+}
+
+}  // namespace plantscale::pipeline

@@ -1,0 +1,147 @@
+#pragma once
+// The vehicle's frame pipeline, the one composition of the engine that every
+// user runs: the vehicle process (`simulate --publish`, `run`), every
+// `evaluate` and the whole-frame benchmark. It takes camera frames with
+// their capture time and wheel odometry samples, in the order they arrive,
+// and runs segmentation, the crop-grid tracker, classification, the
+// treatment map and the nozzle scheduler. No transport, no files: results
+// come back per frame and per odometry sample, nozzle commands go to a sink.
+//
+// Time: a frame is classified, placed and mapped with the grid as it stood
+// at the frame's capture, whatever odometry came in after the capture
+// before the frame did (GridTracker::UpdateAtCapture); the scheduler ticks
+// from the newest pose. Faults never throw out of it: a refused frame, a
+// lost grid or odometry that stopped is a reported state with the bar
+// closed (the scheduler's fail-safe reasons).
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "engine/common/options.h"
+#include "engine/geometry/camera_model.h"
+#include "engine/tracking/grid_tracker.h"
+#include "engine/treatment/treatment_system.h"
+#include "engine/vision/segmenter.h"
+
+namespace plantscale::pipeline {
+
+struct PipelineOptions {
+  vision::SegmenterOptions segmenter;
+  tracking::TrackerOptions tracker;
+  treatment::TreatmentOptions treatment;
+  // Off: segmentation and tracking only (no classification, map or bar).
+  bool treat = true;
+  // A frame captured this long after the newest odometry sample finds the
+  // odometry stopped: the bar closes (odometry invalid) until it resumes.
+  double max_odometry_age_s = 0.2;
+
+  OptionErrors Validate() const;
+};
+
+// A wheel odometry sample: measured ground speeds over the period ending at
+// utime (µs, the frames' clock).
+struct OdometrySample {
+  int64_t utime = 0;
+  double left_m_s = 0.0;
+  double right_m_s = 0.0;
+};
+
+// What one odometry sample did: the tracker's verdict and the scheduler's
+// ticks until the next pose (empty without treatment).
+struct PoseResult {
+  tracking::InputStatus input;
+  std::span<const treatment::TickResult> ticks;
+};
+
+struct FrameResult {
+  int64_t utime = 0;  // capture
+  int frame_index = 0;
+  // False: the frame was refused (out of time order, no image, the wrong
+  // size, segmentation failed); `faults` says why and the bar is closed
+  // (camera fault) until a frame is accepted.
+  bool accepted = false;
+  std::vector<std::string> faults;  // this frame's problems, each prefixed by its part
+  tracking::FrameReport report;     // the tracker's
+  tracking::TrackerMode mode = tracking::TrackerMode::kInitialising;
+  // The grid at capture, with its covariance and the distance driven then.
+  geometry::GridState state;
+  geometry::Matrix5d covariance = geometry::Matrix5d::Zero();
+  double forward_distance_m = 0.0;
+  // The segmentation (valid until the next frame): every blob, the blobs the
+  // tracker measured, and the plant mask.
+  std::span<const vision::Blob> blobs, track_blobs;
+  cv::Mat mask;
+  // Features of `track_blobs`, as the tracker measured them.
+  std::span<const tracking::Feature> track_features;
+  // Features of `blobs` as classified: features[i] from blobs[blob_of_feature[i]].
+  std::span<const tracking::Feature> features;
+  std::span<const int> blob_of_feature;
+  // Classification and mapping (null without treatment or when refused).
+  const treatment::FrameTreatment* treatment = nullptr;
+  // Ticks the frame itself made: the bar commanded closed when the odometry
+  // has stopped (no odometry sample would tick otherwise).
+  std::span<const treatment::TickResult> ticks;
+};
+
+class Pipeline {
+ public:
+  // Throws InvalidOptionsError. The camera must outlive the pipeline.
+  Pipeline(const geometry::CameraModel& camera, const PipelineOptions& options,
+           treatment::NozzleSink sink = {});
+
+  // A wheel odometry sample: dead reckoning, then the scheduler's ticks.
+  const PoseResult& AddOdometry(const OdometrySample& sample);
+  // A camera frame captured at utime (CV_8UC1 or CV_8UC3 of the camera's size).
+  const FrameResult& ProcessFrame(int64_t utime, int frame_index, const cv::Mat& image);
+  // A frame with the odometry that came with it, in time order: the samples
+  // up to its capture, the frame, the samples after it. `ticks` (optional)
+  // collects every tick of the step.
+  const FrameResult& Step(int64_t utime, int frame_index, const cv::Mat& image,
+                          std::span<const OdometrySample> odometry,
+                          std::vector<treatment::TickResult>* ticks = nullptr);
+
+  // The operator: `held` closes the bar (pause, spraying off); `mode` (when
+  // set) is the spray mode from the next tick on.
+  void SetOperator(bool held, std::optional<treatment::SprayMode> mode = std::nullopt);
+  void set_sink(treatment::NozzleSink sink);
+
+  const tracking::GridTracker& tracker() const { return tracker_; }
+  // Null without treatment.
+  const treatment::TreatmentSystem* treatment() const { return system_.get(); }
+  treatment::TreatmentSystem* treatment() { return system_.get(); }
+  const PipelineOptions& options() const { return options_; }
+  const geometry::CameraModel& camera() const { return camera_; }
+  // The newest tick (fail-safe state, open mask), when there was one.
+  const std::optional<treatment::TickResult>& last_tick() const { return last_tick_; }
+  int64_t last_odometry_utime() const { return last_odometry_utime_; }
+
+ private:
+  treatment::SafetyInputs Safety(int64_t pose_utime, bool odometry_ok) const;
+  void Refuse(const std::string& why);
+  void Treat();
+  void CloseIfOdometryStopped();
+  void KeepTicks(std::span<const treatment::TickResult> ticks);
+
+  const geometry::CameraModel& camera_;
+  PipelineOptions options_;
+  vision::Segmenter segmenter_;
+  tracking::GridTracker tracker_;
+  std::unique_ptr<treatment::TreatmentSystem> system_;
+  bool held_ = false;
+  bool camera_fault_ = false;  // the last frame was refused
+  int64_t last_frame_utime_ = -1;
+  int64_t last_odometry_utime_ = -1;
+  std::optional<treatment::TickResult> last_tick_;
+  PoseResult pose_;
+  FrameResult frame_;
+  std::vector<tracking::Feature> track_features_, features_;
+  std::vector<int> blob_of_feature_;
+  std::vector<treatment::TickResult> frame_ticks_;
+};
+
+}  // namespace plantscale::pipeline

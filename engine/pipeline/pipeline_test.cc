@@ -1,0 +1,271 @@
+// The vehicle pipeline on the simulator: frames classified and placed with
+// the grid at their capture whatever odometry came in before them, and bad
+// input (frames out of order or without an image, odometry that stops, a lost
+// grid) reported with the bar closed, never thrown.
+#include "engine/pipeline/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <deque>
+#include <limits>
+
+#include "engine/geometry/test_cameras.h"
+#include "engine/sim/simulator.h"
+
+namespace plantscale::pipeline {
+namespace {
+
+sim::SimulatorOptions Pass(double length_m) {
+  sim::SimulatorOptions so;
+  so.camera = geometry::testing::ThesisCamera();
+  so.length_m = length_m;
+  so.seed = 5;
+  return so;
+}
+
+PipelineOptions OptionsFor(const sim::SimulatorOptions& so) {
+  PipelineOptions o;
+  o.tracker.rows_each_side = (so.field.rows - 1) / 2;
+  o.tracker.row_spacing_m = so.field.row_spacing_m;
+  o.tracker.plant_spacing_m = so.field.plant_spacing_m;
+  o.tracker.track_width_m = so.vehicle.track_width_m;
+  return o;
+}
+
+OdometrySample Sample(const sim::OdometrySample& o) { return {o.utime, o.left_m_s, o.right_m_s}; }
+
+struct Outcome {
+  std::vector<treatment::PlantRecord> records;
+  std::vector<double> capture_error_m;  // per tracked frame: Y at capture less Y of truth
+  int frames_tracked = 0;
+  int open_ticks = 0;
+};
+
+// Drives a pass through a pipeline, each frame handed over once the
+// odometry has passed its capture by `lag_us`.
+Outcome Drive(double length_m, int64_t lag_us) {
+  const sim::SimulatorOptions so = Pass(length_m);
+  sim::Simulator simulator(so);
+  Outcome run;
+  Pipeline p(simulator.camera(), OptionsFor(so),
+             [&run](int64_t, uint64_t mask) { run.open_ticks += mask != 0; });
+  std::deque<sim::SimFrame> pending;
+  const auto process = [&] {
+    const sim::SimFrame& f = pending.front();
+    const FrameResult& r = p.ProcessFrame(f.truth.utime, f.truth.index, f.rendered.image);
+    EXPECT_TRUE(r.accepted) << (r.faults.empty() ? "" : r.faults.front());
+    if (r.mode == tracking::TrackerMode::kTracking && r.report.updated) {
+      ++run.frames_tracked;
+      run.capture_error_m.push_back(
+          std::remainder(r.state.forward_m - f.truth.grid.forward_m, f.truth.grid.plant_spacing_m));
+    }
+    pending.pop_front();
+  };
+  sim::SimFrame frame;
+  while (simulator.Next(frame)) {
+    std::vector<sim::OdometrySample> odometry = std::move(frame.odometry);
+    pending.push_back(std::move(frame));
+    frame = sim::SimFrame{};
+    for (const sim::OdometrySample& o : odometry) {
+      while (!pending.empty() && pending.front().truth.utime + lag_us < o.utime) process();
+      p.AddOdometry(Sample(o));
+    }
+  }
+  while (!pending.empty()) process();
+  run.records = p.treatment()->registry().records();
+  return run;
+}
+
+double Mean(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return v.empty() ? std::numeric_limits<double>::infinity() : s / static_cast<double>(v.size());
+}
+
+// A frame that reaches the pipeline 100 ms after its capture, after the
+// odometry up to then (about 70 mm of travel): its blobs are classified and
+// placed with the grid where it stood at capture. Moved on by the lag, the
+// crops would be placed 70 mm off along the row.
+TEST(Pipeline, FrameLateBehindItsOdometryIsPlacedWithTheGridAtCapture) {
+  const Outcome on_time = Drive(8.0, 0);
+  const Outcome late = Drive(8.0, 100'000);
+  ASSERT_GT(on_time.frames_tracked, 50);
+  ASSERT_GT(late.frames_tracked, 50);
+  // The grid reported with the frame is the grid at capture: its error in Y
+  // against the truth at capture is the on-time run's within 12 mm (the
+  // lag is 0.7 m/s × 0.1 s = 70 mm; moved on by it, the difference is 60 mm).
+  EXPECT_NEAR(Mean(late.capture_error_m), Mean(on_time.capture_error_m), 0.012);
+  // Crop records: each on-time crop's nearest late crop stands within 5 mm
+  // along on average (the same plants, placed from the same views).
+  double along = 0.0;
+  int matched = 0;
+  for (const treatment::PlantRecord& a : on_time.records) {
+    if (!a.crop() || !a.confirmed()) continue;
+    double best = 1e9;
+    const treatment::PlantRecord* nearest = nullptr;
+    for (const treatment::PlantRecord& b : late.records) {
+      if (!b.crop() || !b.confirmed()) continue;
+      const double d = (a.bed_m - b.bed_m).norm();
+      if (d < best) best = d, nearest = &b;
+    }
+    if (nearest == nullptr || best > 0.15) continue;
+    along += nearest->bed_m.y() - a.bed_m.y();
+    ++matched;
+  }
+  ASSERT_GT(matched, 20);
+  EXPECT_LT(std::abs(along / matched), 0.005) << "mean along shift of " << matched << " crops";
+  // The bar still sprays: about as many open ticks as on time (±20 %).
+  EXPECT_NEAR(late.open_ticks, on_time.open_ticks, 0.2 * on_time.open_ticks);
+}
+
+// Feeds a pipeline the first `seconds` of a pass in time order; returns
+// the simulator for more.
+class PipelineFaults : public ::testing::Test {
+ protected:
+  PipelineFaults()
+      : simulator_(Pass(20.0)),
+        p_(simulator_.camera(), OptionsFor(Pass(20.0)),
+           [this](int64_t, uint64_t mask) { last_mask_ = mask; }) {}
+
+  // The next frame and its odometry, in order.
+  const FrameResult& Next(bool with_odometry = true) {
+    EXPECT_TRUE(simulator_.Next(frame_));
+    if (!with_odometry) frame_.odometry.clear();
+    const auto feed = [&](bool before) {
+      for (const sim::OdometrySample& o : frame_.odometry) {
+        if ((o.utime <= frame_.truth.utime) == before) ticks_ = p_.AddOdometry(Sample(o)).ticks;
+      }
+    };
+    feed(true);
+    const FrameResult& r = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index,
+                                           frame_.rendered.image);
+    feed(false);
+    return r;
+  }
+  void TrackFor(int frames) {
+    for (int i = 0; i < frames; ++i) Next();
+    ASSERT_EQ(p_.tracker().mode(), tracking::TrackerMode::kTracking);
+  }
+  // The reasons of the newest tick.
+  uint32_t Reasons() const { return p_.last_tick() ? p_.last_tick()->fail_reasons : 0u; }
+  static bool Has(const FrameResult& r, const std::string& text) {
+    for (const std::string& f : r.faults) {
+      if (f.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+
+  sim::Simulator simulator_;
+  Pipeline p_;
+  sim::SimFrame frame_;
+  std::span<const treatment::TickResult> ticks_;
+  uint64_t last_mask_ = 0;
+};
+
+TEST_F(PipelineFaults, FrameOutOfTimeOrderIsRefusedAndClosesTheBarUntilTheNext) {
+  TrackFor(60);
+  const cv::Mat image = frame_.rendered.image.clone();
+  const int64_t earlier = frame_.truth.utime - 40'000;
+  const FrameResult& r = p_.ProcessFrame(earlier, 999, image);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_TRUE(Has(r, "out of time order")) << r.faults.front();
+  // The next odometry sample ticks with the camera at fault: all closed.
+  ASSERT_TRUE(simulator_.Next(frame_));
+  ASSERT_FALSE(frame_.odometry.empty());
+  const PoseResult& pose = p_.AddOdometry(Sample(frame_.odometry.front()));
+  ASSERT_FALSE(pose.ticks.empty());
+  EXPECT_NE(pose.ticks.back().fail_reasons & treatment::kCameraLost, 0u);
+  EXPECT_EQ(pose.ticks.back().open_mask, 0u);
+  EXPECT_EQ(last_mask_, 0u);
+  // A good frame clears it.
+  const FrameResult& good = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index,
+                                            frame_.rendered.image);
+  EXPECT_TRUE(good.accepted);
+  for (size_t i = 1; i < frame_.odometry.size(); ++i) p_.AddOdometry(Sample(frame_.odometry[i]));
+  EXPECT_EQ(Reasons() & treatment::kCameraLost, 0u);
+}
+
+TEST_F(PipelineFaults, FrameWithNoImageIsRefusedWithTheBarClosed) {
+  TrackFor(60);
+  ASSERT_TRUE(simulator_.Next(frame_));
+  for (const sim::OdometrySample& o : frame_.odometry) {
+    if (o.utime <= frame_.truth.utime) p_.AddOdometry(Sample(o));
+  }
+  const FrameResult& r = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index, cv::Mat());
+  EXPECT_FALSE(r.accepted);
+  EXPECT_TRUE(Has(r, "has no image"));
+  for (const sim::OdometrySample& o : frame_.odometry) {
+    if (o.utime > frame_.truth.utime) p_.AddOdometry(Sample(o));
+  }
+  EXPECT_NE(Reasons() & treatment::kCameraLost, 0u);
+  EXPECT_EQ(last_mask_, 0u);
+  // The wrong size too.
+  const FrameResult& small = p_.ProcessFrame(frame_.truth.utime + 80'000, 1000,
+                                             cv::Mat(10, 10, CV_8UC1, cv::Scalar(0)));
+  EXPECT_FALSE(small.accepted);
+  EXPECT_TRUE(Has(small, "the calibration is"));
+}
+
+TEST_F(PipelineFaults, OdometryThatStopsClosesTheBarFromTheFrames) {
+  TrackFor(60);
+  // Frames keep coming, the wheels say nothing: within 0.2 s the frames
+  // command the bar closed themselves (no odometry sample ticks it).
+  const FrameResult* r = nullptr;
+  for (int i = 0; i < 5; ++i) r = &Next(false);
+  EXPECT_TRUE(r->accepted);
+  EXPECT_TRUE(Has(*r, "odometry: stopped"));
+  ASSERT_FALSE(r->ticks.empty());
+  EXPECT_NE(r->ticks.back().fail_reasons & treatment::kOdometryInvalid, 0u);
+  EXPECT_EQ(r->ticks.back().open_mask, 0u);
+  EXPECT_EQ(last_mask_, 0u);
+}
+
+TEST_F(PipelineFaults, PipelineFedAfterItLostTheGridKeepsTheBarClosed) {
+  TrackFor(60);
+  // Blank frames for 4 s (beyond the tracker's 3 s of coasting): lost.
+  const cv::Mat blank(frame_.rendered.image.size(), frame_.rendered.image.type(), cv::Scalar(0));
+  int lost_at = -1;
+  for (int i = 0; i < 60; ++i) {
+    ASSERT_TRUE(simulator_.Next(frame_));
+    for (const sim::OdometrySample& o : frame_.odometry) p_.AddOdometry(Sample(o));
+    const FrameResult& r = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index, blank);
+    EXPECT_TRUE(r.accepted);
+    if (r.mode == tracking::TrackerMode::kLost && lost_at < 0) {
+      lost_at = i;
+      EXPECT_TRUE(Has(r, "tracker:"));
+    }
+    if (lost_at >= 0) {
+      EXPECT_EQ(last_mask_, 0u) << "frame " << i;
+    }
+  }
+  ASSERT_GE(lost_at, 0);
+  EXPECT_NE(Reasons() & treatment::kTrackerLost, 0u);
+  // Fed on after the loss: frames are taken (the tracker tries to find the
+  // grid again) and nothing throws; the bar stays closed until it does.
+  for (int i = 0; i < 3; ++i) {
+    const FrameResult& r = Next();
+    EXPECT_TRUE(r.accepted);
+    if (r.mode != tracking::TrackerMode::kTracking) {
+      EXPECT_EQ(last_mask_, 0u);
+    }
+  }
+}
+
+TEST(PipelineOptionsTest, InvalidOptionsNameTheirKey) {
+  PipelineOptions o;
+  o.max_odometry_age_s = 0.0;
+  o.tracker.max_coast_s = -1.0;
+  const OptionErrors e = o.Validate();
+  ASSERT_GE(e.size(), 2u);
+  bool age = false, coast = false;
+  for (const OptionError& x : e) {
+    age |= x.key == "max_odometry_age_s";
+    coast |= x.key == "tracker.max_coast_s";
+  }
+  EXPECT_TRUE(age);
+  EXPECT_TRUE(coast);
+}
+
+}  // namespace
+}  // namespace plantscale::pipeline
