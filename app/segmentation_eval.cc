@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "engine/pipeline/pipeline.h"
 #include "engine/vision/threshold.h"
 
 namespace plantscale::app {
@@ -71,9 +72,9 @@ struct Accumulators {
 };
 
 void ScoreFrame(const cv::Mat& image, const cv::Mat& labels, const cv::Mat& valid,
-                vision::Segmenter& segmenter, Accumulators& acc) {
-  const vision::Segmentation& s = segmenter.Process(image);
-  acc.ours.Add(s.mask, labels, valid);
+                const pipeline::FrameResult& frame, vision::Segmenter& segmenter,
+                Accumulators& acc) {
+  acc.ours.Add(frame.mask, labels, valid);
   // The thesis's baselines see the plant image as it is (no smoothing).
   cv::Mat raw = image;
   if (image.channels() == 3) {
@@ -147,7 +148,13 @@ SegmentationEvaluation EvaluateSegmentation(const SegmentationEvalOptions& optio
   const double spacing = ViewDepth(camera) + 0.1;
   const double step = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Accumulators acc;
-  vision::Segmenter segmenter(options.segmenter);
+  // The vehicle's pipeline, segmentation only: the sampled frames are far
+  // apart, with no odometry between them.
+  pipeline::PipelineOptions po;
+  po.segmenter = options.segmenter;
+  po.treat = false;
+  po.track = false;
+  pipeline::Pipeline pipe(camera, po);
   SegmentationEvaluation result;
   for (int k = 0; k < options.seeds; ++k) {
     sim::SimulatorOptions so = options.sim;
@@ -162,13 +169,15 @@ SegmentationEvaluation EvaluateSegmentation(const SegmentationEvalOptions& optio
       next_sample = frame.truth.distance_m + spacing;
       cv::Mat valid;
       vision::EvaluationMask(frame.rendered.labels, roi, options.doubt_band_px, valid);
-      ScoreFrame(frame.rendered.image, frame.rendered.labels, valid, segmenter, acc);
+      const pipeline::FrameResult& r =
+          pipe.ProcessFrame(frame.truth.utime, frame.truth.index, frame.rendered.image);
+      if (!r.accepted) throw std::runtime_error("segmentation evaluation: " + r.faults.front());
+      ScoreFrame(frame.rendered.image, frame.rendered.labels, valid, r, pipe.segmenter(), acc);
       if (!options.errors_dir.empty()) {
         std::filesystem::create_directories(options.errors_dir);
         WriteErrors(options.errors_dir + "/seed" + std::to_string(k) + "_frame" +
                         std::to_string(result.frames) + "_errors.png",
-                    frame.rendered.image, segmenter.Process(frame.rendered.image).mask,
-                    frame.rendered.labels, valid);
+                    frame.rendered.image, r.mask, frame.rendered.labels, valid);
       }
       ++result.frames;
     }

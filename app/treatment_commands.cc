@@ -22,6 +22,7 @@ struct TreatmentArgs {
   std::string baseline;
   std::optional<double> latency_ms;
   std::optional<double> true_latency_ms;
+  double frame_lag_ms = 0.0;
   std::optional<double> tick_ms;
   std::optional<double> footprint_scale;
   std::optional<double> weed_footprint_scale;
@@ -170,6 +171,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   treatment::ParseSprayMode(a.mode, o.treatment.scheduler.mode);
   if (a.latency_ms) o.treatment.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
+  o.frame_lag_s = a.frame_lag_ms / 1000.0;
   if (a.tick_ms) o.treatment.scheduler.tick_s = *a.tick_ms / 1000.0;
   if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
   if (a.weed_footprint_scale) o.treatment.weed_footprint_scale = *a.weed_footprint_scale;
@@ -272,6 +274,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_option("--true-latency-ms", args.true_latency_ms,
                   "the simulated valves' latency (default: as scheduled)")
       ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--frame-lag-ms", args.frame_lag_ms,
+                  "each frame reaches the pipeline this long after its capture, after the "
+                  "odometry up to then (camera and segmentation latency)")
+      ->check(CLI::Range(0.0, 150.0))->capture_default_str();
   cmd->add_option("--tick-ms", args.tick_ms,
                   "spray bar command period, at most the 20 ms pose period (default 5: 200 Hz)")
       ->check(CLI::Range(1.0, 20.0));

@@ -29,6 +29,7 @@ OptionErrors PipelineOptions::Validate() const {
     e.insert(e.end(), r.begin(), r.end());
   }
   RequirePositive(e, "max_odometry_age_s", max_odometry_age_s);
+  if (treat && !track) e.push_back({"track", "must be on when treat is (treatment needs the grid)"});
   return e;
 }
 
@@ -108,7 +109,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
     Refuse("camera: frame " + std::to_string(frame_index) + " is " + std::to_string(image.cols) +
            "x" + std::to_string(image.rows) + " px, the calibration is " +
            std::to_string(camera_.width()) + "x" + std::to_string(camera_.height()) + " px");
-  } else if (last_frame_utime_ >= 0 && utime <= last_frame_utime_) {
+  } else if (options_.track && last_frame_utime_ >= 0 && utime <= last_frame_utime_) {
     Refuse("camera: frame " + std::to_string(frame_index) + " out of time order (captured " +
            Seconds(last_frame_utime_ - utime) + " before the previous frame)");
   } else {
@@ -120,6 +121,10 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
     } catch (const std::exception& e) {
       Refuse(std::string("segmentation: ") + e.what());
     }
+  }
+  if (!options_.track) {
+    frame_.mode = tracker_.mode();
+    return frame_;
   }
   if (frame_.accepted) {
     tracking::FeaturesFromBlobs(frame_.track_blobs, image.cols, image.rows, track_features_,

@@ -36,6 +36,9 @@ struct PipelineOptions {
   treatment::TreatmentOptions treatment;
   // Off: segmentation and tracking only (no classification, map or bar).
   bool treat = true;
+  // Off: segmentation only (needs treat off): frames in any order, no
+  // odometry needed (evaluate segmentation's sampled frames).
+  bool track = true;
   // A frame captured this long after the newest odometry sample finds the
   // odometry stopped: the bar closes (odometry invalid) until it resumes.
   double max_odometry_age_s = 0.2;
@@ -115,6 +118,8 @@ class Pipeline {
   const treatment::TreatmentSystem* treatment() const { return system_.get(); }
   treatment::TreatmentSystem* treatment() { return system_.get(); }
   const PipelineOptions& options() const { return options_; }
+  // The segmenter, for measuring it (its continuous score: Segmenter::Score).
+  vision::Segmenter& segmenter() { return segmenter_; }
   const geometry::CameraModel& camera() const { return camera_; }
   // The newest tick (fail-safe state, open mask), when there was one.
   const std::optional<treatment::TickResult>& last_tick() const { return last_tick_; }
