@@ -1,7 +1,7 @@
 #pragma once
 // Telemetry commands: `replay` and `telemetry-stats`, and the publishing
 // mode of `simulate` (--publish, --fast, --lcm-url, --log, --can), which runs
-// the vehicle runner (telemetry/runner.h) on the simulator. With --can IFACE
+// the vehicle runner (app/vehicle/runner.h) on the simulator. With --can IFACE
 // the spray bar (telemetry/can) is opened on that interface before anything
 // else; a failure to open it ends the command with the reason.
 

@@ -2,8 +2,7 @@
 // The spray bar in the vehicle runner: a Stage that keeps the bar's
 // watchdog running every frame and reports its state in the heartbeat
 // (PLANTSCALE_HEALTH: fail-safe flag and one fault line per reason or
-// faulty nozzle), and the bar's state as a telemetry NozzleBar for
-// PLANTSCALE_NOZZLES.
+// faulty nozzle); the bar's state as telemetry is telemetry/can/nozzle_bar.h.
 //
 // The treatment scheduler drives the nozzles through SprayBar::Sink(); until
 // one does, the stage commands all nozzles closed every frame

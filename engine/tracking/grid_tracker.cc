@@ -500,8 +500,9 @@ FrameReport GridTracker::UpdateAtCapture(int64_t utime, int width, int height,
   // A frame captured before the newest odometry (the camera's latency, or
   // odometry that arrived while the frame was being segmented) is compared
   // with the grid where it was at capture: the mean is driven back over the
-  // lag with the newest wheel speeds for the update and forward again after
-  // it. The covariance already holds the lag's process noise.
+  // lag with the newest wheel speeds for the update, and held there until
+  // CatchUp drives it forward again. The covariance already holds the lag's
+  // process noise.
   const double lag_s = utime_ > utime ? (utime_ - utime) * 1e-6 : 0.0;
   const WheelIncrement lag{left_m_s_ * lag_s, right_m_s_ * lag_s};
 

@@ -112,6 +112,47 @@ TEST(GridTracker, AFrameOlderThanTheNewestOdometryIsComparedWhereItWasCaptured) 
   }
 }
 
+// The same lag through UpdateAtCapture: until CatchUp the grid stands where
+// it was at the frame's capture (what the frame's blobs are classified and
+// placed with), after it where it is now.
+TEST(GridTracker, UpdateAtCaptureHoldsTheGridAtCaptureUntilCatchUp) {
+  constexpr int64_t kLagUs = 100'000;  // 70 mm at 0.7 m/s
+  testing::TestScene scene;
+  GridTracker tracker(scene.camera, TrackerOptions{});
+  int64_t utime = 0;
+  const double v = 0.7;
+  std::vector<Feature> captured;
+  GridState truth_at_capture;
+  int64_t captured_at = -1;
+  double at_capture = 0.0, caught_up = 0.0;
+  int n = 0, tracked = 0;
+  for (int sample = 1; sample <= 150 * 4; ++sample) {
+    utime += kOdoUs;
+    scene.Drive({v * kOdoUs * 1e-6, v * kOdoUs * 1e-6});
+    tracker.AddOdometry(utime, v, v);
+    if (sample % 4 == 0 && captured_at < 0) {
+      captured = scene.Features();
+      captured_at = utime;
+      truth_at_capture = scene.truth;
+    }
+    if (captured_at < 0 || utime - captured_at != kLagUs) continue;
+    const FrameReport r = tracker.UpdateAtCapture(captured_at, 640, 480, captured);
+    captured_at = -1;
+    if (tracker.mode() != TrackerMode::kTracking) continue;
+    ++tracked;
+    EXPECT_TRUE(tracker.held_lag()) << "frame " << tracked;
+    const double e = WrappedForwardError(tracker.state(), truth_at_capture);
+    if (tracked > 20) at_capture += e;
+    tracker.CatchUp();
+    EXPECT_FALSE(tracker.held_lag());
+    if (tracked > 20) caught_up += WrappedForwardError(tracker.state(), scene.truth), ++n;
+    EXPECT_TRUE(r.updated || r.initialised_now);
+  }
+  ASSERT_GT(n, 40);
+  EXPECT_NEAR(at_capture / n, 0.0, 0.002);
+  EXPECT_NEAR(caught_up / n, 0.0, 0.002);
+}
+
 TEST(GridTracker, EstimatesSpacingsStartedOff) {
   TrackerOptions o;
   o.row_spacing_m = 0.5;    // 25 mm off

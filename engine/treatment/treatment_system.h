@@ -2,8 +2,9 @@
 // The treatment chain of one vehicle (DESIGN.md §1): classify each frame's
 // blobs against the tracker's predicted crop grid, accumulate their
 // footprints in the treatment map and the plant registry, and from every
-// 50 Hz pose schedule the nozzles at 200 Hz (with the fail-safe). Shared by the
-// evaluation (app/) and the vehicle runner (telemetry/stages).
+// 50 Hz pose schedule the nozzles at 200 Hz (with the fail-safe). Composed
+// with segmentation and the tracker by the vehicle pipeline
+// (engine/pipeline), which every user runs.
 
 #include <cstdint>
 #include <map>
