@@ -29,6 +29,7 @@ OptionErrors PipelineOptions::Validate() const {
     e.insert(e.end(), r.begin(), r.end());
   }
   RequirePositive(e, "max_odometry_age_s", max_odometry_age_s);
+  RequireFinite(e, "map_keep_behind_bar_m", map_keep_behind_bar_m);
   if (treat && !track) e.push_back({"track", "must be on when treat is (treatment needs the grid)"});
   return e;
 }
@@ -148,6 +149,12 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   frame_.forward_distance_m = tracker_.forward_distance_m();
   if (frame_.accepted && system_) Treat();
   tracker_.CatchUp();
+  if (system_ && options_.map_keep_behind_bar_m > 0.0 &&
+      tracker_.mode() == tracking::TrackerMode::kTracking) {
+    system_->ForgetBehind(tracker_.forward_distance_m() -
+                          options_.treatment.scheduler.bar.bar_offset_m -
+                          options_.map_keep_behind_bar_m);
+  }
   CloseIfOdometryStopped();
   frame_.ticks = frame_ticks_;
   return frame_;

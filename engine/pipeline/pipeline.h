@@ -42,6 +42,10 @@ struct PipelineOptions {
   // A frame captured this long after the newest odometry sample finds the
   // odometry stopped: the bar closes (odometry invalid) until it resumes.
   double max_odometry_age_s = 0.2;
+  // The treatment map keeps the bed from this far behind the spray bar on
+  // (rows behind the bar are final: sprayed or not, and published); <= 0
+  // keeps the whole run (at most 1.3 km of it, TreatmentMap).
+  double map_keep_behind_bar_m = 2.0;
 
   OptionErrors Validate() const;
 };

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -40,6 +41,8 @@ struct Outcome {
   std::vector<double> capture_error_m;  // per tracked frame: Y at capture less Y of truth
   int frames_tracked = 0;
   int open_ticks = 0;
+  int max_window_rows = 0;  // treatment map rows held at once
+  int first_row = 0;        // the first row held at the end
 };
 
 // Drives a pass through a pipeline, each frame handed over once the
@@ -54,6 +57,8 @@ Outcome Drive(double length_m, int64_t lag_us) {
   const auto process = [&] {
     const sim::SimFrame& f = pending.front();
     const FrameResult& r = p.ProcessFrame(f.truth.utime, f.truth.index, f.rendered.image);
+    const treatment::TreatmentMap& map = p.treatment()->map();
+    run.max_window_rows = std::max(run.max_window_rows, map.rows() - map.first_row());
     EXPECT_TRUE(r.accepted) << (r.faults.empty() ? "" : r.faults.front());
     if (r.mode == tracking::TrackerMode::kTracking && r.report.updated) {
       ++run.frames_tracked;
@@ -74,6 +79,7 @@ Outcome Drive(double length_m, int64_t lag_us) {
   }
   while (!pending.empty()) process();
   run.records = p.treatment()->registry().records();
+  run.first_row = p.treatment()->map().first_row();
   return run;
 }
 
@@ -117,6 +123,17 @@ TEST(Pipeline, FrameLateBehindItsOdometryIsPlacedWithTheGridAtCapture) {
   EXPECT_LT(std::abs(along / matched), 0.005) << "mean along shift of " << matched << " crops";
   // The bar still sprays: about as many open ticks as on time (±20 %).
   EXPECT_NEAR(late.open_ticks, on_time.open_ticks, 0.2 * on_time.open_ticks);
+}
+
+// The treatment map holds a window from 2 m behind the bar to the view's
+// far edge, however long the pass: 20 m here, under 12 m of rows at most
+// (the 5 m behind the start until the first step; then 2 m + the bar's
+// 0.6 m + a 3.4 m step + the view), and the bar sprays on.
+TEST(Pipeline, TreatmentMapKeepsAWindowAroundTheVehicle) {
+  const Outcome run = Drive(20.0, 0);
+  EXPECT_GT(run.first_row, 0);
+  EXPECT_LT(run.max_window_rows, 12.0 / 0.01333);
+  EXPECT_GT(run.open_ticks, 100);
 }
 
 // Feeds a pipeline the first `seconds` of a pass in time order; returns

@@ -85,7 +85,7 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
                             const classify::ClassifierOptions& c) {
   for (PlantRecord& r : records_) {
     int column = 0, row = 0;
-    if (map.CellOf(r.bed_m, column, row)) {
+    if (!r.counts_final && map.CellOf(r.bed_m, column, row)) {
       r.counts = map.Counts(column, row);
       r.map_class = map.ClassOf(column, row);
     }
@@ -107,6 +107,18 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
                   ToString(mode));
     r.why = text;
   }
+}
+
+void PlantRegistry::TakeFinalCounts(const TreatmentMap& map, int before_row) {
+  for (size_t i = final_from_; i < records_.size(); ++i) {
+    PlantRecord& r = records_[i];
+    int column = 0, row = 0;
+    if (r.counts_final || !map.CellOf(r.bed_m, column, row) || row >= before_row) continue;
+    r.counts = map.Counts(column, row);
+    r.map_class = map.ClassOf(column, row);
+    r.counts_final = true;
+  }
+  while (final_from_ < records_.size() && records_[final_from_].counts_final) ++final_from_;
 }
 
 void PlantRegistry::CountView(const Quad& view) {

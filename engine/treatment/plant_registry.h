@@ -36,6 +36,7 @@ struct PlantRecord {
   double size_filter_m2 = 0.0;  // ... the filter that view was held to
   CellCounts counts;   // map counters under its position at the last update
   CellClass map_class = CellClass::kSoil;
+  bool counts_final = false;  // read as the map let its row go (TakeFinalCounts)
   bool sprayed = false;
   bool grid_plant = false;  // associated with a predicted crop at grid_bed_m
   Eigen::Vector2d grid_bed_m{0.0, 0.0};
@@ -70,11 +71,18 @@ class PlantRegistry {
   // A nozzle covered this bed strip: records inside it are sprayed. Appends
   // the ids of records that were not sprayed before to `newly` when given.
   void MarkSprayed(const NozzleTarget& strip, std::vector<int>* newly = nullptr);
-  // Reads the map under every record and writes its `why`.
+  // Reads the map under every record (but those whose counts are final) and
+  // writes its `why`.
   void Explain(const TreatmentMap& map, SprayMode mode, const classify::ClassifierOptions& c);
+  // The map is about to let the rows before `row` go: the records standing
+  // there read their counters now, for good.
+  void TakeFinalCounts(const TreatmentMap& map, int row);
   // A frame looked at this part of the bed: the records inside it were in view.
   void CountView(const Quad& view);
-  void Clear() { records_.clear(); }
+  void Clear() {
+    records_.clear();
+    final_from_ = 0;
+  }
 
   const std::vector<PlantRecord>& records() const { return records_; }
 
@@ -82,6 +90,7 @@ class PlantRegistry {
   // Records are appended as plants come into view: the newest kLookBack are
   // the ones that can still be in view (newest first when reversed).
   static constexpr size_t kLookBack = 400;
+  size_t final_from_ = 0;  // records before it all have final counts
   std::span<PlantRecord> Recent() {
     const size_t n = std::min(records_.size(), kLookBack);
     return {records_.data() + records_.size() - n, n};

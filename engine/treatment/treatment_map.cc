@@ -8,8 +8,11 @@ namespace plantscale::treatment {
 
 namespace {
 
-// Row index of the last cell the map will grow to (≈ 1.3 km at 13 mm).
-constexpr int kMaxRows = 100000;
+// Rows the map keeps at once (≈ 1.3 km at 13 mm): a map whose rows behind
+// the bar are never forgotten stops counting there.
+constexpr int kMaxWindowRows = 100000;
+// Row index of the last cell of a bed (≈ 3 600 km at 13 mm).
+constexpr int kMaxRows = 1 << 28;
 
 }  // namespace
 
@@ -39,14 +42,26 @@ TreatmentMap::TreatmentMap(const TreatmentMapOptions& options) : options_(option
 
 void TreatmentMap::GrowTo(int row) {
   if (row >= rows()) {
-    counts_.resize(static_cast<size_t>(row + 1) * columns_);
+    counts_.resize(static_cast<size_t>(row + 1 - first_row_) * columns_);
     flags_.resize(counts_.size());
   }
 }
 
+int TreatmentMap::LastRow() const { return std::min(kMaxRows, first_row_ + kMaxWindowRows) - 1; }
+
 void TreatmentMap::Clear() {
   counts_.clear();
   flags_.clear();
+  first_row_ = 0;
+}
+
+void TreatmentMap::ForgetBefore(int row) {
+  if (row <= first_row_) return;
+  const int drop = std::min(row, rows()) - first_row_;
+  const auto n = static_cast<std::ptrdiff_t>(drop) * columns_;
+  counts_.erase(counts_.begin(), counts_.begin() + n);
+  flags_.erase(flags_.begin(), flags_.begin() + n);
+  first_row_ = row;
 }
 
 bool TreatmentMap::CellOf(const Eigen::Vector2d& b, int& column, int& row) const {
@@ -64,8 +79,8 @@ Eigen::Vector2d TreatmentMap::CellCentre(int column, int row) const {
 }
 
 CellCounts TreatmentMap::Counts(int column, int row) const {
-  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return {};
-  return counts_[static_cast<size_t>(row) * columns_ + column];
+  if (column < 0 || column >= columns_ || row < first_row_ || row >= rows()) return {};
+  return counts_[Index(column, row)];
 }
 
 CellClass TreatmentMap::ClassOf(int column, int row) const {
@@ -95,15 +110,16 @@ int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   const double s = options_.cell_m;
   const int c0 = std::max(0, static_cast<int>(std::floor((x0 - origin_x_m()) / s)));
   const int c1 = std::min(columns_ - 1, static_cast<int>(std::floor((x1 - origin_x_m()) / s)));
-  const int r0 = std::max(0, static_cast<int>(std::floor((y0 - options_.start_y_m) / s)));
-  const int r1 = std::min(kMaxRows - 1, static_cast<int>(std::floor((y1 - options_.start_y_m) / s)));
-  if (c0 > c1 || r0 > r1) return 0;
+  const double last = std::min<double>(LastRow(), std::floor((y1 - options_.start_y_m) / s));
+  const double first = std::max<double>(first_row_, std::floor((y0 - options_.start_y_m) / s));
+  if (c0 > c1 || !(first <= last)) return 0;
+  const int r0 = static_cast<int>(first), r1 = static_cast<int>(last);
   GrowTo(r1);
   int cells = 0;
   for (int r = r0; r <= r1; ++r) {
     for (int c = c0; c <= c1; ++c) {
       if (!InsideQuad(q, CellCentre(c, r))) continue;
-      f(static_cast<size_t>(r) * columns_ + c);
+      f(Index(c, r));
       ++cells;
     }
   }
@@ -158,11 +174,11 @@ int TreatmentMap::AddSpans(std::span<const ColumnSpan> spans, double along_m, in
     // Rows whose centre start + (r + 0.5) s lies in [y0, y1].
     const double first = std::ceil((span.y0_m + along_m - options_.start_y_m) / s - 0.5);
     const double last = std::floor((span.y1_m + along_m - options_.start_y_m) / s - 0.5);
-    if (!(first <= last) || last < 0.0 || first > kMaxRows - 1) continue;
-    const int r0 = static_cast<int>(std::max(first, 0.0));
-    const int r1 = static_cast<int>(std::min(last, kMaxRows - 1.0));
+    if (!(first <= last) || last < first_row_ || first > LastRow()) continue;
+    const int r0 = static_cast<int>(std::max<double>(first, first_row_));
+    const int r1 = static_cast<int>(std::min<double>(last, LastRow()));
     GrowTo(r1);
-    for (int r = r0; r <= r1; ++r) Vote(static_cast<size_t>(r) * columns_ + span.column, votes, crop);
+    for (int r = r0; r <= r1; ++r) Vote(Index(span.column, r), votes, crop);
     cells += r1 - r0 + 1;
   }
   return cells;
@@ -186,8 +202,8 @@ TreatmentMap::CellRange TreatmentMap::RangeOf(double x0, double x1, double y0, d
   }
   k.c0 = std::max(k.c0, 0);
   k.c1 = std::min(k.c1, columns_ - 1);
-  k.r0 = std::max(k.r0, 0);
-  k.r1 = std::min(k.r1, kMaxRows - 1);
+  k.r0 = std::max(k.r0, first_row_);
+  k.r1 = std::min(k.r1, LastRow());
   return k;
 }
 
@@ -206,13 +222,13 @@ void TreatmentMap::MarkTreated(double x0, double x1, double y0, double y1) {
   if (k.c0 > k.c1 || k.r0 > k.r1) return;
   GrowTo(k.r1);
   for (int r = k.r0; r <= k.r1; ++r) {
-    for (int c = k.c0; c <= k.c1; ++c) flags_[static_cast<size_t>(r) * columns_ + c] |= kTreatedFlag;
+    for (int c = k.c0; c <= k.c1; ++c) flags_[Index(c, r)] |= kTreatedFlag;
   }
 }
 
 uint8_t TreatmentMap::Flags(int column, int row) const {
-  if (column < 0 || column >= columns_ || row < 0 || row >= rows()) return 0;
-  return flags_[static_cast<size_t>(row) * columns_ + column];
+  if (column < 0 || column >= columns_ || row < first_row_ || row >= rows()) return 0;
+  return flags_[Index(column, row)];
 }
 
 }  // namespace plantscale::treatment

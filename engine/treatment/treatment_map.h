@@ -7,7 +7,9 @@
 // class's threshold (a tie goes to crop: the crop is what must not be
 // wronged), and soil otherwise; a crop cell must also tie or outvote the
 // weed and doubt counters together (CellCounts::doubt). The map grows
-// along the bed as the vehicle drives.
+// along the bed as the vehicle drives, and keeps a window of it: rows behind
+// the bar are final, and ForgetBefore lets them go (a day's run of bed in
+// bounded memory). Rows are numbered from start_y_m over the whole bed.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -76,6 +78,11 @@ class TreatmentMap {
   // quad, but for centres on its boundary.
   int AddSpans(std::span<const ColumnSpan> spans, double along_m, int votes, bool crop);
   void Clear();
+  // Lets the rows before `row` go: they read as unobserved soil from then on
+  // and are never counted again. The map keeps at most 100 000 rows (1.3 km
+  // at 13 mm cells) at once; beyond them nothing is counted.
+  void ForgetBefore(int row);
+  int first_row() const { return first_row_; }
 
   // Cell (column, row) of a bed point; false outside the map across or
   // behind its start (ahead it grows on demand when counting).
@@ -97,12 +104,17 @@ class TreatmentMap {
   bool Observed(int column, int row) const { return (Flags(column, row) & kObservedFlag) != 0; }
 
   int columns() const { return columns_; }
-  int rows() const { return static_cast<int>(counts_.size()) / columns_; }
+  // One past the last row held (rows are numbered over the whole bed).
+  int rows() const { return first_row_ + static_cast<int>(counts_.size()) / columns_; }
   const TreatmentMapOptions& options() const { return options_; }
   double origin_x_m() const { return -0.5 * options_.width_m; }
 
  private:
   void GrowTo(int row);
+  int LastRow() const;  // the last row the map may grow to
+  size_t Index(int column, int row) const {
+    return static_cast<size_t>(row - first_row_) * columns_ + column;
+  }
   // Adds `votes` (negative: takes back) to one counter, kept within [0, 65535].
   void Vote(uint16_t& counter, int votes);
   void Vote(size_t cell, int votes, bool crop) {
@@ -121,7 +133,8 @@ class TreatmentMap {
 
   TreatmentMapOptions options_;
   int columns_ = 0;
-  std::vector<CellCounts> counts_;  // row-major, row 0 at start_y_m
+  int first_row_ = 0;                // the first row held
+  std::vector<CellCounts> counts_;  // row-major, from first_row_
   std::vector<uint8_t> flags_;       // same layout: kTreatedFlag | kObservedFlag
 };
 

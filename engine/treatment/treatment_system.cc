@@ -367,6 +367,16 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   return frame_;
 }
 
+void TreatmentSystem::ForgetBehind(double bed_y_m) {
+  constexpr int kStep = 256;
+  const double row = std::min(std::floor((bed_y_m - map_.options().start_y_m) / map_.options().cell_m),
+                              double{1 << 28});
+  if (!(row >= map_.first_row() + kStep)) return;
+  const int before = static_cast<int>(row) / kStep * kStep;
+  registry_.TakeFinalCounts(map_, before);
+  map_.ForgetBefore(before);
+}
+
 BedPose TrackerPose(const tracking::GridTracker& tracker, int64_t utime, bool speed_known) {
   // The wheels' speed past the slip guard, corrected by the scale the
   // tracker has learnt: the latency lead and the tick's strip are ground

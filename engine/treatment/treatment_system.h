@@ -209,6 +209,10 @@ class TreatmentSystem {
   // One tick.
   TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
   int64_t last_frame_utime() const { return last_frame_utime_; }
+  // The bed behind `bed_y_m` is final (the bar has passed it): the map lets
+  // its rows go, in steps of 256 rows (3.4 m), once the records standing
+  // there have read their counters.
+  void ForgetBehind(double bed_y_m);
   // Writes every plant record's `why`.
   void Explain() { registry_.Explain(map_, options_.scheduler.mode, options_.classifier); }
 

@@ -203,6 +203,40 @@ TEST(TreatmentMap, SprayedStripsMarkExactlyTheirCellsAsTreated) {
   EXPECT_FALSE(map.Observed(50, 50));
 }
 
+// A day's bed: the map keeps a window, so footprints 5 km along count as
+// they did at the start, and rows let go read as unobserved soil. Without
+// ForgetBefore the map stops counting after 100 000 rows (1.3 km).
+TEST(TreatmentMap, ForgetsRowsBehindAndCountsKilometresAlong) {
+  TreatmentMapOptions o;
+  o.majority_threshold = 1;
+  TreatmentMap map(o);
+  const auto vote_at = [&](double y) {
+    const Quad q = Square(0.0, y, 0.02);
+    return map.AddFootprint(q, true);
+  };
+  EXPECT_GT(vote_at(1.0), 0);
+  EXPECT_EQ(vote_at(1500.0), 0) << "a window of 1.3 km from the start";
+  int column = 0, row = 0;
+  ASSERT_TRUE(map.CellOf({0.0, 4999.0}, column, row));
+  map.ForgetBefore(row - 1000);
+  EXPECT_EQ(map.first_row(), row - 1000);
+  EXPECT_EQ(map.ClassAt({0.0, 1.0}), CellClass::kSoil);  // let go
+  EXPECT_EQ(map.rows(), row - 1000);                     // nothing held
+  EXPECT_GT(vote_at(4999.0), 0);
+  EXPECT_EQ(map.ClassAt({0.0, 4999.0}), CellClass::kCrop);
+  EXPECT_TRUE(map.AnyIn(-0.01, 0.01, 4998.99, 4999.01, CellClass::kCrop));
+  map.MarkTreated(-0.01, 0.01, 4998.99, 4999.01);
+  ASSERT_TRUE(map.CellOf({0.0, 4999.0}, column, row));
+  EXPECT_TRUE(map.Treated(column, row));
+  // The window holds the rows from the first kept on, not the whole bed.
+  EXPECT_LT(map.rows() - map.first_row(), 1100);
+  // Behind the window nothing is counted, marked or grown.
+  EXPECT_EQ(vote_at(10.0), 0);
+  map.MarkTreated(-0.01, 0.01, 9.99, 10.01);
+  ASSERT_TRUE(map.CellOf({0.0, 10.0}, column, row));
+  EXPECT_FALSE(map.Treated(column, row));
+}
+
 TEST(TreatmentMap, BadOptionsAreNamed) {
   TreatmentMapOptions o;
   o.cell_m = 0.0;
