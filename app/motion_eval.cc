@@ -117,9 +117,9 @@ class MethodRun {
       totals.across_sum += 100.0 * error.x() / distance;
     }
     ++totals.sequences;
-    const maps::CropMap map = mosaic_.Build();
+    const motion::MosaicMap map = mosaic_.Build();
     std::vector<Eigen::Vector2d> plants;
-    for (const auto& p : map.plants()) plants.push_back(p.position_m);
+    for (const auto& p : map.plants) plants.push_back(p.position_m);
     const motion::RowFit fit = motion::FitRows(plants, 0.5 * tracker_.pose().position_m.y(), rows);
     for (const auto& r : fit.rows) totals.rms.push_back(r.rms_m);
     totals.spacings.insert(totals.spacings.end(), fit.spacings_m.begin(), fit.spacings_m.end());

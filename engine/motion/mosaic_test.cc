@@ -23,10 +23,22 @@ class MosaicTest : public ::testing::Test {
 TEST_F(MosaicTest, CellsInTheFootprintTakeTheFrameLabelOthersStayUnknown) {
   Mosaic mosaic(options_, camera_);
   mosaic.AddFrame(Labels(kWeedLabel), VehiclePose2{});
-  const maps::CropMap map = mosaic.Build();
-  EXPECT_EQ(map.ClassAt(map.grid().CellAt({0.0, 0.55})), maps::CellClass::kWeed);
-  EXPECT_EQ(map.ClassAt(map.grid().CellAt({0.0, 1.2})), maps::CellClass::kUnknown);
-  EXPECT_EQ(map.ClassAt(map.grid().CellAt({0.0, 0.1})), maps::CellClass::kUnknown);
+  const MosaicMap map = mosaic.Build();
+  EXPECT_EQ(map.LabelAt({0.0, 0.55}), kWeedLabel);
+  EXPECT_EQ(map.LabelAt({0.0, 1.2}), kUnknownLabel);
+  EXPECT_EQ(map.LabelAt({0.0, 0.1}), kUnknownLabel);
+  EXPECT_EQ(map.labels.size(), map.grid.size());
+  EXPECT_EQ(map.frames, 1);
+}
+
+TEST_F(MosaicTest, TheGridCoversTheExtentOnMultiplesOfTheResolution) {
+  const MosaicMap map = Mosaic(options_, camera_).Build();
+  EXPECT_DOUBLE_EQ(map.grid.resolution_m, 0.01);
+  EXPECT_NEAR(map.grid.origin_m.x(), -0.5, 1e-12);
+  EXPECT_NEAR(map.grid.origin_m.y(), 0.0, 1e-12);
+  EXPECT_EQ(map.grid.cols, 101);
+  EXPECT_EQ(map.grid.rows, 151);
+  EXPECT_EQ(map.LabelAt({0.6, 0.5}), kUnknownLabel);  // outside the grid
 }
 
 TEST_F(MosaicTest, TheMajorityOfOverlappingFramesWins) {
@@ -34,8 +46,7 @@ TEST_F(MosaicTest, TheMajorityOfOverlappingFramesWins) {
   mosaic.AddFrame(Labels(kSoilLabel), VehiclePose2{});
   mosaic.AddFrame(Labels(kWeedLabel), VehiclePose2{});
   mosaic.AddFrame(Labels(kSoilLabel), VehiclePose2{});
-  EXPECT_EQ(mosaic.Build().ClassAt(mosaic.Build().grid().CellAt({0.0, 0.55})),
-            maps::CellClass::kSoil);
+  EXPECT_EQ(mosaic.Build().LabelAt({0.0, 0.55}), kSoilLabel);
   EXPECT_EQ(mosaic.frames(), 3);
 }
 
@@ -48,10 +59,11 @@ TEST_F(MosaicTest, APlantIsPlacedWithThePoseAndRegistered) {
              cv::Scalar(kPlantLabel), cv::FILLED);  // ≈ 3.6 cm radius
   Mosaic mosaic(options_, camera_);
   mosaic.AddFrame(labels, pose);
-  const maps::CropMap map = mosaic.Build();
-  ASSERT_EQ(map.plants().size(), 1U);
-  EXPECT_LT((map.plants()[0].position_m - Eigen::Vector2d(0.05, 0.75)).norm(), 0.01);
-  EXPECT_EQ(map.plants()[0].kind, maps::PlantKind::kCrop);
+  const MosaicMap map = mosaic.Build();
+  ASSERT_EQ(map.plants.size(), 1U);
+  EXPECT_LT((map.plants[0].position_m - Eigen::Vector2d(0.05, 0.75)).norm(), 0.01);
+  EXPECT_NEAR(map.plants[0].radius_m, 0.036, 0.005);
+  EXPECT_EQ(map.LabelAt({0.05, 0.75}), kPlantLabel);
 }
 
 TEST_F(MosaicTest, APlantCutByTheEdgeOfTheViewIsNotRegistered) {
@@ -60,7 +72,14 @@ TEST_F(MosaicTest, APlantCutByTheEdgeOfTheViewIsNotRegistered) {
   cv::circle(labels, cv::Point(0, static_cast<int>(uv.y())), 80, cv::Scalar(kPlantLabel), cv::FILLED);
   Mosaic mosaic(options_, camera_);
   mosaic.AddFrame(labels, VehiclePose2{});
-  EXPECT_TRUE(mosaic.Build().plants().empty());
+  EXPECT_TRUE(mosaic.Build().plants.empty());
+}
+
+TEST_F(MosaicTest, AnExtentOfMoreThan32768CellsASideIsRejected) {
+  options_.max_m = {0.5, 400.0};  // 40001 rows at 1 cm
+  EXPECT_THROW(Mosaic(options_, camera_), InvalidOptionsError);
+  options_.max_m = {0.5, 300.0};
+  EXPECT_TRUE(options_.Validate().empty());
 }
 
 TEST_F(MosaicTest, LabelFrameSplitsPlantsFromWeedsBySize) {
