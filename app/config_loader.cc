@@ -280,8 +280,11 @@ geometry::CameraOptions LoadCamera(const std::string& name_or_path, const fs::pa
   return o;
 }
 
-sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
-                                          const fs::path& config_dir) {
+namespace {
+
+// The preset, with the camera of `calibration` instead of its own when given.
+sim::SimulatorOptions LoadPreset(const std::string& name_or_path, const fs::path& config_dir,
+                                 const std::string* calibration) {
   const fs::path file = Resolve(name_or_path, config_dir / "presets", "preset");
   MapReader top(ParseFile(file), file.string(), "");
   sim::SimulatorOptions o;
@@ -297,6 +300,21 @@ sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
     } else {
       MapReader r(camera, file.string(), "camera");
       ReadCamera(r, o.camera);
+    }
+  }
+  if (calibration != nullptr) {
+    camera_source = Resolve(*calibration, config_dir / "cameras", "camera").string();
+    o.camera = LoadCamera(*calibration, config_dir);
+    if (top.Has("camera_overrides") && top.Node("camera_overrides").IsMap()) {
+      for (const auto& item : top.Node("camera_overrides")) {
+        const auto key = item.first.as<std::string>();
+        if (key != "virtual_plane_height_m") {
+          throw ConfigError(file.string(), "camera_overrides." + key,
+                            "would change the calibration " + camera_source +
+                                "; with a calibration a preset may override only "
+                                "virtual_plane_height_m (the crop's height)");
+        }
+      }
     }
   }
   Section(top, "camera_overrides", [&](MapReader& r) { ReadCamera(r, o.camera); });
@@ -317,6 +335,19 @@ sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
                       errors[0].reason);
   }
   return o;
+}
+
+}  // namespace
+
+sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
+                                          const fs::path& config_dir) {
+  return LoadPreset(name_or_path, config_dir, nullptr);
+}
+
+sim::SimulatorOptions LoadSimulatorPresetWithCalibration(const std::string& name_or_path,
+                                                         const std::string& calibration,
+                                                         const fs::path& config_dir) {
+  return LoadPreset(name_or_path, config_dir, &calibration);
 }
 
 }  // namespace plantscale::app

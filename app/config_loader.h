@@ -30,6 +30,15 @@ std::vector<std::string> ListConfigNames(const std::filesystem::path& dir);
 // malformed YAML, unknown keys, wrong types and invalid values.
 sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
                                           const std::filesystem::path& config_dir);
+// The preset's field, vehicle, grid and render settings around the camera
+// of `calibration` (a camera name or file, as LoadCamera) instead of the
+// preset's own: `run --calibration`, until crop profiles hold the crop and
+// vehicle settings. The preset's camera_overrides still apply and may set
+// only virtual_plane_height_m (the crop's height, a crop setting); any other
+// override is a ConfigError. Camera errors name the calibration file.
+sim::SimulatorOptions LoadSimulatorPresetWithCalibration(const std::string& name_or_path,
+                                                         const std::string& calibration,
+                                                         const std::filesystem::path& config_dir);
 geometry::CameraOptions LoadCamera(const std::string& name_or_path,
                                    const std::filesystem::path& config_dir);
 

@@ -108,6 +108,49 @@ TEST_F(ConfigLoaderTest, UnreadableFileIsReported) {
   EXPECT_NE(error.find("missing.yaml: (file): cannot be read"), std::string::npos) << error;
 }
 
+TEST_F(ConfigLoaderTest, CalibrationReplacesThePresetsCameraKeepingTheCropsPlane) {
+  Write("cameras/calib.yaml",
+        "height_m: 1.2\ntilt_deg: 60\nfocal_length_m: 0.006\n"
+        "virtual_plane_height_m: 0.0\n");
+  Write("presets/p.yaml",
+        "camera: cam\ncamera_overrides: {virtual_plane_height_m: 0.1}\nfield: {rows: 5}\n");
+  const sim::SimulatorOptions o =
+      LoadSimulatorPresetWithCalibration("p", (dir_ / "cameras" / "calib.yaml").string(), dir_);
+  EXPECT_DOUBLE_EQ(o.camera.height_m, 1.2);
+  EXPECT_NEAR(o.camera.tilt_rad, std::numbers::pi / 3.0, 1e-12);
+  EXPECT_DOUBLE_EQ(o.camera.focal_length_m, 0.006);
+  EXPECT_DOUBLE_EQ(o.camera.virtual_plane_height_m, 0.1);  // the crop's height: the preset's
+  EXPECT_EQ(o.field.rows, 5);
+}
+
+TEST_F(ConfigLoaderTest, CalibrationErrorsNameTheCalibrationOrTheOverride) {
+  Write("presets/p.yaml", "camera: cam\ncamera_overrides: {height_m: 1.4}\n");
+  const auto error_of = [&](const std::string& preset, const std::string& calibration) {
+    try {
+      LoadSimulatorPresetWithCalibration(preset, calibration, dir_);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::string error = error_of("p", "cam");
+  EXPECT_NE(error.find("p.yaml: camera_overrides.height_m: would change the calibration"),
+            std::string::npos)
+      << error;
+  Write("presets/q.yaml", "camera: cam\n");
+  Write("cameras/bad.yaml", "height_m: [1\n");
+  error = error_of("q", (dir_ / "cameras" / "bad.yaml").string());
+  EXPECT_NE(error.find("bad.yaml: (file): malformed YAML at line"), std::string::npos) << error;
+  Write("cameras/typo.yaml", "height_m: 1.5\nfocal_length: 0.004\n");
+  error = error_of("q", (dir_ / "cameras" / "typo.yaml").string());
+  EXPECT_NE(error.find("typo.yaml: focal_length: unknown key (line 2)"), std::string::npos)
+      << error;
+  error = error_of("q", (dir_ / "absent.yaml").string());
+  EXPECT_NE(error.find("absent.yaml: (file): cannot be read"), std::string::npos) << error;
+  error = error_of("q", "nosuchcamera");
+  EXPECT_NE(error.find("nosuchcamera: unknown camera"), std::string::npos) << error;
+}
+
 TEST(ShippedPresets, EveryPresetAndCameraLoadsAndValidates) {
   const fs::path dir = DefaultConfigDir();
   int presets = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <ostream>
@@ -97,7 +98,11 @@ struct TruthFiles {
                     "frame,instance,plant_id,class,row,line,x_m,y_m,vehicle_x_m,vehicle_y_m,"
                     "radius_m,height_m,root_u_px,root_v_px,area_px,centroid_u_px,centroid_v_px")),
         odometry(OpenCsv(folder / "odometry.csv",
-                         "utime,left_m_s,right_m_s,true_left_m_s,true_right_m_s,slipping")) {}
+                         "utime,left_m_s,right_m_s,true_left_m_s,true_right_m_s,slipping")) {
+    // Speeds that read back as the same doubles: `run --odometry` feeds them
+    // to the pipeline as simulate --publish does.
+    odometry << std::setprecision(std::numeric_limits<double>::max_digits10);
+  }
 
   void Close() {
     CloseChecked(frames, dir / "frames.csv");

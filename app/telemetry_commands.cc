@@ -204,17 +204,33 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
 struct RunArgs {
   PublishArgs publish;
   CameraSourceOptions camera;
+  std::string calibration;       // empty: segmentation alone
+  std::string preset = "field";  // the crop and vehicle settings, with a calibration
 };
 
-int Run(const RunArgs& a) {
+int Run(const RunArgs& a, const GlobalOptions& global) {
+  // With a calibration: the whole pipeline, with the crop and vehicle
+  // settings of a simulator preset until crop profiles hold them.
+  std::optional<sim::SimulatorOptions> settings;
+  if (!a.calibration.empty()) {
+    settings = LoadSimulatorPresetWithCalibration(a.preset, a.calibration, global.ConfigDir());
+  }
   const SprayBarEndpoint bar =
-      OpenSprayBar(a.publish, false, BarOptionsOfTreatment());  // before anything else
+      OpenSprayBar(a.publish, false, BarOptionsOfTreatment());  // before the camera
+  std::string title = "plantscale run: camera " + a.camera.camera;
+  std::optional<geometry::CameraModel> camera;
+  std::optional<PipelineSetup> pipeline;
+  if (settings) {
+    camera.emplace(settings->camera);
+    pipeline.emplace(PipelineSetup{*camera, ProductPipelineOptions(*settings)});
+    title += ", calibration " + a.calibration + ", preset " + settings->preset;
+  }
   return RunVehicle(
       a.publish,
       [&a](tm::Transport& t, int64_t boot) {
         return std::make_unique<CameraFrameSource>(a.camera, t, boot);
       },
-      false, "plantscale run: camera " + a.camera.camera, bar);
+      false, title, bar, pipeline);
 }
 
 }  // namespace
@@ -297,14 +313,37 @@ int TelemetryStats(const std::string& log, bool json) {
 
 void AddTelemetryCommands(CommandRegistry& registry) {
   RunArgs& run = registry.Keep(RunArgs{});
+  const GlobalOptions& global = registry.global();
   CLI::App* rc = registry.Add(
-      "run", "the vehicle process on a real camera (V4L2 device or image folder) and LCM odometry",
-      [&run] { return Run(run); });
+      "run",
+      "the vehicle process on a real camera (V4L2 device or image folder) and LCM odometry: "
+      "with --calibration the whole pipeline (tracking, treatment and the spray bar), "
+      "without it segmentation alone",
+      [&run, &global] { return Run(run, global); });
   rc->add_option("--camera", run.camera.camera, "/dev/videoN, N, or a folder of images")
       ->required();
+  CLI::Option* calibration =
+      rc->add_option("--calibration", run.calibration,
+                     "the camera's calibration: a YAML file as config/cameras/*.yaml (or a "
+                     "camera name there); runs tracking, treatment and the bar");
+  rc->add_option("--preset", run.preset,
+                 "with --calibration: the crop and vehicle settings (row and plant spacing, "
+                 "rows, track width, crop size, the crop's height for the virtual ground "
+                 "plane, ...) of this simulator preset (config/presets) or YAML file, for "
+                 "now, until crop profiles hold them; its camera is not used")
+      ->capture_default_str()
+      ->needs(calibration);
   rc->add_option("--frame-rate", run.camera.folder_frame_rate_hz,
-                 "frame rate of a folder of images, Hz")
+                 "frame rate of a folder of images without --frame-times, Hz")
       ->capture_default_str();
+  rc->add_option("--frame-times", run.camera.frame_times,
+                 "folder: CSV of the images' capture times, one row per image in name order, "
+                 "columns utime (us from the start) and frame (index), as simulate --out's "
+                 "truth/frames.csv (needs its --every 1)");
+  rc->add_option("--odometry", run.camera.odometry,
+                 "folder: CSV of wheel odometry instead of LCM input, columns utime (us, the "
+                 "frame times' clock), left_m_s, right_m_s (measured ground speeds), as "
+                 "simulate --out's truth/odometry.csv");
   rc->add_flag("--fast", run.publish.fast, "folder of images: as fast as possible");
   rc->add_option("--lcm-url", run.publish.lcm_url,
                  "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");

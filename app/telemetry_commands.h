@@ -1,9 +1,11 @@
 #pragma once
-// Telemetry commands: `replay` and `telemetry-stats`, and the publishing
-// mode of `simulate` (--publish, --fast, --lcm-url, --log, --can), which runs
-// the vehicle runner (app/vehicle/runner.h) on the simulator. With --can IFACE
-// the spray bar (telemetry/can) is opened on that interface before anything
-// else; a failure to open it ends the command with the reason.
+// Telemetry commands: `run` (the vehicle process on a camera: the whole
+// pipeline with --calibration, segmentation alone without), `replay` and
+// `telemetry-stats`, and the publishing mode of `simulate` (--publish,
+// --fast, --lcm-url, --log, --can), which runs the vehicle runner
+// (app/vehicle/runner.h) on the simulator. With --can IFACE the spray bar
+// (telemetry/can) is opened on that interface before the camera or the
+// simulator; a failure to open it ends the command with the reason.
 
 #include <CLI/CLI.hpp>
 #include <memory>
