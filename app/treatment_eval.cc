@@ -174,8 +174,8 @@ void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
   sums.ticks_fail_safe += c.ticks_fail_safe;
   sums.shots += shots;
   sums.map_resets += c.system().map_resets();
-  sums.plants += static_cast<int>(c.system().registry().records().size());
-  for (const treatment::PlantRecord& r : c.system().registry().records()) sums.confirmed += r.confirmed();
+  sums.plants += static_cast<int>(c.system().registry().recorded());
+  sums.confirmed += c.system().registry().confirmed();
 }
 
 double Ratio(double a, double b) { return b > 0 ? a / b : 0.0; }

@@ -267,8 +267,8 @@ void PipelineStage::PublishPlants(const VehicleFrame& frame, const treatment::Fr
   std::vector<PlantObservation> plants;
   for (int id : TakeChangedPlants()) {
     if (id < 0) continue;
-    const treatment::PlantRecord& r = system().registry().records()[static_cast<size_t>(id)];
-    if (r.confirmed()) plants.push_back(Observation(r, WhyCode(r)));
+    const treatment::PlantRecord* r = system().registry().Find(id);
+    if (r != nullptr && r->confirmed()) plants.push_back(Observation(*r, WhyCode(*r)));
   }
   last_plants_utime_ = frame.utime;
   publisher.Publish(channels::kPlants, ToLcm(plants, frame.utime, frame.frame_index));

@@ -45,7 +45,7 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
   if (!best) {
     records_.emplace_back();
     best = &records_.back();
-    best->id = static_cast<int>(records_.size()) - 1;
+    best->id = first_id_ + static_cast<int>(records_.size()) - 1;
   }
   PlantRecord& r = *best;
   if (grid) {
@@ -119,6 +119,33 @@ void PlantRegistry::TakeFinalCounts(const TreatmentMap& map, int before_row) {
     r.counts_final = true;
   }
   while (final_from_ < records_.size() && records_[final_from_].counts_final) ++final_from_;
+}
+
+void PlantRegistry::Clear() {
+  first_id_ += static_cast<int>(records_.size());
+  cleared_id_ = first_id_;
+  records_.clear();
+  final_from_ = 0;
+  let_go_confirmed_ = 0;
+}
+
+void PlantRegistry::LetGoFinal() {
+  const auto n = static_cast<std::ptrdiff_t>(final_from_);
+  for (auto it = records_.begin(); it != records_.begin() + n; ++it) let_go_confirmed_ += it->confirmed();
+  records_.erase(records_.begin(), records_.begin() + n);
+  first_id_ += static_cast<int>(n);
+  final_from_ = 0;
+}
+
+const PlantRecord* PlantRegistry::Find(int id) const {
+  if (id < first_id_ || id - first_id_ >= static_cast<int>(records_.size())) return nullptr;
+  return &records_[static_cast<size_t>(id - first_id_)];
+}
+
+int PlantRegistry::confirmed() const {
+  int n = let_go_confirmed_;
+  for (const PlantRecord& r : records_) n += r.confirmed();
+  return n;
 }
 
 void PlantRegistry::CountView(const Quad& view) {

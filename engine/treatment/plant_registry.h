@@ -79,18 +79,31 @@ class PlantRegistry {
   void TakeFinalCounts(const TreatmentMap& map, int row);
   // A frame looked at this part of the bed: the records inside it were in view.
   void CountView(const Quad& view);
-  void Clear() {
-    records_.clear();
-    final_from_ = 0;
-  }
+  // Lets go of the oldest records whose counts are final (TakeFinalCounts):
+  // their place is behind the bar, they were published as they changed, and
+  // a day's run would hold hundreds of thousands of them.
+  void LetGoFinal();
+  // Forgets every record (a new bed frame); ids stay unique over the run.
+  void Clear();
 
+  // The records held, oldest first: ids first_id() on.
   const std::vector<PlantRecord>& records() const { return records_; }
+  // Record `id`; null when let go (or never made).
+  const PlantRecord* Find(int id) const;
+  int first_id() const { return first_id_; }
+  // Records made since the last Clear, held or let go, and of those the
+  // confirmed ones (PlantRecord::confirmed).
+  int64_t recorded() const { return first_id_ - cleared_id_ + static_cast<int64_t>(records_.size()); }
+  int confirmed() const;
 
  private:
   // Records are appended as plants come into view: the newest kLookBack are
   // the ones that can still be in view (newest first when reversed).
   static constexpr size_t kLookBack = 400;
   size_t final_from_ = 0;  // records before it all have final counts
+  int first_id_ = 0;       // id of records_[0]
+  int cleared_id_ = 0;     // first id after the last Clear
+  int let_go_confirmed_ = 0;
   std::span<PlantRecord> Recent() {
     const size_t n = std::min(records_.size(), kLookBack);
     return {records_.data() + records_.size() - n, n};

@@ -374,6 +374,7 @@ void TreatmentSystem::ForgetBehind(double bed_y_m) {
   if (!(row >= map_.first_row() + kStep)) return;
   const int before = static_cast<int>(row) / kStep * kStep;
   registry_.TakeFinalCounts(map_, before);
+  registry_.LetGoFinal();
   map_.ForgetBefore(before);
 }
 

@@ -211,7 +211,7 @@ class TreatmentSystem {
   int64_t last_frame_utime() const { return last_frame_utime_; }
   // The bed behind `bed_y_m` is final (the bar has passed it): the map lets
   // its rows go, in steps of 256 rows (3.4 m), once the records standing
-  // there have read their counters.
+  // there have read their counters, and the registry lets those records go.
   void ForgetBehind(double bed_y_m);
   // Writes every plant record's `why`.
   void Explain() { registry_.Explain(map_, options_.scheduler.mode, options_.classifier); }
