@@ -113,7 +113,8 @@ struct TrackerSetup {
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
                const std::string& title, const SprayBarEndpoint& endpoint,
-               const std::optional<TrackerSetup>& tracker = {}) {
+               const std::optional<TrackerSetup>& tracker = {},
+               const std::string& run_config = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
@@ -128,7 +129,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   }
   tm::Publisher publisher(*transport, tm::PublisherOptions{});
   std::unique_ptr<tm::FrameSource> source = make_source(*transport, boot);
-  tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast}, boot);
+  tm::VehicleRunner runner(publisher, tm::RunnerOptions{!args.fast, run_config}, boot);
   clock = &runner;
   runner.ListenForCommands(*transport);  // start, pause and mode from the station
   // The spray bar (--can): with the treatment stage (a calibrated camera)
@@ -217,7 +218,8 @@ int Run(const RunArgs& a) {
 
 }  // namespace
 
-int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
+                       const SimRunConfig& run) {
   const SprayBarEndpoint bar =
       OpenSprayBar(args, true, BarOptionsOfTreatment());  // before anything else
   sim::Simulator simulator(options);
@@ -229,7 +231,7 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      bar, TrackerSetup{simulator.camera(), ProductTrackerOptions(options)});
+      bar, TrackerSetup{simulator.camera(), ProductTrackerOptions(options)}, RunConfigJson(run));
 }
 
 namespace {
