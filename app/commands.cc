@@ -1,6 +1,7 @@
 #include "app/commands.h"
 
 #include "app/export_commands.h"
+#include "app/log_eval_commands.h"
 #include "app/motion_commands.h"
 #include "app/rows_commands.h"
 #include "app/segment_commands.h"
@@ -20,6 +21,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddExportCommands(registry_);
   AddTrackingCommands(registry_);
   AddTreatmentCommands(registry_);
+  AddLogEvalCommands(registry_);
   AddMotionCommands(registry_);
   AddRowsCommands(registry_);
   AddUiCommands(registry_);

@@ -87,7 +87,10 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
     throw ConfigError("command line", "--fast/--lcm-url/--log/--can", "only with --publish");
   }
   const SimulateRequest request = MakeRequest(args, global);
-  if (args.publish.publish) return SimulateAndPublish(request.options, args.publish);
+  if (args.publish.publish) {
+    return SimulateAndPublish(request.options, args.publish,
+                              SimRunConfigOf(args.preset, global.ConfigDir(), request.options));
+  }
   const SimulateSummary summary = RunSimulation(request, std::cerr);
   PrintSummary(name, request, summary);
   return 0;

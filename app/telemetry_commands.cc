@@ -115,7 +115,8 @@ struct PipelineSetup {
 
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
                const std::string& title, const SprayBarEndpoint& endpoint,
-               const std::optional<PipelineSetup>& tracker = {}) {
+               const std::optional<PipelineSetup>& tracker = {},
+               const std::string& run_config = {}) {
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
@@ -130,7 +131,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   }
   tm::Publisher publisher(*transport, tm::PublisherOptions{});
   std::unique_ptr<vehicle::FrameSource> source = make_source(*transport, boot);
-  vehicle::VehicleRunner runner(publisher, vehicle::RunnerOptions{!args.fast}, boot);
+  vehicle::VehicleRunner runner(publisher, vehicle::RunnerOptions{!args.fast, run_config}, boot);
   clock = &runner;
   runner.ListenForCommands(*transport);  // start, pause and mode from the station
   // The spray bar (--can): with the treatment stage (a calibrated camera)
@@ -235,7 +236,8 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
 
 }  // namespace
 
-int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args) {
+int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
+                       const SimRunConfig& run) {
   const SprayBarEndpoint bar =
       OpenSprayBar(args, true, BarOptionsOfTreatment());  // before anything else
   sim::Simulator simulator(options);
@@ -247,7 +249,7 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      bar, PipelineSetup{simulator.camera(), ProductPipelineOptions(options)});
+      bar, PipelineSetup{simulator.camera(), ProductPipelineOptions(options)}, RunConfigJson(run));
 }
 
 namespace {

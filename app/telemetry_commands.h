@@ -12,6 +12,7 @@
 #include <string>
 
 #include "app/command_registry.h"
+#include "app/run_config.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
@@ -43,8 +44,11 @@ inline constexpr char kSimulatedBar[] = "simulated";
 SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
                               const telemetry::can::SprayBarOptions& options = {});
 // Runs the simulator through the vehicle runner and publishes; prints a
-// summary with the traffic per channel. Returns the exit code.
-int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args);
+// summary with the traffic per channel. Returns the exit code. `run` (what
+// `options` were made from) goes out as the run_config event, for scoring
+// the log later (evaluate log).
+int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
+                       const SimRunConfig& run);
 
 void AddTelemetryCommands(CommandRegistry& registry);
 

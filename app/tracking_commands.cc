@@ -26,6 +26,8 @@ struct TrackingArgs {
   bool json = false;
 };
 
+}  // namespace
+
 nlohmann::json MetricsJson(const TrackingMetrics& m) {
   return {
       {"lateral_rmse_m", m.lateral_rmse_m},
@@ -55,6 +57,8 @@ nlohmann::json MetricsJson(const TrackingMetrics& m) {
       {"run_forward_drift_cm_per_m", m.run_forward_drift_cm_per_m},
   };
 }
+
+namespace {
 
 // The thesis's own figures for its tracker (tables 5.22, 8.1, 8.2; §8.1.1).
 struct ThesisFigure {

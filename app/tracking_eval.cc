@@ -83,20 +83,17 @@ struct Scorer {
     matched += r.matched;
     const double past = frame.truth.distance_m - init_distance_m;
     if (past < options.settle_m) return;
-    const double e_lat = est.offset_m - truth.offset_m;
-    const double e_bear = est.bearing_rad - truth.bearing_rad;
-    const double e_fwd = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
+    const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
+    const GridErrors g = ScoreGrid(est, p, truth);
+    const double e_lat = g.lateral_m, e_fwd = g.forward_m, e_bear = g.bearing_rad, n = g.nees;
     lat += e_lat;
     fwd += e_fwd;
     lat2 += e_lat * e_lat;
     bear2 += e_bear * e_bear;
-    const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
-    sd += std::sqrt(p(0, 0));
-    const Eigen::Vector3d e(e_lat, e_fwd, e_bear);
-    const double n = e.dot(p.ldlt().solve(e));
+    sd += g.lateral_sd_m;
     nees += n;
-    normalised2 += e.cwiseAbs2().cwiseQuotient(p.diagonal());
-    if (n >= kNeesLow && n <= kNeesHigh) ++nees_in;
+    normalised2 += g.normalised2;
+    nees_in += g.nees_in_bounds;
     ++scored;
     if (trace) {
       *trace << seed << ',' << index << ',' << frame.truth.distance_m << ',' << e_lat << ','
@@ -116,10 +113,7 @@ struct Scorer {
   }
 
   static bool InitCorrect(const geometry::GridState& est, const geometry::GridState& truth) {
-    return std::abs(est.offset_m - truth.offset_m) < 0.25 * truth.row_spacing_m &&
-           std::abs(std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m)) <
-               0.25 * truth.plant_spacing_m &&
-           std::abs(est.bearing_rad - truth.bearing_rad) < 0.035;
+    return InitialisedOnTruth(est, truth);
   }
 };
 
@@ -162,8 +156,11 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   init_successes += s.init_successes;
 }
 
-void Finish(TrackingMetrics& m, int spacing_frames, const std::vector<double>& init_frames,
-            int init_trials, int init_successes) {
+}  // namespace
+
+void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
+                           const std::vector<double>& init_frames, int init_trials,
+                           int init_successes) {
   const double n = std::max(1, m.frames);
   m.lateral_rmse_m = std::sqrt(m.lateral_rmse_m / n);
   m.lateral_mean_m /= n;
@@ -193,7 +190,26 @@ void Finish(TrackingMetrics& m, int spacing_frames, const std::vector<double>& i
   m.init_frames_p95 = Percentile(init_frames, 0.95);
 }
 
-}  // namespace
+GridErrors ScoreGrid(const geometry::GridState& est, const Eigen::Matrix3d& p,
+                     const geometry::GridState& truth) {
+  GridErrors g;
+  g.lateral_m = est.offset_m - truth.offset_m;
+  g.bearing_rad = est.bearing_rad - truth.bearing_rad;
+  g.forward_m = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
+  g.lateral_sd_m = std::sqrt(p(0, 0));
+  const Eigen::Vector3d e(g.lateral_m, g.forward_m, g.bearing_rad);
+  g.nees = e.dot(p.ldlt().solve(e));
+  g.normalised2 = e.cwiseAbs2().cwiseQuotient(p.diagonal());
+  g.nees_in_bounds = g.nees >= kNeesLow && g.nees <= kNeesHigh;
+  return g;
+}
+
+bool InitialisedOnTruth(const geometry::GridState& est, const geometry::GridState& truth) {
+  return std::abs(est.offset_m - truth.offset_m) < 0.25 * truth.row_spacing_m &&
+         std::abs(std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m)) <
+             0.25 * truth.plant_spacing_m &&
+         std::abs(est.bearing_rad - truth.bearing_rad) < 0.035;
+}
 
 OptionErrors TrackingEvalOptions::Validate() const {
   OptionErrors e = Prefixed("sim", sim.Validate());
@@ -355,9 +371,10 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
       spacing_thesis += thesis->spacing_scored;
     }
   }
-  Finish(result.ours, spacing_ours, init_frames_ours, trials_ours, successes_ours);
+  FinishTrackingMetrics(result.ours, spacing_ours, init_frames_ours, trials_ours, successes_ours);
   if (options.baseline_thesis) {
-    Finish(thesis_metrics, spacing_thesis, init_frames_thesis, trials_thesis, successes_thesis);
+    FinishTrackingMetrics(thesis_metrics, spacing_thesis, init_frames_thesis, trials_thesis,
+                          successes_thesis);
     result.thesis = thesis_metrics;
   }
   return result;

@@ -7,6 +7,8 @@
 // threshold segmentation) runs on the same frames as the baseline
 // (SIMULATOR.md: calibrated presets).
 
+#include <Eigen/Core>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -80,5 +82,27 @@ struct TrackingEvaluation {
 };
 
 TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options);
+
+// How a frame's grid estimate is scored against its truth (shared with
+// evaluate log): errors of t_x, Y (modulo the true plant spacing) and Ψ, and
+// their NEES under the filter's covariance of (t_x, Y, Ψ), inside or not the
+// two-sided 95 % χ²₃ interval.
+struct GridErrors {
+  double lateral_m = 0.0, forward_m = 0.0, bearing_rad = 0.0;
+  double nees = 0.0;
+  bool nees_in_bounds = false;
+  Eigen::Vector3d normalised2 = Eigen::Vector3d::Zero();  // e²/σ² of t_x, Y, Ψ
+  double lateral_sd_m = 0.0;                              // the filter's σ(t_x)
+};
+GridErrors ScoreGrid(const geometry::GridState& estimate, const Eigen::Matrix3d& covariance,
+                     const geometry::GridState& truth);
+// An initialisation found the right grid: within a quarter of a spacing
+// across and along, and 2° in bearing.
+bool InitialisedOnTruth(const geometry::GridState& estimate, const geometry::GridState& truth);
+// Turns the sums in `m` (squared errors in the RMSE fields, errors in the
+// means', per-run lists filled) into the metrics.
+void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
+                           const std::vector<double>& init_frames, int init_trials,
+                           int init_successes);
 
 }  // namespace plantscale::app

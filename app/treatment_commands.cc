@@ -66,6 +66,8 @@ struct TreatmentArgs {
   bool json = false;
 };
 
+}  // namespace
+
 nlohmann::json MetricsJson(const TreatmentMetrics& m) {
   return {
       {"crop_plants", m.crop_plants},
@@ -108,6 +110,8 @@ nlohmann::json MetricsJson(const TreatmentMetrics& m) {
       {"plants_confirmed", m.plants_confirmed},
   };
 }
+
+namespace {
 
 nlohmann::json PointJson(const classify::MrrocPoint& p) {
   return {{"min_crop_area_m2", std::isfinite(p.min_crop_area_m2) ? p.min_crop_area_m2 : -1.0},

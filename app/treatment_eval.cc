@@ -181,27 +181,7 @@ void Accumulate(const Chain& c, const SprayScore& s, int shots, Sums& sums) {
 double Ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 TreatmentMetrics Finish(const Sums& s) {
-  TreatmentMetrics m;
-  const SprayScore& p = s.spray;
-  m.crop_plants = p.crop_plants;
-  m.crop_hits = p.crop_hits;
-  m.crop_hit_rate = Ratio(p.crop_hits, p.crop_plants);
-  m.weeds = p.weeds;
-  m.weed_hits = p.weed_hits;
-  m.weed_hit_rate = Ratio(p.weed_hits, p.weeds);
-  m.weeds_clear = p.weeds_clear;
-  m.weed_hit_rate_clear = Ratio(p.weed_hits_clear, p.weeds_clear);
-  const double n = std::max(1, p.crop_hits);
-  m.placement_bias_across_m = p.error_sum.x() / n;
-  m.placement_bias_along_m = p.error_sum.y() / n;
-  m.placement_rms_across_m = std::sqrt(p.error2_sum.x() / n);
-  m.placement_rms_along_m = std::sqrt(p.error2_sum.y() / n);
-  m.placement_rms_m = std::max(m.placement_rms_across_m, m.placement_rms_along_m);
-  m.centre_bias_across_m = p.centre_error_sum.x() / n;
-  m.centre_bias_along_m = p.centre_error_sum.y() / n;
-  m.centre_rms_across_m = std::sqrt(p.centre_error2_sum.x() / n);
-  m.centre_rms_along_m = std::sqrt(p.centre_error2_sum.y() / n);
-  m.treated_area_fraction = Ratio(p.sprayed_bed_m2, p.bed_m2);
+  TreatmentMetrics m = SprayMetrics(s.spray);
   const auto& c = s.confusion;
   const double crop = c[1][0] + c[1][1] + c[1][2];
   const double weed = c[2][0] + c[2][1] + c[2][2];
@@ -235,18 +215,47 @@ TreatmentMetrics Finish(const Sums& s) {
 // to behind the bar at the end.
 SprayScoreRegion Region(const sim::Simulator& sim, const Chain& c, double last_y,
                         const treatment::TreatmentOptions& t) {
+  return TreatmentScoreRegion(sim, c.first_classified_y, last_y, t);
+}
+
+}  // namespace
+
+TreatmentMetrics SprayMetrics(const SprayScore& p) {
+  TreatmentMetrics m;
+  m.crop_plants = p.crop_plants;
+  m.crop_hits = p.crop_hits;
+  m.crop_hit_rate = Ratio(p.crop_hits, p.crop_plants);
+  m.weeds = p.weeds;
+  m.weed_hits = p.weed_hits;
+  m.weed_hit_rate = Ratio(p.weed_hits, p.weeds);
+  m.weeds_clear = p.weeds_clear;
+  m.weed_hit_rate_clear = Ratio(p.weed_hits_clear, p.weeds_clear);
+  const double n = std::max(1, p.crop_hits);
+  m.placement_bias_across_m = p.error_sum.x() / n;
+  m.placement_bias_along_m = p.error_sum.y() / n;
+  m.placement_rms_across_m = std::sqrt(p.error2_sum.x() / n);
+  m.placement_rms_along_m = std::sqrt(p.error2_sum.y() / n);
+  m.placement_rms_m = std::max(m.placement_rms_across_m, m.placement_rms_along_m);
+  m.centre_bias_across_m = p.centre_error_sum.x() / n;
+  m.centre_bias_along_m = p.centre_error_sum.y() / n;
+  m.centre_rms_across_m = std::sqrt(p.centre_error2_sum.x() / n);
+  m.centre_rms_along_m = std::sqrt(p.centre_error2_sum.y() / n);
+  m.treated_area_fraction = Ratio(p.sprayed_bed_m2, p.bed_m2);
+  return m;
+}
+
+SprayScoreRegion TreatmentScoreRegion(const sim::Simulator& sim, double first_classified_y,
+                                      double last_y, const treatment::TreatmentOptions& t) {
   SprayScoreRegion r;
   const auto& cam = sim.camera().options();
   const auto far = sim.camera().ImageToPlane({cam.image_width_px / 2.0, 0.5}, 0.0);
-  r.y_begin_m = c.first_classified_y + (far ? far->y() : 3.0) + 0.1;
+  r.y_begin_m = first_classified_y + (far ? far->y() : 3.0) + 0.1;
   r.y_end_m = last_y - t.scheduler.bar.bar_offset_m - 0.3;
   const sim::FieldOptions& f = sim.options().field;
   r.bed_half_width_m = 0.5 * f.rows * f.row_spacing_m;
   r.patch_half_size_m = 0.45 * std::min(f.row_spacing_m, f.plant_spacing_m);
   return r;
 }
-
-}  // namespace
 
 OptionErrors TreatmentEvalOptions::Validate() const {
   OptionErrors e = Prefixed("sim", sim.Validate());

@@ -102,4 +102,15 @@ struct TreatmentEvaluation {
 
 TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options);
 
+// How a run's spraying is scored (shared with evaluate log). The plants
+// whose whole life under the camera and the bar fell inside the run: from
+// past the far edge of the view where the chain first classified (the
+// vehicle's true y then), to behind the bar at the end (`last_y`, the
+// vehicle's last true y).
+SprayScoreRegion TreatmentScoreRegion(const sim::Simulator& sim, double first_classified_y,
+                                      double last_y, const treatment::TreatmentOptions& options);
+// The spray metrics (hits, placement, treated area) of a score; the pixel
+// and chain counts are left zero.
+TreatmentMetrics SprayMetrics(const SprayScore& score);
+
 }  // namespace plantscale::app

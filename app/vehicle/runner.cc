@@ -99,6 +99,9 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
       wall_start = Clock::now();
       now_utime_ = frame.utime;
       Event(plantscale_event_t::SEVERITY_INFO, "run_started", "run started: " + source.name());
+      if (!options_.run_config.empty()) {
+        Event(plantscale_event_t::SEVERITY_INFO, "run_config", options_.run_config);
+      }
     }
     if (options_.real_time) {
       std::this_thread::sleep_until(wall_start +

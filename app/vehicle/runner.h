@@ -93,6 +93,11 @@ class Stage {
 
 struct RunnerOptions {
   bool real_time = true;  // false: as fast as possible (--fast)
+  // What the run was made from (a JSON object's text: the simulator's preset
+  // and seed, app/run_config.h), sent as a "run_config" event right after
+  // "run_started" so that the log can be scored later; empty: none. (The
+  // "= {}" keeps `RunnerOptions{false}` clear of -Wmissing-field-initializers.)
+  std::string run_config = {};
 };
 
 struct RunSummary {
@@ -109,8 +114,8 @@ class VehicleRunner {
   // polled before every frame; each applied or refused command is an event.
   void ListenForCommands(Transport& transport);
   const RunStatus& status() const { return status_; }
-  // Runs until the source ends or `stop` becomes true. Publishes run_started,
-  // frame_dropped and run_finished events.
+  // Runs until the source ends or `stop` becomes true. Publishes run_started
+  // (then run_config when given), frame_dropped and run_finished events.
   RunSummary Run(FrameSource& source, const std::atomic<bool>* stop = nullptr);
   // The message clock: utime of the frame being processed (for the log).
   int64_t now_utime() const { return now_utime_; }

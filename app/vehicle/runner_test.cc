@@ -306,3 +306,51 @@ TEST(VehicleRunner, ActsOnStationCommandsAndRefusesBadOnes) {
 
 }  // namespace
 }  // namespace plantscale::vehicle
+
+namespace plantscale::vehicle {
+namespace {
+
+namespace channels = telemetry::channels;
+using telemetry::Decode;
+using telemetry::LcmTransport;
+using telemetry::PublisherOptions;
+
+// What the run was made from goes out once, right after run_started, so
+// that its log can be scored later; nothing when not given.
+TEST(VehicleRunner, RunConfigEventFollowsRunStarted) {
+  for (const std::string& config : {std::string(R"({"preset": "unit-test", "seed": 3})"), std::string()}) {
+    LcmTransport t("memq://");
+    std::vector<plantscale_event_t> events;
+    t.Subscribe(channels::kEvents, [&](const ReceivedMessage& m) {
+      if (const auto e = Decode<plantscale_event_t>(m.channel, m.data, m.size)) events.push_back(*e);
+    });
+    Publisher publisher(t, PublisherOptions{});
+    sim::SimulatorOptions o = SmallPass();
+    o.length_m = 0.5;
+    sim::Simulator simulator(o);
+    SimFrameSource source(simulator, 1'700'000'000'000'000);
+    RunnerOptions ro;
+    ro.real_time = false;
+    ro.run_config = config;
+    VehicleRunner runner(publisher, ro, 1'700'000'000'000'000);
+    runner.Run(source);
+    while (t.Handle(0)) {
+    }
+    ASSERT_GE(events.size(), 2u);
+    EXPECT_EQ(events[0].kind, "run_started");
+    const auto configs = std::count_if(events.begin(), events.end(), [](const plantscale_event_t& e) {
+      return e.kind == "run_config";
+    });
+    if (config.empty()) {
+      EXPECT_EQ(configs, 0);
+    } else {
+      EXPECT_EQ(configs, 1);
+      EXPECT_EQ(events[1].kind, "run_config");
+      EXPECT_EQ(events[1].text, config);
+      EXPECT_EQ(events[1].severity, int8_t{plantscale_event_t::SEVERITY_INFO});
+    }
+  }
+}
+
+}  // namespace
+}  // namespace plantscale::vehicle
