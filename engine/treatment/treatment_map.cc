@@ -115,10 +115,31 @@ int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   if (c0 > c1 || !(first <= last)) return 0;
   const int r0 = static_cast<int>(first), r1 = static_cast<int>(last);
   GrowTo(r1);
+  // Row by row, the quad's span at the row's centre line: centres clearly
+  // inside it are inside the quad; the few within kEdge of its ends are
+  // tested as points (InsideQuad), so the cells are exactly InsideQuad's.
+  constexpr double kEdge = 1e-9;
   int cells = 0;
   for (int r = r0; r <= r1; ++r) {
-    for (int c = c0; c <= c1; ++c) {
-      if (!InsideQuad(q, CellCentre(c, r))) continue;
+    const double y = options_.start_y_m + (r + 0.5) * s;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (size_t i = 0; i < 4; ++i) {
+      const Eigen::Vector2d& a = q[i];
+      const Eigen::Vector2d& b = q[(i + 1) % 4];
+      if ((a.y() - y) * (b.y() - y) > 0.0) continue;  // the edge does not reach y
+      if (a.y() == b.y()) {
+        lo = std::min({lo, a.x(), b.x()}), hi = std::max({hi, a.x(), b.x()});
+      } else {
+        const double x = a.x() + (y - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+        lo = std::min(lo, x), hi = std::max(hi, x);
+      }
+    }
+    if (!(lo <= hi)) continue;
+    const int ca = std::max(c0, static_cast<int>(std::ceil((lo - kEdge - origin_x_m()) / s - 0.5)));
+    const int cb = std::min(c1, static_cast<int>(std::floor((hi + kEdge - origin_x_m()) / s - 0.5)));
+    for (int c = ca; c <= cb; ++c) {
+      const double x = origin_x_m() + (c + 0.5) * s;
+      if (!(x > lo + kEdge && x < hi - kEdge) && !InsideQuad(q, {x, y})) continue;
       f(Index(c, r));
       ++cells;
     }
