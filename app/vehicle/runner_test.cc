@@ -216,23 +216,6 @@ TEST(VehicleRunner, SimulatedRunPublishesTruthThumbnailsHealthAndEvents) {
   EXPECT_NEAR(p.snap.odometry->distance_m, 3.0, 0.3);  // odometry noise and slip: 10 %
 }
 
-}  // namespace
-}  // namespace plantscale::vehicle
-
-namespace plantscale::vehicle {
-namespace {
-
-namespace channels = telemetry::channels;
-using telemetry::Bytes;
-using telemetry::Decode;
-using telemetry::Encode;
-using telemetry::LcmTransport;
-using telemetry::PlantKind;
-using telemetry::PlantObservation;
-using telemetry::PublisherOptions;
-using telemetry::Subscriber;
-using telemetry::TelemetrySnapshot;
-
 // Plays the station: publishes a command while frame `at` is processed.
 class StationScript : public Stage {
  public:
@@ -303,17 +286,6 @@ TEST(VehicleRunner, ActsOnStationCommandsAndRefusesBadOnes) {
   EXPECT_TRUE(has("command_refused: command from test station: unknown command 42"));
   EXPECT_TRUE(has("command_refused: channel PLANTSCALE_COMMAND: cannot decode 3 bytes"));
 }
-
-}  // namespace
-}  // namespace plantscale::vehicle
-
-namespace plantscale::vehicle {
-namespace {
-
-namespace channels = telemetry::channels;
-using telemetry::Decode;
-using telemetry::LcmTransport;
-using telemetry::PublisherOptions;
 
 // What the run was made from goes out once, right after run_started, so
 // that its log can be scored later; nothing when not given.

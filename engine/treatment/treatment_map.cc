@@ -14,6 +14,25 @@ constexpr int kMaxWindowRows = 100000;
 // Row index of the last cell of a bed (≈ 3 600 km at 13 mm).
 constexpr int kMaxRows = 1 << 28;
 
+// Where the convex quad crosses the line at `at` along axis `k` (0: x =
+// at, 1: y = at): the range [lo, hi] of the other coordinate; lo > hi when
+// it does not reach the line.
+void SpanAt(const Quad& q, int k, double at, double& lo, double& hi) {
+  const int o = 1 - k;
+  lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t i = 0; i < 4; ++i) {
+    const Eigen::Vector2d& a = q[i];
+    const Eigen::Vector2d& b = q[(i + 1) % 4];
+    if ((a[k] - at) * (b[k] - at) > 0.0) continue;  // the edge does not reach the line
+    if (a[k] == b[k]) {
+      lo = std::min({lo, a[o], b[o]}), hi = std::max({hi, a[o], b[o]});
+    } else {
+      const double v = a[o] + (at - a[k]) / (b[k] - a[k]) * (b[o] - a[o]);
+      lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+  }
+}
+
 }  // namespace
 
 const char* ToString(CellClass c) {
@@ -122,18 +141,8 @@ int TreatmentMap::ForCellsIn(const Quad& q, F&& f) {
   int cells = 0;
   for (int r = r0; r <= r1; ++r) {
     const double y = options_.start_y_m + (r + 0.5) * s;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (size_t i = 0; i < 4; ++i) {
-      const Eigen::Vector2d& a = q[i];
-      const Eigen::Vector2d& b = q[(i + 1) % 4];
-      if ((a.y() - y) * (b.y() - y) > 0.0) continue;  // the edge does not reach y
-      if (a.y() == b.y()) {
-        lo = std::min({lo, a.x(), b.x()}), hi = std::max({hi, a.x(), b.x()});
-      } else {
-        const double x = a.x() + (y - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
-        lo = std::min(lo, x), hi = std::max(hi, x);
-      }
-    }
+    double lo = 0.0, hi = 0.0;
+    SpanAt(q, 1, y, lo, hi);
     if (!(lo <= hi)) continue;
     const int ca = std::max(c0, static_cast<int>(std::ceil((lo - kEdge - origin_x_m()) / s - 0.5)));
     const int cb = std::min(c1, static_cast<int>(std::floor((hi + kEdge - origin_x_m()) / s - 0.5)));
@@ -171,18 +180,8 @@ void TreatmentMap::AppendSpans(const Quad& q, double along_m,
   const int c1 = std::min(columns_ - 1, static_cast<int>(std::floor((x1 - origin_x_m()) / s)));
   for (int c = c0; c <= c1; ++c) {
     const double x = origin_x_m() + (c + 0.5) * s;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (size_t i = 0; i < 4; ++i) {
-      const Eigen::Vector2d& a = q[i];
-      const Eigen::Vector2d& b = q[(i + 1) % 4];
-      if ((a.x() - x) * (b.x() - x) > 0.0) continue;  // the edge does not reach x
-      if (a.x() == b.x()) {
-        lo = std::min({lo, a.y(), b.y()}), hi = std::max({hi, a.y(), b.y()});
-      } else {
-        const double y = a.y() + (x - a.x()) / (b.x() - a.x()) * (b.y() - a.y());
-        lo = std::min(lo, y), hi = std::max(hi, y);
-      }
-    }
+    double lo = 0.0, hi = 0.0;
+    SpanAt(q, 0, x, lo, hi);
     if (lo <= hi) out.push_back({c, lo - along_m, hi - along_m});
   }
 }
