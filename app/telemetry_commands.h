@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "app/command_auth_commands.h"
 #include "app/command_registry.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/can/simulated_bar.h"
@@ -22,6 +23,7 @@ struct PublishArgs {
   std::string lcm_url;  // empty: LCM's default udpm:// group
   std::string log;      // empty: no log
   std::string can;      // SocketCAN interface of the spray bar; empty: no bar
+  CommandKeyArgs command_key;  // --command-key, --accept-unsigned-commands
 };
 
 void AddPublishOptions(CLI::App* command, PublishArgs& args);
