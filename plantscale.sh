@@ -14,6 +14,7 @@ PACKAGES=(
   liblcm-dev liblcm-bin libglib2.0-dev
   libgdal-dev gdal-bin
   libvtk9-dev
+  libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )

@@ -1,5 +1,6 @@
 #include "app/commands.h"
 
+#include "app/command_auth_commands.h"
 #include "app/export_commands.h"
 #include "app/log_eval_commands.h"
 #include "app/motion_commands.h"
@@ -26,6 +27,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddRowsCommands(registry_);
   AddUiCommands(registry_);
   AddSprayBarCommands(registry_);
+  AddCommandAuthCommands(registry_);
 }
 
 }  // namespace plantscale::app

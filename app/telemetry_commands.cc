@@ -58,6 +58,7 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
                   "with --publish: LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
   AddCanOption(cmd, a);
+  AddVehicleCommandKeyOptions(cmd, a.command_key);
 }
 
 void AddCanOption(CLI::App* cmd, PublishArgs& a) {
@@ -117,6 +118,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
                const std::string& title, const SprayBarEndpoint& endpoint,
                const std::optional<PipelineSetup>& tracker = {},
                const std::string& run_config = {}) {
+  vehicle::CommandAuthOptions command_auth = VehicleCommandAuth(args.command_key);  // refuses a bad key file
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
   std::unique_ptr<tm::LogWriter> log;
@@ -133,7 +135,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   std::unique_ptr<vehicle::FrameSource> source = make_source(*transport, boot);
   vehicle::VehicleRunner runner(publisher, vehicle::RunnerOptions{!args.fast, run_config}, boot);
   clock = &runner;
-  runner.ListenForCommands(*transport);  // start, pause and mode from the station
+  runner.ListenForCommands(*transport, std::move(command_auth));  // start, pause and mode from the station
   // The spray bar (--can): with the treatment stage (a calibrated camera)
   // its scheduler drives the bar through the bar's sink every tick; without
   // one the bar stage commands every nozzle closed each frame so the bar
@@ -351,6 +353,7 @@ void AddTelemetryCommands(CommandRegistry& registry) {
                  "LCM URL (default udpm://239.255.76.67:7667?ttl=0)");
   rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
   AddCanOption(rc, run.publish);
+  AddVehicleCommandKeyOptions(rc, run.publish.command_key);
 
   ReplayArgs& replay = registry.Keep(ReplayArgs{});
   CLI::App* r = registry.Add("replay", "republish an LCM log with its original timing",

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 
+#include "app/command_auth_commands.h"
 #include "app/command_registry.h"
 #include "app/run_config.h"
 #include "engine/sim/simulator.h"
@@ -25,6 +26,7 @@ struct PublishArgs {
   std::string lcm_url;  // empty: LCM's default udpm:// group
   std::string log;      // empty: no log
   std::string can;      // SocketCAN interface of the spray bar; empty: no bar
+  CommandKeyArgs command_key;  // --command-key, --accept-unsigned-commands
 };
 
 void AddPublishOptions(CLI::App* command, PublishArgs& args);

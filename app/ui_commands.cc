@@ -14,6 +14,7 @@
 
 extern char** environ;
 
+#include "telemetry/command_auth.h"
 #include "ui/canvas.h"
 #include "ui/report.h"
 #include "ui/station.h"
@@ -50,6 +51,9 @@ int Station(StationArgs& a) {
     for (const std::string& p : r.problems) std::cout << "station: problem: " << p << '\n';
   } catch (const ui::DisplayError& e) {
     return NoDisplay(e);
+  } catch (const telemetry::CommandAuthError& e) {
+    std::cerr << "plantscale: error: station: --command-key: " << e.what() << '\n';
+    return 2;
   }
   return 0;
 }
@@ -138,16 +142,29 @@ int DemoSystem(const DemoArgs& a) {
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   ReexecUnderXvfb(self, a);
   const bool can_render = ui::DisplayAvailable();
+  // A key for this demo only: the station signs its commands with it and
+  // the vehicle obeys only those (removed when the demo ends).
+  const fs::path key = out / "command.key";
+  fs::remove(key);  // left by an interrupted demo
+  telemetry::WriteNewCommandKey(key);
+  struct RemoveKey {
+    fs::path file;
+    ~RemoveKey() {
+      std::error_code ignored;
+      fs::remove(file, ignored);
+    }
+  } remove_key{key};
   // The station shows a window when there is a real display, else renders off-screen.
   const bool virtual_display = std::getenv("PLANTSCALE_DEMO_XVFB") != nullptr;
   std::vector<std::string> station{"station",  "--lcm-url", a.lcm_url, "--close-when-quiet", "3", "--seconds", "900",
-                                   "--screenshot", (out / "station.png").string()};
+                                   "--screenshot", (out / "station.png").string(), "--command-key", key.string()};
   if (virtual_display) station.push_back("--offscreen");
   station.insert(station.begin(), self);
   const pid_t station_pid = can_render ? Spawn(station, out / "station.txt") : -1;
   std::this_thread::sleep_for(std::chrono::seconds(can_render ? 2 : 0));  // let it subscribe
   std::vector<std::string> vehicle{self, "simulate", "--preset", a.preset, "--length-m", std::to_string(a.length_m),
-                                   "--publish", "--lcm-url", a.lcm_url, "--log", log.string()};
+                                   "--publish", "--lcm-url", a.lcm_url, "--log", log.string(),
+                                   "--command-key", key.string()};
   if (!a.real_time) vehicle.push_back("--fast");
   std::cout << "demo: vehicle publishing on " << a.lcm_url << (a.real_time ? "" : " (as fast as it can)") << "...\n";
   const int vehicle_status = Wait(Spawn(vehicle, out / "vehicle.txt"));
@@ -197,6 +214,9 @@ void AddUiCommands(CommandRegistry& registry) {
                       "close this many seconds after the last message (0: never)");
   station->add_flag("--offscreen", s.options.offscreen, "render without showing a window (needs --seconds)");
   station->add_option("--screenshot", s.options.screenshot, "write the window as it closed to this PNG");
+  station->add_option("--command-key", s.options.command_key,
+                      "sign vehicle commands with this key file (plantscale keygen, mode 0600); without it "
+                      "they go unsigned and a vehicle refuses them unless --accept-unsigned-commands");
 
   ReportArgs& r = registry.Keep(ReportArgs{});
   CLI::App* report = registry.Add("report", "render a run report (index.html and PNGs) from a log",

@@ -8,9 +8,12 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
+#include <utility>
 
+#include "telemetry/command_auth.h"
 #include "telemetry/transport.h"
 #include "ui/palette.h"
 #include "ui/station_controller.h"
@@ -138,12 +141,14 @@ void RunInteractive(Canvas& canvas, StationController& controller) {
 
 StationResult RunStation(const StationOptions& options) {
   ThrowIfInvalid("station options", options.Validate());
+  std::optional<tm::CommandKey> command_key;
+  if (!options.command_key.empty() && options.log.empty()) command_key = tm::ReadCommandKey(options.command_key);
   RequireDisplay("plantscale station");
   std::unique_ptr<Source> source;
   if (!options.log.empty()) {
     source = std::make_unique<LogSource>(options.log, options.speed);
   } else {
-    source = std::make_unique<LiveSource>(options.lcm_url);
+    source = std::make_unique<LiveSource>(options.lcm_url, std::move(command_key));
   }
   Canvas canvas(options.width_px, options.height_px, options.offscreen);
   canvas.window()->SetWindowName("plantscale station");

@@ -36,6 +36,7 @@ struct StationOptions {
   double close_when_quiet_s = 0.0;  // > 0: close this long after the last message (demo)
   bool offscreen = false;      // no window: render into the back buffer only
   std::filesystem::path screenshot;  // non-empty: the last frame as PNG on closing
+  std::filesystem::path command_key;  // live: sign vehicle commands with this key file
   CameraViewParams camera;
 
   OptionErrors Validate() const;
@@ -74,8 +75,9 @@ struct StationResult {
 
 // Runs until the window closes, max_seconds pass or, with close_when_quiet_s,
 // messages have stopped for that long. Throws DisplayError
-// without an X display, InvalidOptionsError, telemetry::LogError or
-// telemetry::TransportError.
+// without an X display, InvalidOptionsError, telemetry::LogError,
+// telemetry::TransportError or telemetry::CommandAuthError (the key file,
+// read before anything else is opened).
 StationResult RunStation(const StationOptions& options);
 
 }  // namespace plantscale::ui

@@ -9,14 +9,17 @@
 #include <atomic>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
 #include "telemetry/transport.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
+#include "telemetry/command_auth.h"
 #include "ui/station_timeline.h"
 
 namespace plantscale::ui {
@@ -74,9 +77,14 @@ class LogSource : public Source {
   LogTimeline timeline_;
 };
 
+// Commands are signed with `command_key` (telemetry/command_auth.h); without
+// one they go unsigned, and a vehicle obeys them only with
+// --accept-unsigned-commands.
 class LiveSource : public Source {
  public:
-  explicit LiveSource(const std::string& url) : transport_(url.empty() ? telemetry::LcmTransportOptions{}.url : url) {
+  explicit LiveSource(const std::string& url, std::optional<telemetry::CommandKey> command_key = {})
+      : command_key_(std::move(command_key)),
+        transport_(url.empty() ? telemetry::LcmTransportOptions{}.url : url) {
     subscriber_.SetObserver([this](const std::string& ch, bool applied, const telemetry::TelemetrySnapshot& s) {
       std::lock_guard lock(mutex);
       model_.Observe(ch, applied, s);
@@ -97,19 +105,25 @@ class LiveSource : public Source {
   std::string SendCommand(int8_t command, int8_t mode) override {
     plantscale_command_t c{};
     c.utime = telemetry::WallUtime();
-    c.seq = ++command_seq_;
+    // The wall clock's microseconds (or one more than the last): seqs keep
+    // increasing across station restarts, which the vehicle's replay check
+    // needs.
+    command_seq_ = std::max(command_seq_ + 1, c.utime);
+    c.seq = command_seq_;
     c.command = command;
     c.mode = mode;
     char host[256] = "station";
     gethostname(host, sizeof host - 1);
     c.origin = std::string("station@") + host;
+    if (command_key_) telemetry::Sign(c, *command_key_);
     const telemetry::Bytes bytes = telemetry::Encode(c);
     try {
       transport_.Publish(telemetry::channels::kCommand, bytes.data(), bytes.size());
     } catch (const telemetry::TransportError& e) {
       return std::string("command not sent: ") + e.what();
     }
-    return "sent to the vehicle: " + CommandText(command, mode);
+    return std::string(command_key_ ? "sent to the vehicle: " : "sent unsigned (no --command-key): ") +
+           CommandText(command, mode);
   }
   static std::string CommandText(int8_t command, int8_t mode) {
     if (command == plantscale_command_t::COMMAND_START) return "start";
@@ -122,6 +136,7 @@ class LiveSource : public Source {
 
  private:
   int64_t command_seq_ = 0;
+  std::optional<telemetry::CommandKey> command_key_;
   telemetry::LcmTransport transport_;
   telemetry::Subscriber subscriber_;
   RunModel model_;

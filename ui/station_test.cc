@@ -5,6 +5,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "telemetry/command_auth.h"
 #include "telemetry/log.h"
 #include "ui/golden.h"
 #include "ui/palette.h"
@@ -181,21 +182,29 @@ namespace {
 // A live station's command keys publish on PLANTSCALE_COMMAND (here over
 // memq://, which the live source's own subscriber also hears); a log
 // source says commands need a live vehicle. No display needed.
-TEST(StationSources, LiveSourceSendsCommandsALogSourceDoesNot) {
-  LiveSource live("memq://");
-  EXPECT_EQ(live.SendCommand(plantscale_command_t::COMMAND_PAUSE, 0), "sent to the vehicle: pause");
-  EXPECT_EQ(live.SendCommand(plantscale_command_t::COMMAND_SET_MODE, plantscale_command_t::MODE_SPRAY_WEED),
-            "sent to the vehicle: spray the weeds");
+// The last command the live source's own subscriber heard, once it is `command`.
+std::optional<plantscale_command_t> Heard(const LiveSource& live, int8_t command) {
   std::optional<plantscale_command_t> got;
-  for (int i = 0; i < 100 && !(got && got->seq == 2); ++i) {
+  for (int i = 0; i < 100 && !(got && got->command == command); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
     got = live.subscriber().Snapshot().command;
   }
+  return got;
+}
+
+TEST(StationSources, LiveSourceSendsCommandsALogSourceDoesNot) {
+  const int64_t start = telemetry::WallUtime();
+  LiveSource live("memq://");  // no key: unsigned, which a vehicle refuses by default
+  EXPECT_EQ(live.SendCommand(plantscale_command_t::COMMAND_PAUSE, 0), "sent unsigned (no --command-key): pause");
+  EXPECT_EQ(live.SendCommand(plantscale_command_t::COMMAND_SET_MODE, plantscale_command_t::MODE_SPRAY_WEED),
+            "sent unsigned (no --command-key): spray the weeds");
+  const std::optional<plantscale_command_t> got = Heard(live, plantscale_command_t::COMMAND_SET_MODE);
   ASSERT_TRUE(got.has_value());
-  EXPECT_EQ(got->seq, 2);
+  EXPECT_GE(got->seq, start);  // the wall clock: seqs increase across station restarts
   EXPECT_EQ(got->command, int8_t{plantscale_command_t::COMMAND_SET_MODE});
   EXPECT_EQ(got->mode, int8_t{plantscale_command_t::MODE_SPRAY_WEED});
   EXPECT_EQ(got->origin.rfind("station@", 0), 0u) << got->origin;
+  EXPECT_EQ(got->mac_size, 0);
 
   SyntheticRunOptions o;
   o.length_m = 2.0;
@@ -204,6 +213,29 @@ TEST(StationSources, LiveSourceSendsCommandsALogSourceDoesNot) {
   LogSource replay(log, 1.0);
   EXPECT_NE(replay.SendCommand(plantscale_command_t::COMMAND_PAUSE, 0).find("need a live station"), std::string::npos);
   std::filesystem::remove(log);
+}
+
+// With --command-key the station signs: what it sends verifies with the
+// key (fresh, seqs increasing), and not with another.
+TEST(StationSources, LiveSourceSignsCommandsWithItsKey) {
+  telemetry::CommandKey key, other;
+  key.bytes.fill(3);
+  other.bytes.fill(4);
+  LiveSource live("memq://", key);
+  telemetry::CommandReplayState state, other_state;
+  int64_t last_seq = 0;
+  for (const int8_t command : {int8_t{plantscale_command_t::COMMAND_PAUSE}, int8_t{plantscale_command_t::COMMAND_START}}) {
+    EXPECT_EQ(live.SendCommand(command, 0).rfind("sent to the vehicle: ", 0), 0u);
+    const std::optional<plantscale_command_t> got = Heard(live, command);
+    ASSERT_TRUE(got.has_value());
+    EXPECT_EQ(got->mac_size, int16_t{plantscale_command_t::MAC_SIZE});
+    EXPECT_GT(got->seq, last_seq);
+    last_seq = got->seq;
+    const telemetry::CommandCheck check = telemetry::Verify(*got, key, telemetry::WallUtime(), state);
+    EXPECT_TRUE(check.accepted()) << check.reason;
+    EXPECT_EQ(telemetry::Verify(*got, other, telemetry::WallUtime(), other_state).verdict,
+              telemetry::CommandVerdict::kForged);
+  }
 }
 
 }  // namespace

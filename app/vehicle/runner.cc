@@ -4,6 +4,7 @@
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <thread>
+#include <utility>
 
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
@@ -45,9 +46,42 @@ void VehicleRunner::Event(int8_t severity, const std::string& kind, const std::s
   publisher_.Publish(channels::kEvents, e);
 }
 
-void VehicleRunner::ListenForCommands(Transport& transport) {
+void VehicleRunner::ListenForCommands(Transport& transport, CommandAuthOptions auth) {
   commands_ = &transport;
+  auth_ = std::move(auth);
   transport.Subscribe(channels::kCommand, [this](const ReceivedMessage& m) { Apply(m); });
+}
+
+namespace {
+
+// An origin as it may appear in a fault line: it is whatever the sender
+// wrote, signed or not.
+std::string Printable(const std::string& origin) {
+  constexpr size_t kMax = 64;
+  std::string out;
+  for (const char c : origin.substr(0, kMax)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
+  return origin.size() > kMax ? out + "..." : out;
+}
+
+}  // namespace
+
+std::string VehicleRunner::Authenticate(const plantscale_command_t& c) {
+  const bool is_signed = c.mac_size != 0 || !c.mac.empty();
+  if (!auth_.key) {
+    if (auth_.accept_unsigned) return "";
+    return is_signed ? "not verifiable (the vehicle has no command key, --command-key)"
+                     : "unsigned (no signature; the vehicle has no command key, --command-key)";
+  }
+  if (!is_signed && auth_.accept_unsigned) return "";
+  const int64_t now = auth_.clock ? auth_.clock() : now_utime_;
+  return telemetry::Verify(c, *auth_.key, now, replay_, auth_.window_us).reason;
+}
+
+void VehicleRunner::RefusalFaults() {
+  while (!refusals_.empty() && refusals_.front().utime < now_utime_ - auth_.fault_hold_us) {
+    refusals_.pop_front();
+  }
+  for (const Refusal& r : refusals_) status_.faults.push_back(r.line);
 }
 
 void VehicleRunner::Apply(const ReceivedMessage& m) {
@@ -57,9 +91,18 @@ void VehicleRunner::Apply(const ReceivedMessage& m) {
   const auto refuse = [&](const std::string& why) {
     ++k.refused;
     Event(plantscale_event_t::SEVERITY_WARNING, "command_refused", why);
+    // A fault line while it is recent; the same line again renews it, and
+    // a flood keeps the newest few.
+    const std::string line = "command refused: " + why;
+    std::erase_if(refusals_, [&](const Refusal& r) { return r.line == line; });
+    refusals_.push_back({now_utime_, line});
+    if (refusals_.size() > 4) refusals_.pop_front();
   };
   if (!c) return refuse(error);
-  const std::string from = c->origin.empty() ? "the station" : c->origin;
+  const std::string from = c->origin.empty() ? "the station" : Printable(c->origin);
+  if (const std::string why = Authenticate(*c); !why.empty()) return refuse(why + " from " + from);
+  const bool is_signed = c->mac_size != 0 || !c->mac.empty();
+  const std::string trust = is_signed && auth_.key ? "" : " (unverified: --accept-unsigned-commands)";
   std::string did;
   if (c->command == plantscale_command_t::COMMAND_START) {
     k.paused = false;
@@ -83,7 +126,7 @@ void VehicleRunner::Apply(const ReceivedMessage& m) {
     return refuse("command from " + from + ": unknown command " + std::to_string(c->command));
   }
   ++k.received;
-  Event(plantscale_event_t::SEVERITY_INFO, "command", did + " by " + from);
+  Event(plantscale_event_t::SEVERITY_INFO, "command", did + " by " + from + trust);
 }
 
 RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop) {
@@ -120,6 +163,7 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
     if (commands_ != nullptr) {
       while (commands_->Handle(0)) {
       }
+      RefusalFaults();
     }
     for (const std::unique_ptr<Stage>& stage : stages_) stage->Process(frame, status_, publisher_);
     summary.seconds = 1e-6 * static_cast<double>(frame.utime - first_utime);

@@ -9,6 +9,8 @@
 
 #include <atomic>
 #include <cstdint>
+#include <deque>
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -17,6 +19,7 @@
 
 #include "engine/pipeline/pipeline.h"
 #include "engine/sim/simulator.h"
+#include "telemetry/command_auth.h"
 #include "telemetry/publisher.h"
 
 namespace plantscale::vehicle {
@@ -65,7 +68,7 @@ struct OperatorCommands {
   bool spray_off = false;  // MODE_SPRAY_OFF until another mode
   int8_t mode = 0;         // plantscale_command_t::MODE_SPRAY_CROP/WEED; 0: as configured
   int64_t received = 0;    // commands applied
-  int64_t refused = 0;     // undecodable or unknown commands
+  int64_t refused = 0;     // undecodable, unknown or not authenticated commands
   bool held() const { return paused || spray_off; }
 };
 
@@ -91,6 +94,25 @@ class Stage {
   virtual void Finish(int64_t /*utime*/, Publisher& /*publisher*/) {}
 };
 
+// How the vehicle authenticates station commands (telemetry/command_auth.h).
+// Fail closed: without a key every command is refused, unless
+// accept_unsigned. A refused command leaves the state as it was, is a
+// command_refused event and stays a fault line in the heartbeat
+// ("command refused: forged (bad signature) from station@host") for
+// fault_hold_us of message time.
+struct CommandAuthOptions {
+  std::optional<telemetry::CommandKey> key;
+  // Demo and tests only: commands without a signature are obeyed (with a
+  // key, a signature that is there must still be good; without one,
+  // signatures go unchecked).
+  bool accept_unsigned = false;
+  int64_t window_us = telemetry::kCommandWindowUs;
+  // The clock a command's utime is checked against; empty: the message
+  // clock (now_utime()).
+  std::function<int64_t()> clock;
+  int64_t fault_hold_us = 5'000'000;
+};
+
 struct RunnerOptions {
   bool real_time = true;  // false: as fast as possible (--fast)
   // What the run was made from (a JSON object's text: the simulator's preset
@@ -111,8 +133,9 @@ class VehicleRunner {
   VehicleRunner(Publisher& publisher, const RunnerOptions& options, int64_t boot_utime);
   void AddStage(std::unique_ptr<Stage> stage);
   // Acts on station commands (PLANTSCALE_COMMAND) received on `transport`,
-  // polled before every frame; each applied or refused command is an event.
-  void ListenForCommands(Transport& transport);
+  // polled before every frame, once `auth` lets them through; each applied
+  // or refused command is an event.
+  void ListenForCommands(Transport& transport, CommandAuthOptions auth = {});
   const RunStatus& status() const { return status_; }
   // Runs until the source ends or `stop` becomes true. Publishes run_started
   // (then run_config when given), frame_dropped and run_finished events.
@@ -123,6 +146,9 @@ class VehicleRunner {
  private:
   void Event(int8_t severity, const std::string& kind, const std::string& text);
   void Apply(const ReceivedMessage& message);
+  // Empty when `command` may be obeyed, else why not.
+  std::string Authenticate(const plantscale_command_t& command);
+  void RefusalFaults();  // the recent refusals into status_.faults
 
   Publisher& publisher_;
   RunnerOptions options_;
@@ -130,6 +156,13 @@ class VehicleRunner {
   std::vector<std::unique_ptr<Stage>> stages_;
   int64_t now_utime_;
   Transport* commands_ = nullptr;
+  CommandAuthOptions auth_;
+  telemetry::CommandReplayState replay_;
+  struct Refusal {
+    int64_t utime;
+    std::string line;
+  };
+  std::deque<Refusal> refusals_;  // newest last, one per line
 };
 
 }  // namespace plantscale::vehicle

@@ -5,7 +5,9 @@
 #include <plantscale_lcmtypes/plantscale_plant_t.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <opencv2/imgcodecs.hpp>
+#include <plantscale_lcmtypes/plantscale_health_t.hpp>
 
 #include "app/vehicle/stages.h"
 #include "engine/geometry/test_cameras.h"
@@ -260,7 +262,9 @@ TEST(VehicleRunner, ActsOnStationCommandsAndRefusesBadOnes) {
   sim::Simulator simulator(o);
   SimFrameSource source(simulator, 1'700'000'000'000'000);
   VehicleRunner runner(publisher, RunnerOptions{false}, 1'700'000'000'000'000);
-  runner.ListenForCommands(t);
+  CommandAuthOptions auth;
+  auth.accept_unsigned = true;  // the script's commands are unsigned
+  runner.ListenForCommands(t, auth);
   std::vector<OperatorCommands> seen;
   runner.AddStage(std::make_unique<StationScript>(t, seen));
   runner.Run(source);
@@ -322,6 +326,261 @@ TEST(VehicleRunner, RunConfigEventFollowsRunStarted) {
       EXPECT_EQ(events[1].severity, int8_t{plantscale_event_t::SEVERITY_INFO});
     }
   }
+}
+
+}  // namespace
+}  // namespace plantscale::vehicle
+
+namespace plantscale::vehicle {
+namespace {
+
+namespace channels = telemetry::channels;
+using telemetry::Bytes;
+using telemetry::CommandKey;
+using telemetry::Decode;
+using telemetry::Encode;
+using telemetry::LcmTransport;
+using telemetry::PublisherOptions;
+using telemetry::Sign;
+
+bool HasLine(const std::vector<std::string>& lines, const std::string& text) {
+  return std::any_of(lines.begin(), lines.end(),
+                     [&](const std::string& l) { return l.find(text) != std::string::npos; });
+}
+
+struct CommandRun {
+  std::vector<OperatorCommands> seen;            // the state at each frame
+  std::vector<std::vector<std::string>> faults;  // the heartbeat's faults at each frame
+  std::vector<std::string> events;               // "kind: text"
+  std::vector<std::string> health_faults;        // every fault line of every heartbeat sent
+};
+
+// Runs a short simulated pass with a heartbeat, `script` playing the
+// station during each frame (its index from 0).
+CommandRun RunWithStation(const CommandAuthOptions& auth, double length_m,
+                          const std::function<void(Transport&, const VehicleFrame&, int)>& script) {
+  class Script : public Stage {
+   public:
+    Script(Transport& t, CommandRun& run,
+           const std::function<void(Transport&, const VehicleFrame&, int)>& script)
+        : t_(t), run_(run), script_(script) {}
+    std::string name() const override { return "station_script"; }
+    void Process(const VehicleFrame& frame, RunStatus& status, Publisher&) override {
+      run_.seen.push_back(status.commands);
+      run_.faults.push_back(status.faults);
+      script_(t_, frame, static_cast<int>(run_.seen.size()) - 1);
+    }
+
+   private:
+    Transport& t_;
+    CommandRun& run_;
+    const std::function<void(Transport&, const VehicleFrame&, int)>& script_;
+  };
+  CommandRun run;
+  LcmTransport t("memq://");
+  t.Subscribe(channels::kEvents, [&](const ReceivedMessage& m) {
+    const auto e = Decode<plantscale_event_t>(m.channel, m.data, m.size);
+    if (e) run.events.push_back(e->kind + ": " + e->text);
+  });
+  t.Subscribe(channels::kHealth, [&](const ReceivedMessage& m) {
+    const auto h = Decode<plantscale_health_t>(m.channel, m.data, m.size);
+    if (h) run.health_faults.insert(run.health_faults.end(), h->faults.begin(), h->faults.end());
+  });
+  Publisher publisher(t, PublisherOptions{});
+  sim::SimulatorOptions o = SmallPass();
+  o.length_m = length_m;
+  sim::Simulator simulator(o);
+  SimFrameSource source(simulator, 1'700'000'000'000'000);
+  VehicleRunner runner(publisher, RunnerOptions{false}, 1'700'000'000'000'000);
+  runner.ListenForCommands(t, auth);
+  runner.AddStage(std::make_unique<Script>(t, run, script));
+  runner.AddStage(std::make_unique<HealthStage>());  // after the script: it sees the same faults
+  runner.Run(source);
+  while (t.Handle(0)) {
+  }
+  return run;
+}
+
+void Send(Transport& t, const plantscale_command_t& c) {
+  const Bytes b = Encode(c);
+  t.Publish(channels::kCommand, b.data(), b.size());
+}
+
+// Signed commands over memq://: the station's own are obeyed; a replayed,
+// forged (flipped MAC byte, a field changed after signing, another key),
+// stale (old or future timestamp), unsigned or out-of-order one is refused,
+// leaves the state as it was, is a command_refused event and a fault line
+// in the heartbeat for fault_hold_us. Timestamps against the message clock.
+TEST(VehicleRunner, ObeysSignedCommandsAndRefusesForgedReplayedStaleAndUnsigned) {
+  CommandKey key, other_key;
+  key.bytes.fill(0x11);
+  other_key.bytes.fill(0x22);
+  CommandAuthOptions auth;
+  auth.key = key;
+  auth.fault_hold_us = 1'200'000;
+  using C = plantscale_command_t;
+  constexpr int kEvery = 6;  // frames between the steps (0.48 s: at most 3 refusals held at once)
+  constexpr int kSteps = 12;
+  Bytes recorded_pause;
+  const auto script = [&](Transport& t, const VehicleFrame& frame, int index) {
+    if (index % kEvery != 2 || index / kEvery >= kSteps) return;
+    C c{};
+    c.utime = frame.utime;
+    c.origin = "test station";
+    c.command = C::COMMAND_PAUSE;
+    switch (index / kEvery) {
+      case 0:  // obeyed, and recorded by the attacker
+        c.seq = 100;
+        Sign(c, key);
+        recorded_pause = Encode(c);
+        break;
+      case 1:  // obeyed
+        c.seq = 101, c.command = C::COMMAND_START;
+        Sign(c, key);
+        break;
+      case 2:  // replayed: the recorded pause, byte for byte
+        t.Publish(channels::kCommand, recorded_pause.data(), recorded_pause.size());
+        return;
+      case 3:  // forged: one bit of the MAC flipped
+        c.seq = 102;
+        Sign(c, key);
+        c.mac[7] ^= 0x10;
+        break;
+      case 4:  // forged: the mode changed after signing
+        c.seq = 103, c.command = C::COMMAND_SET_MODE, c.mode = C::MODE_SPRAY_WEED;
+        Sign(c, key);
+        c.mode = C::MODE_SPRAY_OFF;
+        break;
+      case 5:  // forged: signed with another key
+        c.seq = 104;
+        Sign(c, other_key);
+        break;
+      case 6:  // stale: 3 s old
+        c.seq = 105, c.utime = frame.utime - 3'000'000;
+        Sign(c, key);
+        break;
+      case 7:  // stale: 3 s ahead
+        c.seq = 106, c.utime = frame.utime + 3'000'000;
+        Sign(c, key);
+        break;
+      case 8:  // unsigned
+        c.seq = 107;
+        break;
+      case 9:  // replayed: an older seq, freshly signed
+        c.seq = 50, c.command = C::COMMAND_SET_MODE, c.mode = C::MODE_SPRAY_OFF;
+        Sign(c, key);
+        break;
+      case 10:  // obeyed: seq 102 was never accepted (refusals consume nothing)
+        c.seq = 102, c.command = C::COMMAND_SET_MODE, c.mode = C::MODE_SPRAY_WEED;
+        Sign(c, key);
+        break;
+      case 11:  // replayed: the same seq again, a new command, freshly signed
+        c.seq = 102, c.command = C::COMMAND_SET_MODE, c.mode = C::MODE_SPRAY_OFF;
+        Sign(c, key);
+        break;
+    }
+    Send(t, c);
+  };
+  const CommandRun run = RunWithStation(auth, 6.0, script);  // 0.7 m/s, 12.5 Hz: ≈ 107 frames
+  ASSERT_GE(run.seen.size(), static_cast<size_t>(kEvery * kSteps + 20));
+  // A command sent during frame k is applied (or not) before frame k + 1.
+  const auto after = [&](int step) { return run.seen[static_cast<size_t>(step * kEvery + 3)]; };
+  EXPECT_FALSE(run.seen[2].paused);
+  EXPECT_TRUE(after(0).paused);
+  EXPECT_FALSE(after(1).paused);
+  for (int step = 2; step <= 9; ++step) {
+    EXPECT_FALSE(after(step).held()) << "step " << step;  // not paused, not off
+    EXPECT_EQ(after(step).mode, 0) << "step " << step;
+  }
+  EXPECT_EQ(after(10).mode, int8_t{C::MODE_SPRAY_WEED});
+  EXPECT_FALSE(after(11).spray_off);
+  EXPECT_EQ(after(11).mode, int8_t{C::MODE_SPRAY_WEED});
+  EXPECT_EQ(run.seen.back().received, 3);
+  EXPECT_EQ(run.seen.back().refused, 9);
+
+  const std::vector<std::string> refusals = {
+      "replayed (seq 100, not after the last accepted 101) from test station",
+      "forged (bad signature) from test station",
+      // 3 s and a frame's time apart: the vehicle checks before the next frame
+      "stale (sent 3.",
+      " s before the vehicle's clock, window ±2.0 s) from test station",
+      " s after the vehicle's clock, window ±2.0 s) from test station",
+      "unsigned (no signature) from test station",
+      "replayed (seq 50, not after the last accepted 101) from test station",
+      "replayed (seq 102, not after the last accepted 102) from test station",
+  };
+  // A line that starts with `prefix` and holds `why`.
+  const auto has = [](const std::vector<std::string>& lines, const std::string& prefix, const std::string& why) {
+    return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) {
+      return l.rfind(prefix, 0) == 0 && l.find(why) != std::string::npos;
+    });
+  };
+  for (const std::string& why : refusals) {
+    EXPECT_TRUE(has(run.events, "command_refused: ", why)) << why;
+    EXPECT_TRUE(has(run.health_faults, "command refused: ", why)) << why;
+  }
+  EXPECT_EQ(std::count_if(run.events.begin(), run.events.end(),
+                          [](const std::string& e) { return e.rfind("command_refused: ", 0) == 0; }),
+            9);
+  EXPECT_TRUE(HasLine(run.events, "command: paused (nozzles closed) by test station"));
+  EXPECT_TRUE(HasLine(run.events, "command: mode: spray the weeds by test station"));
+  EXPECT_FALSE(HasLine(run.events, "unverified"));
+  // The fault line right after the refusal, gone fault_hold_us later.
+  const size_t forged_at = 3 * kEvery + 3;
+  EXPECT_TRUE(HasLine(run.faults[forged_at], "command refused: forged (bad signature) from test station"));
+  EXPECT_FALSE(HasLine(run.faults[forged_at - 1], "command refused: forged"));
+  EXPECT_FALSE(HasLine(run.faults.back(), "command refused"));
+  for (const auto& f : run.faults) EXPECT_LE(f.size(), 4u);
+}
+
+// Fail closed: a vehicle without a key obeys no command, and says why;
+// with accept_unsigned and a key, an unsigned command is obeyed but a bad
+// signature still is not.
+TEST(VehicleRunner, WithoutAKeyRefusesEveryCommand) {
+  CommandKey key;
+  key.bytes.fill(0x33);
+  using C = plantscale_command_t;
+  const auto script = [&](Transport& t, const VehicleFrame& frame, int index) {
+    C c{};
+    c.utime = frame.utime, c.seq = index, c.origin = "test station", c.command = C::COMMAND_PAUSE;
+    if (index == 2) Send(t, c);  // unsigned
+    if (index == 4) {  // signed, but the vehicle cannot check it
+      Sign(c, key);
+      Send(t, c);
+    }
+  };
+  const CommandRun closed = RunWithStation(CommandAuthOptions{}, 1.0, script);
+  ASSERT_GE(closed.seen.size(), 8u);
+  for (const OperatorCommands& k : closed.seen) EXPECT_FALSE(k.paused);
+  EXPECT_EQ(closed.seen.back().refused, 2);
+  EXPECT_TRUE(HasLine(closed.events,
+                      "command_refused: unsigned (no signature; the vehicle has no command key, --command-key) "
+                      "from test station"));
+  EXPECT_TRUE(HasLine(closed.events,
+                      "command_refused: not verifiable (the vehicle has no command key, --command-key) from test "
+                      "station"));
+
+  CommandAuthOptions open;
+  open.key = key;
+  open.accept_unsigned = true;
+  const auto mixed = [&](Transport& t, const VehicleFrame& frame, int index) {
+    C c{};
+    c.utime = frame.utime, c.seq = index, c.origin = "test station", c.command = C::COMMAND_PAUSE;
+    if (index == 2) Send(t, c);  // unsigned: obeyed
+    if (index == 4) {  // forged: refused
+      c.command = C::COMMAND_START;
+      Sign(c, key);
+      c.mac[0] ^= 1;
+      Send(t, c);
+    }
+  };
+  const CommandRun demo = RunWithStation(open, 1.0, mixed);
+  ASSERT_GE(demo.seen.size(), 8u);
+  EXPECT_TRUE(demo.seen[3].paused);
+  EXPECT_TRUE(demo.seen.back().paused);
+  EXPECT_TRUE(HasLine(demo.events,
+                      "command: paused (nozzles closed) by test station (unverified: --accept-unsigned-commands)"));
+  EXPECT_TRUE(HasLine(demo.events, "command_refused: forged (bad signature) from test station"));
 }
 
 }  // namespace
