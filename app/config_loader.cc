@@ -117,7 +117,8 @@ fs::path Resolve(const std::string& name_or_path, const fs::path& dir, const cha
     return as_path;
   }
   const fs::path file = dir / (name_or_path + ".yaml");
-  if (fs::exists(file)) return file;
+  std::error_code ec;  // a name too long for a file name is an unknown preset, not an I/O error
+  if (fs::exists(file, ec)) return file;
   std::string known;
   for (const std::string& n : ListConfigNames(dir)) known += (known.empty() ? "" : ", ") + n;
   throw ConfigError(

@@ -68,6 +68,37 @@ TEST(Log, TruncatedLogKeepsWholeEventsAndNamesFileAndOffset) {
       << r.error();
 }
 
+// Found by tests/fuzz/log_fuzz: liblcm allocated a corrupt header's data
+// length (2 GB) before finding the bytes missing, and skipped garbage to the
+// next magic. The reader stops at such an event and says where.
+TEST(Log, CorruptEventHeaderOrGarbageEndsTheLogAtItsOffset) {
+  const fs::path path = TempLog("huge.lcmlog");
+  WriteLog(path, 2);
+  const auto whole = static_cast<int64_t>(fs::file_size(path));
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::app);
+    const unsigned char header[28] = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0,
+                                      0,    0,    0,    0,    0, 0, 0, 0, 0, 3, 0x7F, 0xFF, 0xFF, 0xFF};
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    out << "abc" << std::string(64, 'x');
+  }
+  LogReader r(path);
+  int n = 0;
+  while (r.Next()) ++n;
+  EXPECT_EQ(n, 2);
+  EXPECT_NE(r.error().find("byte offset " + std::to_string(whole)), std::string::npos) << r.error();
+
+  fs::resize_file(path, static_cast<uintmax_t>(whole));
+  std::string events(static_cast<size_t>(whole), '\0');
+  std::ifstream(path, std::ios::binary).read(events.data(), whole);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << events << "garbage" << events;
+  LogReader g(path);
+  n = 0;
+  while (g.Next()) ++n;
+  EXPECT_EQ(n, 2);
+  EXPECT_NE(g.error().find("byte offset " + std::to_string(whole)), std::string::npos) << g.error();
+}
+
 TEST(Log, FileThatIsNotALogIsReportedNotCrashed) {
   const fs::path path = TempLog("not_a_log.txt");
   std::ofstream(path) << "this is a text file, not an LCM event log\n";
