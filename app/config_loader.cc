@@ -57,7 +57,12 @@ class MapReader {
   }
   void Finish() const {
     for (const auto& item : node_) {
-      const auto key = item.first.as<std::string>();
+      if (!item.first.IsScalar()) {  // `? [a, b]: 1` or a null key (found by fuzzing)
+        throw ConfigError(file_, path_.empty() ? "(top level)" : path_,
+                          "a key that is not a name (line " +
+                              std::to_string(item.first.Mark().line + 1) + ")");
+      }
+      const std::string& key = item.first.Scalar();
       if (used_.count(key) == 0) {
         throw ConfigError(file_, Join(path_, key),
                           "unknown key (line " + std::to_string(item.first.Mark().line + 1) + ")");

@@ -1,6 +1,7 @@
 #include "telemetry/convert.h"
 
 #include <gtest/gtest.h>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
 #include <cmath>
@@ -173,6 +174,24 @@ TEST(Codec, LengthFieldsBeyondTheBytesAreRefusedBeforeAllocating) {
   // ... also when the message ends right after it.
   const size_t cut = thumb.size() - blob - 4 - 3;
   EXPECT_FALSE(Decode<plantscale_thumbnail_t>("J", thumb.data(), cut));
+}
+
+// Found by tests/fuzz/lcm_fuzz (UBSan): a string length of INT32_MIN made
+// lcm-gen's `length - 1` overflow into a 2 GB read past the message, and 0
+// threw length_error; lcm_gen_fix.cmake refuses lengths below 1.
+TEST(Codec, StringLengthsBelowOneAreRefused) {
+  plantscale_event_t e{};
+  e.kind = "k";
+  e.text = "text";
+  Bytes b = Encode(e);
+  ASSERT_TRUE(Decode<plantscale_event_t>("E", b.data(), b.size()));
+  const size_t kind_length_at = 8 + 8 + 8 + 1;  // fingerprint, utime, seq, severity
+  for (uint32_t length : {0x80000000u, 0u, 0xFFFFFFFFu}) {
+    SetInt32(b, kind_length_at, length);
+    std::string error;
+    EXPECT_FALSE(Decode<plantscale_event_t>("E", b.data(), b.size(), &error)) << length;
+    EXPECT_NE(error.find("plantscale_event_t"), std::string::npos) << error;
+  }
 }
 
 }  // namespace
