@@ -2,6 +2,7 @@
 # plantscale.sh: the two README commands.
 #   ./plantscale.sh demo [plantscale demo options]   build, then run the whole system on the simulator into out/demo/
 #   ./plantscale.sh test                             build, then run every test under Xvfb
+#   ./plantscale.sh fuzz [SECONDS]                   build the fuzz targets (clang), run each SECONDS
 # Each installs the Debian packages it needs when they are missing (apt is
 # skipped entirely when they are all present) and builds with ccache into build/.
 # Extra CMake arguments: PLANTSCALE_CMAKE_ARGS="-DPLANTSCALE_SANITIZE=address,undefined".
@@ -18,10 +19,12 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )
+# tests/fuzz (docs/fuzzing.md): clang and its libFuzzer/ASan runtimes.
+FUZZ_PACKAGES=(clang libclang-rt-dev)
 
 ensure_packages() {
   local missing=()
-  for p in "${PACKAGES[@]}"; do
+  for p in "${PACKAGES[@]}" "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if ((${#missing[@]} == 0)); then return; fi
@@ -40,8 +43,54 @@ build() {
   cmake --build build --parallel "$(nproc)"
 }
 
+# The fuzz targets with clang, libFuzzer, ASan and UBSan in build-fuzz/
+# (only the libraries they link are built).
+build_fuzz() {
+  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DPLANTSCALE_FUZZ=ON
+  cmake --build build-fuzz --target plantscale_fuzzers --parallel "$(nproc)"
+}
+
+# Runs every fuzz target for $1 seconds, $(nproc) at a time, on its seeds
+# plus the inputs kept from earlier runs (build-fuzz/tests/fuzz/corpus/);
+# prints executions and crashes per target and fails when any crashed.
+run_fuzzers() {
+  local seconds="$1" dir=build-fuzz/tests/fuzz logs=build-fuzz/tests/fuzz/logs
+  mkdir -p "$logs" "$dir/artifacts"
+  local targets=()
+  for f in tests/fuzz/*_fuzz.cc; do targets+=("$(basename "$f" .cc)"); done
+  local running=0
+  for t in "${targets[@]}"; do
+    mkdir -p "$dir/corpus/$t"
+    ("$dir/$t" -max_total_time="$seconds" -timeout=30 -rss_limit_mb=2048 -print_final_stats=1 \
+      -artifact_prefix="$dir/artifacts/$t-" "$dir/corpus/$t" "tests/fuzz/corpus/$t" \
+      >"$logs/$t.log" 2>&1
+     echo $? >"$logs/$t.rc") &
+    running=$((running + 1))
+    if ((running >= $(nproc))); then wait -n || true; running=$((running - 1)); fi
+  done
+  wait || true
+  local failed=0
+  printf '%-16s %12s %10s %8s  %s\n' target executions exec/s crashes "corpus (kept)"
+  for t in "${targets[@]}"; do
+    local log="$logs/$t.log" execs rate crashes
+    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+    [[ -n "$execs" ]] || execs=$(grep -o '^#[0-9]*' "$log" | tail -1 | tr -d '#')
+    rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+    crashes=$(grep -c -E 'Test unit written to .*/[a-z_]+-(crash|oom|timeout|leak)-' "$log" || true)
+    printf '%-16s %12s %10s %8s  %s\n' "$t" "${execs:-?}" "${rate:-?}" "$crashes" \
+      "$(find "$dir/corpus/$t" -type f | wc -l)"
+    if ((crashes > 0)) || [[ "$(cat "$logs/$t.rc")" != 0 ]]; then
+      failed=1
+      grep -E 'SUMMARY|Test unit written to' "$log" | sed 's/^/    /'
+    fi
+  done
+  echo "logs: $logs/"
+  return "$failed"
+}
+
 usage() {
-  echo "usage: $0 demo [options for 'plantscale demo'] | test" >&2
+  echo "usage: $0 demo [options for 'plantscale demo'] | test | fuzz [SECONDS]" >&2
   exit 2
 }
 
@@ -62,6 +111,13 @@ case "$command" in
     # that connects during the reset aborts ("bad X server connection").
     xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \
       ctest --output-on-failure --parallel "$(nproc)" --timeout 900
+    ;;
+  fuzz)
+    seconds="${1:-60}"
+    [[ "$seconds" =~ ^[0-9]+$ ]] || usage
+    ensure_packages "${FUZZ_PACKAGES[@]}"
+    build_fuzz
+    run_fuzzers "$seconds"
     ;;
   *) usage ;;
 esac

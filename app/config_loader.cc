@@ -57,7 +57,12 @@ class MapReader {
   }
   void Finish() const {
     for (const auto& item : node_) {
-      const auto key = item.first.as<std::string>();
+      if (!item.first.IsScalar()) {  // `? [a, b]: 1` or a null key (found by fuzzing)
+        throw ConfigError(file_, path_.empty() ? "(top level)" : path_,
+                          "a key that is not a name (line " +
+                              std::to_string(item.first.Mark().line + 1) + ")");
+      }
+      const std::string& key = item.first.Scalar();
       if (used_.count(key) == 0) {
         throw ConfigError(file_, Join(path_, key),
                           "unknown key (line " + std::to_string(item.first.Mark().line + 1) + ")");
@@ -117,7 +122,8 @@ fs::path Resolve(const std::string& name_or_path, const fs::path& dir, const cha
     return as_path;
   }
   const fs::path file = dir / (name_or_path + ".yaml");
-  if (fs::exists(file)) return file;
+  std::error_code ec;  // a name too long for a file name is an unknown preset, not an I/O error
+  if (fs::exists(file, ec)) return file;
   std::string known;
   for (const std::string& n : ListConfigNames(dir)) known += (known.empty() ? "" : ", ") + n;
   throw ConfigError(

@@ -62,6 +62,26 @@ TEST_F(ConfigLoaderTest, UnknownPresetListsTheKnownOnes) {
   EXPECT_NE(error.find("alpha"), std::string::npos) << error;
 }
 
+// Found by tests/fuzz/config_fuzz: a camera name longer than a file name
+// made std::filesystem::exists throw filesystem_error (exit 1, "filesystem
+// error") instead of the unknown-camera ConfigError.
+TEST_F(ConfigLoaderTest, OverlongCameraNameIsAnUnknownCamera) {
+  Write("presets/long.yaml", "camera: " + std::string(300, 'c') + "\n");
+  const std::string error = ErrorOf("long");
+  EXPECT_NE(error.find("unknown camera"), std::string::npos) << error;
+}
+
+// Found by tests/fuzz/config_fuzz: a key that is not a scalar threw
+// YAML::TypedBadConversion out of the loader.
+TEST_F(ConfigLoaderTest, KeyThatIsNotANameIsAConfigError) {
+  Write("presets/complex.yaml", "length_m: 5\n? [a, b]\n: 1\n");
+  EXPECT_NE(ErrorOf("complex").find("a key that is not a name (line 2)"), std::string::npos)
+      << ErrorOf("complex");
+  Write("presets/null.yaml", "field:\n  ? \n  : 1\n");
+  EXPECT_NE(ErrorOf("null").find("field: a key that is not a name"), std::string::npos)
+      << ErrorOf("null");
+}
+
 TEST_F(ConfigLoaderTest, MalformedYamlNamesFileAndLine) {
   Write("presets/bad.yaml", "field:\n  rows: [3\nlength_m: 4\n");
   const std::string error = ErrorOf("bad");

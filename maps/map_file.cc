@@ -1,7 +1,10 @@
 #include "maps/map_file.h"
 
+#include <algorithm>
+#include <charconv>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -80,11 +83,33 @@ Json MapJson(const CropMap& map) {
 template <typename T>
 T Get(const Json& j, const char* key, const std::string& where) {
   if (!j.is_object() || !j.contains(key)) throw DataError(where + ": missing '" + key + "'");
-  try {
-    return j.at(key).get<T>();
-  } catch (const Json::exception&) {
-    throw DataError(where + ": '" + key + "' has the wrong type");
+  const Json& v = j.at(key);
+  if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+    // An integer that fits: get<int>() converts a float such as 1e300 (or
+    // an integer beyond int) without a check, undefined for the float.
+    using Limits = std::numeric_limits<T>;
+    if (v.is_number_unsigned() && v.get<uint64_t>() <= static_cast<uint64_t>(Limits::max())) {
+      return static_cast<T>(v.get<uint64_t>());
+    }
+    if (v.is_number_integer() && !v.is_number_unsigned() && v.get<int64_t>() >= Limits::min() &&
+        v.get<int64_t>() <= Limits::max()) {
+      return static_cast<T>(v.get<int64_t>());
+    }
+    throw DataError(where + ": '" + key + "' is not an integer in range");
+  } else {
+    try {
+      return v.get<T>();
+    } catch (const Json::exception&) {
+      throw DataError(where + ": '" + key + "' has the wrong type");
+    }
   }
+}
+
+// A list field ("plants", "rows").
+Json GetList(const Json& j, const char* key, const std::string& where) {
+  Json list = Get<Json>(j, key, where);
+  if (!list.is_array()) throw DataError(where + ": '" + key + "' is not a list");
+  return list;
 }
 
 Bytes Layer(const Json& layers, const char* key, size_t size, const std::string& where) {
@@ -139,12 +164,12 @@ CropMap MapFrom(const Json& j, const std::string& name) {
       {Layer(layers, "class", n, lw), FromU16Bytes(Layer(layers, "crop_count", 2 * n, lw)),
        FromU16Bytes(Layer(layers, "weed_count", 2 * n, lw)), Layer(layers, "treated", n, lw)});
   std::vector<MapPlant> plants;
-  const Json list = Get<Json>(j, "plants", name);
+  const Json list = GetList(j, "plants", name);
   for (size_t i = 0; i < list.size(); ++i) {
     plants.push_back(PlantFrom(list[i], name + ": plants[" + std::to_string(i) + "]"));
   }
   map.SetPlants(std::move(plants));
-  const Json rows = Get<Json>(j, "rows", name);
+  const Json rows = GetList(j, "rows", name);
   for (size_t i = 0; i < rows.size(); ++i) {
     map.AddRow(RowFrom(rows[i], name + ": rows[" + std::to_string(i) + "]"));
   }
@@ -174,8 +199,18 @@ Header ParseHeader(std::istream& in, const std::string& name) {
                     " is not supported (this build reads version " +
                     std::to_string(kMapFileVersion) + ")");
   }
-  if (!(fields >> h.bytes >> crc_hex)) throw DataError(name + ": header is malformed: " + line);
-  h.crc = static_cast<uint32_t>(std::stoul(crc_hex, nullptr, 16));
+  std::string bytes;
+  if (!(fields >> bytes >> crc_hex)) throw DataError(name + ": header is malformed: " + line);
+  // Digits only: istream would read "-1" as a huge size_t, and stoul throws
+  // std::invalid_argument on a non-hex checksum.
+  const auto whole = [](const std::string& text, auto& value, int base) {
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value, base);
+    return ec == std::errc() && ptr == end && !text.empty() && text[0] != '-';
+  };
+  if (!whole(bytes, h.bytes, 10) || !whole(crc_hex, h.crc, 16)) {
+    throw DataError(name + ": header is malformed: " + line);
+  }
   return h;
 }
 
@@ -203,11 +238,19 @@ void WriteMap(const CropMap& map, std::ostream& out, const std::string& name) {
 
 CropMap ReadMap(std::istream& in, const std::string& name) {
   const Header h = ParseHeader(in, name);
-  Bytes payload(h.bytes);
-  in.read(reinterpret_cast<char*>(payload.data()), static_cast<std::streamsize>(h.bytes));
-  if (static_cast<size_t>(in.gcount()) != h.bytes) {
+  // Read in pieces: the header's size is not trusted with an allocation
+  // larger than what the file holds.
+  Bytes payload;
+  while (payload.size() < h.bytes && in) {
+    const size_t piece = std::min<size_t>(h.bytes - payload.size(), size_t{1} << 20);
+    const size_t at = payload.size();
+    payload.resize(at + piece);
+    in.read(reinterpret_cast<char*>(payload.data() + at), static_cast<std::streamsize>(piece));
+    payload.resize(at + static_cast<size_t>(in.gcount()));
+  }
+  if (payload.size() != h.bytes) {
     throw DataError(name + ": truncated: header promises " + std::to_string(h.bytes) +
-                    " bytes, file holds " + std::to_string(in.gcount()));
+                    " bytes, file holds " + std::to_string(payload.size()));
   }
   if (Crc32(payload.data(), payload.size()) != h.crc) {
     throw DataError(name + ": corrupt: CRC-32 of the payload does not match the header");
@@ -217,8 +260,14 @@ CropMap ReadMap(std::istream& in, const std::string& name) {
     j = Json::from_cbor(payload);
   } catch (const Json::parse_error& e) {
     throw DataError(name + ": malformed CBOR payload at byte " + std::to_string(e.byte));
+  } catch (const Json::exception& e) {  // e.g. an array longer than any memory (found by fuzzing)
+    throw DataError(name + ": malformed CBOR payload: " + e.what());
   }
-  return MapFrom(j, name);
+  try {
+    return MapFrom(j, name);
+  } catch (const Json::exception& e) {  // a field of an unexpected shape that no check names
+    throw DataError(name + ": malformed map content: " + e.what());
+  }
 }
 
 void SaveMap(const CropMap& map, const std::filesystem::path& path) {

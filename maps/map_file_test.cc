@@ -84,6 +84,11 @@ TEST(MapFile, CorruptInputIsRefusedWithTheReason) {
   flipped[flipped.size() - 100] ^= 0x10;
   ExpectDataError(flipped, "CRC-32");
   ExpectDataError("plantscale-map 1\n", "header is malformed");
+  // Found by tests/fuzz/map_file_fuzz: a checksum that is not hex threw
+  // std::invalid_argument ("stoul"), and a size of -1 asked for 2^64 bytes.
+  ExpectDataError("plantscale-map 1 4 zz\nabcd", "header is malformed");
+  ExpectDataError("plantscale-map 1 -1 00000000\nabcd", "header is malformed");
+  ExpectDataError("plantscale-map 1 99999999999999 00000000\nabcd", "truncated");
 }
 
 TEST(MapFile, WellFormedButIncompleteContentNamesTheField) {
@@ -99,6 +104,29 @@ TEST(MapFile, WellFormedButIncompleteContentNamesTheField) {
   const std::string bytes = "plantscale-map 1 " + std::to_string(cbor.size()) + " " + crc + "\n" +
                             std::string(cbor.begin(), cbor.end());
   ExpectDataError(bytes, "missing 'layers'");
+}
+
+// Found by tests/fuzz/map_file_fuzz: CBOR that declares an array of 2^64
+// items (nlohmann's out_of_range), a float where an int belongs (undefined
+// conversion) and a non-list "plants" escaped as other exceptions.
+TEST(MapFile, MalformedCborAndFieldShapesAreDataErrors) {
+  const auto wrapped = [](const std::vector<uint8_t>& cbor) {
+    char crc[9];
+    std::snprintf(crc, sizeof crc, "%08x", Crc32(cbor.data(), cbor.size()));
+    return "plantscale-map 1 " + std::to_string(cbor.size()) + " " + crc + "\n" +
+           std::string(cbor.begin(), cbor.end());
+  };
+  // An array head (0x9b) with a 64-bit count of 0xffffd0ffff...
+  ExpectDataError(wrapped({0xa1, 0x61, 'g', 0x9b, 0xff, 0xff, 0xd0, 0xff, 0xff, 0xf6, 0x01, 0x00}),
+                  "malformed CBOR payload");
+  nlohmann::json map = nlohmann::json::from_cbor(
+      Saved(SyntheticMap()).substr(Saved(SyntheticMap()).find('\n') + 1));
+  nlohmann::json huge_cols = map;
+  huge_cols["grid"]["cols"] = 1e300;
+  ExpectDataError(wrapped(nlohmann::json::to_cbor(huge_cols)), "'cols' is not an integer");
+  nlohmann::json plants_object = map;
+  plants_object["plants"] = nlohmann::json{{"a", 1}};
+  ExpectDataError(wrapped(nlohmann::json::to_cbor(plants_object)), "'plants' is not a list");
 }
 
 TEST(MapFile, FullDiskIsAnIoErrorNamingTheFile) {

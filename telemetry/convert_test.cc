@@ -1,6 +1,8 @@
 #include "telemetry/convert.h"
 
 #include <gtest/gtest.h>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
+#include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
 #include <cmath>
 #include <limits>
@@ -129,6 +131,67 @@ TEST(Convert, NozzlesAndHealthRoundTrip) {
   const Health back = FromLcm(hm);
   EXPECT_EQ(back.faults, h.faults);
   EXPECT_EQ(back.dropped_frames, 2);
+}
+
+// Found by tests/fuzz/lcm_fuzz: lcm-gen's decode() resized the array to a
+// 32-bit length field before checking the bytes, so a few corrupt bytes
+// asked for gigabytes. Decode refuses such lengths before decode() runs.
+void SetInt32(Bytes& b, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[at + i] = static_cast<uint8_t>(v >> (24 - 8 * i));
+}
+
+TEST(Codec, LengthFieldsBeyondTheBytesAreRefusedBeforeAllocating) {
+  MapTileDelta tile;
+  tile.width = 4;
+  tile.height = 2;
+  tile.cells.assign(8, 1);
+  Bytes b = Encode(ToLcm(tile, 1));
+  ASSERT_TRUE(Decode<plantscale_map_tile_t>("T", b.data(), b.size()));
+  SetInt32(b, b.size() - 2 - 4, 0x7FFFFFFF);  // num_bytes (the RLE cells are 2 bytes)
+  std::string error;
+  EXPECT_FALSE(Decode<plantscale_map_tile_t>("T", b.data(), b.size(), &error));
+  EXPECT_NE(error.find("plantscale_map_tile_t"), std::string::npos) << error;
+
+  Bytes list = Encode(ToLcm(std::vector<PlantObservation>(2), 1, 1));
+  ASSERT_TRUE(Decode<plantscale_plant_list_t>("P", list.data(), list.size()));
+  const size_t plant = static_cast<size_t>(plantscale_plant_t{}._getEncodedSizeNoHash());
+  SetInt32(list, list.size() - 2 * plant - 4, 30'000'000);  // num_plants: 2.6 GB of plants
+  EXPECT_FALSE(Decode<plantscale_plant_list_t>("P", list.data(), list.size()));
+
+  plantscale_thumbnail_t t{};
+  t.jpeg = {1, 2, 3};
+  t.jpeg_size = 3;
+  t.blobs.resize(1);
+  t.num_blobs = 1;
+  Bytes thumb = Encode(t);
+  ASSERT_TRUE(Decode<plantscale_thumbnail_t>("J", thumb.data(), thumb.size()));
+  const size_t blob = static_cast<size_t>(plantscale_blob_t{}._getEncodedSizeNoHash());
+  Bytes blobs = thumb;
+  SetInt32(blobs, blobs.size() - blob - 4, 0x7FFFFFFF);  // num_blobs
+  EXPECT_FALSE(Decode<plantscale_thumbnail_t>("J", blobs.data(), blobs.size()));
+  SetInt32(thumb, thumb.size() - blob - 4 - 3 - 4, 0x7FFFFFFF);  // jpeg_size
+  EXPECT_FALSE(Decode<plantscale_thumbnail_t>("J", thumb.data(), thumb.size()));
+  // ... also when the message ends right after it.
+  const size_t cut = thumb.size() - blob - 4 - 3;
+  EXPECT_FALSE(Decode<plantscale_thumbnail_t>("J", thumb.data(), cut));
+}
+
+// Found by tests/fuzz/lcm_fuzz (UBSan): a string length of INT32_MIN made
+// lcm-gen's `length - 1` overflow into a 2 GB read past the message, and 0
+// threw length_error; lcm_gen_fix.cmake refuses lengths below 1.
+TEST(Codec, StringLengthsBelowOneAreRefused) {
+  plantscale_event_t e{};
+  e.kind = "k";
+  e.text = "text";
+  Bytes b = Encode(e);
+  ASSERT_TRUE(Decode<plantscale_event_t>("E", b.data(), b.size()));
+  const size_t kind_length_at = 8 + 8 + 8 + 1;  // fingerprint, utime, seq, severity
+  for (uint32_t length : {0x80000000u, 0u, 0xFFFFFFFFu}) {
+    SetInt32(b, kind_length_at, length);
+    std::string error;
+    EXPECT_FALSE(Decode<plantscale_event_t>("E", b.data(), b.size(), &error)) << length;
+    EXPECT_NE(error.find("plantscale_event_t"), std::string::npos) << error;
+  }
 }
 
 }  // namespace

@@ -37,10 +37,37 @@ LogReader::LogReader(const std::filesystem::path& path)
 
 LogReader::~LogReader() = default;
 
+namespace {
+
+// Whether the event header at `offset` (magic, eventnum, timestamp, channel
+// and data lengths, big-endian) starts a whole event of a `size`-byte file.
+// liblcm would skip bytes up to the next magic, and allocates the declared
+// data length (up to 2 GB when corrupt) before it finds the bytes missing;
+// the reader stops at such an event instead (found by tests/fuzz/log_fuzz).
+bool WholeEventAt(std::FILE* f, int64_t offset, int64_t size) {
+  uint8_t h[28];
+  const size_t got = std::fread(h, 1, sizeof h, f);
+  std::fseek(f, static_cast<long>(offset), SEEK_SET);
+  if (got != sizeof h) return false;
+  const auto u32 = [&h](int at) {
+    return (uint32_t{h[at]} << 24) | (uint32_t{h[at + 1]} << 16) | (uint32_t{h[at + 2]} << 8) |
+           uint32_t{h[at + 3]};
+  };
+  constexpr uint32_t kMagic = 0xEDA1DA01;
+  const auto channel = static_cast<int32_t>(u32(20));
+  const auto data = static_cast<int32_t>(u32(24));
+  return u32(0) == kMagic && channel > 0 && channel < 1000 && data >= 0 &&
+         offset + int64_t{sizeof h} + channel + data <= size;
+}
+
+}  // namespace
+
 std::optional<LogEvent> LogReader::Next() {
   if (done_) return std::nullopt;
   const int64_t offset = std::ftell(file_->getFilePtr());
-  const lcm::LogEvent* e = file_->readNextEvent();
+  const lcm::LogEvent* e =
+      offset < size_ && WholeEventAt(file_->getFilePtr(), offset, size_) ? file_->readNextEvent()
+                                                                         : nullptr;
   if (!e) {
     done_ = true;
     if (offset < size_) {

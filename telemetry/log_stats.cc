@@ -23,7 +23,9 @@ LogTraffic MeasureLog(const std::filesystem::path& log) {
     ++traffic.events;
   }
   traffic.error = reader.error();
-  traffic.duration_s = traffic.events > 1 ? 1e-6 * static_cast<double>(last - first) : 0.0;
+  // In doubles: corrupt utimes far apart overflow int64 (found by fuzzing).
+  traffic.duration_s =
+      traffic.events > 1 ? 1e-6 * (static_cast<double>(last) - static_cast<double>(first)) : 0.0;
   if (traffic.duration_s <= 0.0) return traffic;
   for (auto& [name, c] : traffic.channels) {
     c.rate_hz = static_cast<double>(c.messages) / traffic.duration_s;

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 #include <lcm/eventlog.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <string>
 
@@ -68,6 +70,36 @@ TEST(Log, TruncatedLogKeepsWholeEventsAndNamesFileAndOffset) {
       << r.error();
 }
 
+// Found by tests/fuzz/log_fuzz: liblcm allocated a corrupt header's data
+// length (2 GB) before finding the bytes missing, and skipped garbage to the
+// next magic. The reader stops at such an event and says where.
+TEST(Log, CorruptEventHeaderOrGarbageEndsTheLogAtItsOffset) {
+  const fs::path path = TempLog("huge.lcmlog");
+  WriteLog(path, 2);
+  const auto whole = static_cast<int64_t>(fs::file_size(path));
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::app);
+    const unsigned char header[28] = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0,
+                                      0,    0,    0,    0,    0, 0, 0, 0, 0, 3, 0x7F, 0xFF, 0xFF, 0xFF};
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    out << "abc" << std::string(64, 'x');
+  }
+  LogReader r(path);
+  int n = 0;
+  while (r.Next()) ++n;
+  EXPECT_EQ(n, 2);
+  EXPECT_NE(r.error().find("byte offset " + std::to_string(whole)), std::string::npos) << r.error();
+
+  // Garbage before the first event: liblcm would skip to the next magic.
+  fs::resize_file(path, static_cast<uintmax_t>(whole));
+  std::string events(static_cast<size_t>(whole), '\0');
+  std::ifstream(path, std::ios::binary).read(events.data(), whole);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << "garbage" << events;
+  LogReader g(path);
+  EXPECT_FALSE(g.Next().has_value());
+  EXPECT_NE(g.error().find("not an LCM log"), std::string::npos) << g.error();
+}
+
 TEST(Log, FileThatIsNotALogIsReportedNotCrashed) {
   const fs::path path = TempLog("not_a_log.txt");
   std::ofstream(path) << "this is a text file, not an LCM event log\n";
@@ -115,6 +147,20 @@ TEST(LogStats, RatesAndBandwidthPerChannel) {
   // 101 kB over 10 s = 80.8 kbit/s.
   EXPECT_NEAR(t.total_kbit_s, 80.8, 1e-9);
   EXPECT_NEAR(t.channels.at("A").kbit_s + t.channels.at("B").kbit_s, 80.8, 1e-9);
+}
+
+// Found by tests/fuzz/log_fuzz (UBSan): the span of corrupt utimes far
+// apart overflowed int64.
+TEST(LogStats, UtimesFarApartGiveAFiniteSpan) {
+  const fs::path path = TempLog("far.lcmlog");
+  {
+    LogWriter w(path);
+    w.Write("A", "x", 1, std::numeric_limits<int64_t>::min() + 1);
+    w.Write("A", "x", 1, 1'000'000);
+  }
+  const LogTraffic t = MeasureLog(path);
+  EXPECT_TRUE(std::isfinite(t.duration_s));
+  EXPECT_GT(t.duration_s, 9e12);
 }
 
 TEST(Log, LcmLogplayerToolIsInstalled) {
