@@ -3,6 +3,9 @@
 #   ./plantscale.sh demo [plantscale demo options]   build, then run the whole system on the simulator into out/demo/
 #   ./plantscale.sh test                             build, then run every test under Xvfb
 #   ./plantscale.sh fuzz [SECONDS]                   build the fuzz targets (clang), run each SECONDS
+#   ./plantscale.sh sanitize                         the unit tests under ASan + UBSan only
+# With PLANTSCALE_SANITIZED=1, `test` also runs the unit tests under ASan +
+# UBSan (build-asan/) and each fuzz target for 10 s (build-fuzz/).
 # Each installs the Debian packages it needs when they are missing (apt is
 # skipped entirely when they are all present) and builds with ccache into build/.
 # Extra CMake arguments: PLANTSCALE_CMAKE_ARGS="-DPLANTSCALE_SANITIZE=address,undefined".
@@ -41,6 +44,24 @@ build() {
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DPLANTSCALE_WERROR="$werror" ${PLANTSCALE_CMAKE_ARGS:-}
   cmake --build build --parallel "$(nproc)"
+}
+
+# Unit test binaries run again under ASan + UBSan (build-asan/, GCC): the
+# engine's, telemetry's, maps' and the vehicle's (docs/fuzzing.md). Not
+# ui_test and app_test (they link VTK; ui_test needs Xvfb), nor system_test
+# and the CLI scripts (minutes of simulation each, and the whole program).
+SANITIZED_TESTS=(common_test geometry_test sim_test vision_test rows_test tracking_test motion_test
+  classify_test treatment_test pipeline_test telemetry_test maps_test vehicle_test)
+
+run_sanitized_tests() {
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPLANTSCALE_WERROR=ON \
+    -DPLANTSCALE_BUILD_BENCHMARKS=OFF -DPLANTSCALE_SANITIZE=address,undefined
+  cmake --build build-asan --parallel "$(nproc)" --target "${SANITIZED_TESTS[@]}"
+  local labels
+  labels="^($(IFS='|'; echo "${SANITIZED_TESTS[*]}"))\$"
+  (cd build-asan &&
+    ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      ctest -L "$labels" --output-on-failure --parallel "$(nproc)" --timeout 900)
 }
 
 # The fuzz targets with clang, libFuzzer, ASan and UBSan in build-fuzz/
@@ -90,7 +111,7 @@ run_fuzzers() {
 }
 
 usage() {
-  echo "usage: $0 demo [options for 'plantscale demo'] | test | fuzz [SECONDS]" >&2
+  echo "usage: $0 demo [options for 'plantscale demo'] | test | fuzz [SECONDS] | sanitize" >&2
   exit 2
 }
 
@@ -106,11 +127,20 @@ case "$command" in
   test)
     ensure_packages
     build ON
-    cd build
     # -noreset: an X server resets when its last client leaves, and a test
     # that connects during the reset aborts ("bad X server connection").
-    xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \
-      ctest --output-on-failure --parallel "$(nproc)" --timeout 900
+    (cd build && xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \
+      ctest --output-on-failure --parallel "$(nproc)" --timeout 900)
+    if [[ "${PLANTSCALE_SANITIZED:-0}" == 1 ]]; then
+      ensure_packages "${FUZZ_PACKAGES[@]}"
+      run_sanitized_tests
+      build_fuzz
+      (cd build-fuzz && ctest -L '^fuzz$' --output-on-failure --parallel "$(nproc)")
+    fi
+    ;;
+  sanitize)
+    ensure_packages
+    run_sanitized_tests
     ;;
   fuzz)
     seconds="${1:-60}"
