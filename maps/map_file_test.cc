@@ -85,7 +85,8 @@ TEST(MapFile, CorruptInputIsRefusedWithTheReason) {
   ExpectDataError(flipped, "CRC-32");
   ExpectDataError("plantscale-map 1\n", "header is malformed");
   // Found by tests/fuzz/map_file_fuzz: a checksum that is not hex threw
-  // std::invalid_argument ("stoul"), and a size of -1 asked for 2^64 bytes.
+  // std::invalid_argument ("stoul"). Seen while fixing it: a size of -1
+  // asked for 2^64 bytes.
   ExpectDataError("plantscale-map 1 4 zz\nabcd", "header is malformed");
   ExpectDataError("plantscale-map 1 -1 00000000\nabcd", "header is malformed");
   ExpectDataError("plantscale-map 1 99999999999999 00000000\nabcd", "truncated");
@@ -107,8 +108,9 @@ TEST(MapFile, WellFormedButIncompleteContentNamesTheField) {
 }
 
 // Found by tests/fuzz/map_file_fuzz: CBOR that declares an array of 2^64
-// items (nlohmann's out_of_range), a float where an int belongs (undefined
-// conversion) and a non-list "plants" escaped as other exceptions.
+// items threw nlohmann's out_of_range. Seen while fixing it: a float where
+// an int belongs was converted unchecked (undefined for 1e300), and a
+// "plants" that is not a list threw type_error.
 TEST(MapFile, MalformedCborAndFieldShapesAreDataErrors) {
   const auto wrapped = [](const std::vector<uint8_t>& cbor) {
     char crc[9];

@@ -1,5 +1,8 @@
 #include "telemetry/log.h"
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
 #include <system_error>
@@ -40,11 +43,15 @@ LogReader::~LogReader() = default;
 namespace {
 
 // Whether the event header at `offset` (magic, eventnum, timestamp, channel
-// and data lengths, big-endian) starts a whole event of a `size`-byte file.
+// and data lengths, big-endian) starts a whole event of the file (`size`:
+// its size, updated).
 // liblcm would skip bytes up to the next magic, and allocates the declared
 // data length (up to 2 GB when corrupt) before it finds the bytes missing;
 // the reader stops at such an event instead (found by tests/fuzz/log_fuzz).
-bool WholeEventAt(std::FILE* f, int64_t offset, int64_t size) {
+bool WholeEventAt(std::FILE* f, int64_t offset, int64_t& size) {
+  // A log still being written has grown since it was opened.
+  struct stat st {};
+  if (::fstat(::fileno(f), &st) == 0) size = std::max<int64_t>(size, st.st_size);
   uint8_t h[28];
   const size_t got = std::fread(h, 1, sizeof h, f);
   std::fseek(f, static_cast<long>(offset), SEEK_SET);
@@ -66,8 +73,7 @@ std::optional<LogEvent> LogReader::Next() {
   if (done_) return std::nullopt;
   const int64_t offset = std::ftell(file_->getFilePtr());
   const lcm::LogEvent* e =
-      offset < size_ && WholeEventAt(file_->getFilePtr(), offset, size_) ? file_->readNextEvent()
-                                                                         : nullptr;
+      WholeEventAt(file_->getFilePtr(), offset, size_) ? file_->readNextEvent() : nullptr;
   if (!e) {
     done_ = true;
     if (offset < size_) {
