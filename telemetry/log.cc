@@ -52,6 +52,7 @@ bool WholeEventAt(std::FILE* f, int64_t offset, int64_t& size) {
   // A log still being written has grown since it was opened.
   struct stat st {};
   if (::fstat(::fileno(f), &st) == 0) size = std::max<int64_t>(size, st.st_size);
+  std::clearerr(f);  // an end of file met before: the log may have grown since
   uint8_t h[28];
   const size_t got = std::fread(h, 1, sizeof h, f);
   std::fseek(f, static_cast<long>(offset), SEEK_SET);

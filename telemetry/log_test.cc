@@ -100,6 +100,20 @@ TEST(Log, CorruptEventHeaderOrGarbageEndsTheLogAtItsOffset) {
   EXPECT_NE(g.error().find("not an LCM log"), std::string::npos) << g.error();
 }
 
+// The event header check reads the file's size as it is now, not as it
+// was when the reader was opened.
+TEST(Log, EventsWrittenAfterTheReaderOpenedAreRead) {
+  const fs::path path = TempLog("growing.lcmlog");
+  LogWriter w(path);
+  w.Write("A", "1", 1, 1);
+  LogReader r(path);
+  w.Write("A", "22", 2, 2);
+  ASSERT_TRUE(r.Next().has_value());
+  ASSERT_TRUE(r.Next().has_value());
+  EXPECT_FALSE(r.Next().has_value());
+  EXPECT_TRUE(r.error().empty()) << r.error();
+}
+
 TEST(Log, FileThatIsNotALogIsReportedNotCrashed) {
   const fs::path path = TempLog("not_a_log.txt");
   std::ofstream(path) << "this is a text file, not an LCM event log\n";
