@@ -87,7 +87,7 @@ TEST(Convert, PlantsRoundTrip) {
   EXPECT_EQ((back.position_m - p.position_m).norm(), 0.0);
   EXPECT_EQ(back.covariance(0, 1), 2e-5);
   EXPECT_TRUE(back.sprayed);
-  EXPECT_EQ(back.why, plantscale_plant_t::WHY_OUTSIDE_REGION);
+  EXPECT_EQ(back.why, int{plantscale_plant_t::WHY_OUTSIDE_REGION});
 }
 
 TEST(Convert, MapTileRoundTripsCompressed) {
@@ -127,7 +127,7 @@ TEST(Convert, NozzlesAndHealthRoundTrip) {
   h.dropped_frames = 2;
   h.faults = {"camera: no frame for 0.3 s"};
   const plantscale_health_t hm = ToLcm(h, 5);
-  EXPECT_EQ(hm.protocol_version, plantscale_health_t::PROTOCOL_VERSION);
+  EXPECT_EQ(hm.protocol_version, int32_t{plantscale_health_t::PROTOCOL_VERSION});
   const Health back = FromLcm(hm);
   EXPECT_EQ(back.faults, h.faults);
   EXPECT_EQ(back.dropped_frames, 2);
