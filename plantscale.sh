@@ -2,6 +2,7 @@
 # plantscale.sh: the two README commands.
 #   ./plantscale.sh demo [plantscale demo options]   build, then run the whole system on the simulator into out/demo/
 #   ./plantscale.sh test                             build, then run every test under Xvfb
+#   ./plantscale.sh test --fast                      build, then the unit tests only (ctest -L unit): the edit loop
 #   ./plantscale.sh fuzz [SECONDS]                   build the fuzz targets (clang), run each SECONDS
 #   ./plantscale.sh sanitize                         the unit tests under ASan + UBSan only
 # With PLANTSCALE_SANITIZED=1, `test` also runs the unit tests under ASan +
@@ -112,7 +113,7 @@ run_fuzzers() {
 }
 
 usage() {
-  echo "usage: $0 demo [options for 'plantscale demo'] | test | fuzz [SECONDS] | sanitize" >&2
+  echo "usage: $0 demo [options for 'plantscale demo'] | test [--fast] | fuzz [SECONDS] | sanitize" >&2
   exit 2
 }
 
@@ -128,6 +129,11 @@ case "$command" in
   test)
     ensure_packages
     build
+    if [[ "${1:-}" == --fast ]]; then
+      (cd build && ctest -L '^unit$' --output-on-failure --parallel "$(nproc)" --timeout 300)
+      exit 0
+    fi
+    [[ $# -eq 0 ]] || usage
     # -noreset: an X server resets when its last client leaves, and a test
     # that connects during the reset aborts ("bad X server connection").
     (cd build && xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \

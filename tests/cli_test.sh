@@ -2,25 +2,12 @@
 # Command-line contract of `plantscale simulate` (issue: bad input gets a
 # clear message naming file, key and reason, exit code 2, nothing written).
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
 
-expect() {  # expect CODE PATTERN -- command...
-  local code="$1" pattern="$2"
-  shift 3
-  local output status
-  output=$("$@" 2>&1)
-  status=$?
-  if [[ $status -ne $code ]]; then
-    echo "FAIL: '$*' exited $status, expected $code"; echo "$output" | tail -5; failures=$((failures + 1)); return
-  fi
-  if ! grep -qE -- "$pattern" <<<"$output"; then
-    echo "FAIL: '$*' output lacks /$pattern/"; echo "$output" | tail -5; failures=$((failures + 1)); return
-  fi
-  echo "ok: $* -> $status"
-}
 
 expect 2 "unknown preset \(known: .*field" -- "$plantscale" simulate --preset nope --out "$work/a"
 expect 2 "length_m: must be in \(0, 10000\]" -- "$plantscale" simulate --preset testbed --length-m -3 --out "$work/a"
@@ -36,13 +23,12 @@ printf 'field: {weeds: 3}\n' >"$work/typo.yaml"
 expect 2 "typo.yaml: field.weeds: unknown key \(line 1\)" -- "$plantscale" simulate --preset "$work/typo.yaml" --out "$work/a"
 expect 2 "cannot be read" -- "$plantscale" simulate --preset "$work/absent.yaml" --out "$work/a"
 expect 2 "out is required|--out" -- "$plantscale" simulate --preset testbed
-[[ -e "$work/a" ]] && { echo "FAIL: a failed run left $work/a behind"; failures=$((failures + 1)); }
+[[ -e "$work/a" ]] && fail "a failed run left $work/a behind"
 
 expect 0 "driven +1\.[0-9]+ m in" -- "$plantscale" simulate --preset testbed --length-m 1 --seed 4 --quiet --out "$work/good"
 for f in run.json truth/frames.csv truth/visible_plants.csv truth/plants.csv truth/lines.csv truth/odometry.csv frames/000000.png labels/000000.png instances/000000.png; do
-  [[ -s "$work/good/$f" ]] || { echo "FAIL: missing $work/good/$f"; failures=$((failures + 1)); }
+  [[ -s "$work/good/$f" ]] || fail "missing $work/good/$f"
 done
-grep -q '"preset": "testbed"' "$work/good/run.json" || { echo "FAIL: run.json lacks the preset"; failures=$((failures + 1)); }
+grep -q '"preset": "testbed"' "$work/good/run.json" || fail "run.json lacks the preset"
 
-echo "$failures failure(s)"
-exit $((failures > 0))
+finish "simulate CLI"

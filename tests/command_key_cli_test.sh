@@ -5,11 +5,11 @@
 # without a key says it refuses every command; --accept-unsigned-commands
 # warns. All over memq:// (no network, no display needed).
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
-source "$(dirname "$0")/cli_lib.sh"
 
 key="$work/station.key"
 expect 0 "keygen: .*station.key .*mode 0600" -- "$plantscale" keygen "$key"
@@ -37,5 +37,4 @@ grep -q "every station command will be refused\|warning" <<<"$output" && fail "a
 expect 0 "--accept-unsigned-commands" -- "$plantscale" simulate --help
 expect 0 "--command-key" -- "$plantscale" station --help
 
-echo "$failures failure(s)"
-exit $((failures > 0))
+finish "command key CLI"

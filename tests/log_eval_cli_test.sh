@@ -5,12 +5,12 @@
 # which simulated run it came from (no run_config event: `plantscale run`).
 # usage: log_eval_cli_test.sh PLANTSCALE WORKDIR
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
 # shellcheck source=/dev/null
-source "$(dirname "$0")/cli_lib.sh"
 
 log="$work/run.lcmlog"
 expect 0 "PLANTSCALE_SIM_TRUTH" -- "$plantscale" simulate --preset field --length-m 8 --seed 11 \
@@ -36,5 +36,4 @@ expect 1 "text.lcmlog: not an LCM log" -- "$plantscale" evaluate log "$work/text
 expect 2 "camera.lcmlog: run_config: the log has no run_config event" -- \
   "$plantscale" evaluate log "$work/camera.lcmlog"
 
-echo "$failures failure(s)"
-exit $((failures > 0))
+finish "evaluate log CLI"

@@ -3,9 +3,10 @@
 # paper's figures, bad arguments.
 # usage: motion_cli_test.sh PLANTSCALE WORKDIR
 set -euo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 bin="$1"; work="$2"
 rm -rf "$work"; mkdir -p "$work"
-fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$bin" evaluate motion --preset sanchiz_pla --seeds 1 --frames 8 --json > "$work/eval.json"
 for key in correct_correspondence_rate rotation_rmse_deg translation_rmse_m drift_cm_per_m \
@@ -32,4 +33,4 @@ set -e
 [[ $rc -ne 0 ]] || fail "an unknown preset succeeded"
 grep -q "no_such_preset" "$work/err" || fail "no error naming the preset"
 [[ $rc0 -ne 0 ]] || fail "--seeds 0 accepted"
-echo "motion CLI contract: ok"
+finish "evaluate motion CLI"

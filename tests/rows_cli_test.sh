@@ -4,9 +4,10 @@
 # a folder with progress, no-row images (bare soil, sky), bad input.
 # usage: rows_cli_test.sh PLANTSCALE WORKDIR
 set -euo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 bin="$1"; work="$2"
 rm -rf "$work"; mkdir -p "$work/in" "$work/empty"
-fail() { echo "FAIL: $*" >&2; exit 1; }
 # A dependency-free RGB PNG writer for the Python snippets below.
 cat > "$work/pngw.py" <<'PY'
 import struct, zlib
@@ -158,4 +159,4 @@ set +e
 rc=$?
 set -e
 [[ $rc -ne 0 ]] && grep -qi "no_such_preset" "$work/stderr4" || fail "unknown preset must fail clearly"
-echo "rows CLI: ok"
+finish "rows CLI"

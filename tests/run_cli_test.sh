@@ -5,12 +5,12 @@
 # naming the file, the key or line and the reason. That a folder written by
 # simulate --out runs as simulate --publish is app_test's RunContract.
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
 # shellcheck source=/dev/null
-source "$(dirname "$0")/cli_lib.sh"
 
 pass="$work/pass"
 "$plantscale" simulate --preset testbed --length-m 1 --seed 4 --quiet --out "$pass" >/dev/null ||
@@ -72,5 +72,4 @@ expect 2 "absent.csv: \(file\): cannot be read" -- "$plantscale" "${run[@]}" \
 expect 2 "--odometry: only with a folder of images" -- "$plantscale" run --camera /dev/video99 \
   --lcm-url memq:// --odometry "$odometry"
 
-echo "$failures failure(s)"
-exit $((failures > 0))
+finish "run CLI"

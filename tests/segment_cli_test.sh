@@ -2,9 +2,10 @@
 # plantscale segment / evaluate segmentation: outputs, JSON keys, bad input.
 # usage: segment_cli_test.sh PLANTSCALE WORKDIR
 set -euo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 bin="$1"; work="$2"
 rm -rf "$work"; mkdir -p "$work/in" "$work/empty"
-fail() { echo "FAIL: $*" >&2; exit 1; }
 
 # Test images made by the simulator (a clone has no photographs).
 "$bin" simulate --preset C --length-m 2 --every 10 --out "$work/sim" --quiet >/dev/null
@@ -49,4 +50,4 @@ for key in preset auc plant_pixel_recall plant_pixel_precision soil_pixel_accura
 done
 "$bin" evaluate segmentation --preset B --seeds 1 --frames 2 --roc-csv "$work/roc.csv" >/dev/null
 head -1 "$work/roc.csv" | grep -q "^method,threshold,tpr,fpr$" || fail "ROC CSV header"
-echo "segment CLI: ok"
+finish "segment CLI"

@@ -7,11 +7,11 @@
 # the interface names used here never exist, so the expectations hold on a
 # kernel with SocketCAN too.
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
-source "$(dirname "$0")/cli_lib.sh"
 
 missing="cannot open CAN interface 'nocanbus9': .*no such network interface \(No such device"
 expect 1 "$missing" -- "$plantscale" simulate --preset testbed --length-m 2 --publish \
@@ -99,5 +99,4 @@ assert j["nozzle_faults"] == ["ok"] * 4, j
 print("ok: spraybar simulated:", j["commands"], "commands,", j["heartbeats"], "heartbeats")
 PY
 
-echo "$failures failure(s)"
-exit $((failures > 0))
+finish "spraybar CLI"

@@ -5,12 +5,12 @@
 # input (not a log, a truncated log, options without --publish) exiting 2
 # with a message naming the file and offset.
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
 # shellcheck source=/dev/null
-source "$(dirname "$0")/cli_lib.sh"
 
 log="$work/run.lcmlog"
 expect 0 "PLANTSCALE_SIM_TRUTH +[0-9]+" -- "$plantscale" simulate --preset testbed --length-m 4 --seed 2 \
@@ -66,5 +66,4 @@ expect 1 "video99: cannot open the camera" -- "$plantscale" run --camera /dev/vi
 mkdir -p "$work/empty"
 expect 1 "empty: no images" -- "$plantscale" run --camera "$work/empty" --lcm-url memq://
 
-echo "$failures failure(s)"
-exit $((failures > 0))
+finish "telemetry CLI"

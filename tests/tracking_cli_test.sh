@@ -2,9 +2,10 @@
 # plantscale evaluate tracking: the JSON contract (issue 5), the table, bad input.
 # usage: tracking_cli_test.sh PLANTSCALE WORKDIR
 set -euo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 bin="$1"; work="$2"
 rm -rf "$work"; mkdir -p "$work"
-fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$bin" evaluate tracking --preset testbed --seeds 1 --length-m 4 --baseline thesis --json \
   >"$work/out.json" || fail "evaluate tracking --json exited $?"
@@ -32,4 +33,4 @@ set +e
 "$bin" evaluate tracking --preset testbed --seeds 0 >/dev/null 2>&1; rc=$?
 set -e
 [[ $rc -ne 0 ]] || fail "--seeds 0 accepted"
-echo "ok: evaluate tracking"
+finish "evaluate tracking CLI"

@@ -3,10 +3,10 @@
 # MRROC, weed mode and bad input.
 # usage: treatment_cli_test.sh PLANTSCALE WORKDIR
 set -euo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 bin="$1"; work="$2"
 rm -rf "$work"; mkdir -p "$work"
-fail() { echo "FAIL: $*" >&2; exit 1; }
-num() { grep -m1 -oE "\"$1\": [0-9.e+-]+" "$2" | awk '{print $2}'; }
 
 "$bin" evaluate treatment --preset field --seeds 1 --length-m 12 --json --mrroc \
   >"$work/out.json" || fail "evaluate treatment --json exited $?"
@@ -61,4 +61,4 @@ expect_exit2 --seeds --preset field --seeds 0
 expect_exit2 --mode --preset field --mode fertilise
 expect_exit2 --baseline --preset field --baseline hague
 expect_exit2 --footprint-scale --preset field --footprint-scale 0
-echo "ok: evaluate treatment"
+finish "evaluate treatment CLI"

@@ -6,12 +6,11 @@
 # station replays the log off-screen and says what is wrong with bad logs.
 # Rendering needs an X display: run under xvfb-run -a (skipped, 77, without).
 set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
 plantscale="$1"
 work="$2"
 rm -rf "$work" && mkdir -p "$work"
-failures=0
-# shellcheck source=cli_lib.sh
-source "$(dirname "$0")/cli_lib.sh"
 if [[ -z "${DISPLAY:-}" ]]; then echo "skip: no DISPLAY (run under xvfb-run -a)"; exit 77; fi
 
 log="$work/run.lcmlog"
@@ -34,5 +33,4 @@ expect 0 "problem: .*no plantscale messages|problem: log:" -- \
   "$plantscale" station --log "$work/garbage.lcmlog" --offscreen --seconds 1
 
 expect 2 "memq:// stays inside one process" -- "$plantscale" demo --lcm-url memq:// --out "$work/e"
-if ((failures)); then echo "$failures failure(s)"; exit 1; fi
-echo "all ui CLI checks passed"
+finish "station and report CLI"
