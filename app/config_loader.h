@@ -1,5 +1,5 @@
 #pragma once
-// Reads YAML presets into the engine's option structs (DESIGN.md §6: only
+// Reads YAML presets into the engine's option structs (docs/design.md §6: only
 // app/ reads files). Every problem is reported with the file, the key and
 // the reason; unknown keys are errors so that typos never pass silently.
 // Angles are written in degrees (`tilt_deg`) or radians (`tilt_rad`) and

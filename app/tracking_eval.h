@@ -5,7 +5,7 @@
 // The thesis's own tracker (3-state fixed grid, image-plane update with
 // R projected from the ground, constant process noise per frame, adaptive
 // threshold segmentation) runs on the same frames as the baseline
-// (SIMULATOR.md: calibrated presets).
+// (docs/simulator.md: calibrated presets).
 
 #include <Eigen/Core>
 #include <optional>

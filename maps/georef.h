@@ -2,7 +2,7 @@
 // Georeference: anchors the field frame to WGS84 and maps it into the
 // projected CRS of the exports (GDAL/OSR; OSR types stay in georef.cc).
 //
-// Definition (DESIGN.md §3, README "Georeferencing"):
+// Definition (docs/design.md §3, docs/cli/export.md "Georeferencing"):
 //  * origin (latitude_deg, longitude_deg), WGS84, is field point (0, 0);
 //  * heading_deg is the direction of the field +y axis (along the rows),
 //    clockwise from TRUE north at the origin; +x is 90° clockwise from +y;

@@ -2,7 +2,7 @@
 // The raster geometry of a crop map (the Cartographer habit: one value type
 // owns resolution, origin and extent, and all cell↔world maths).
 //
-// Field frame (DESIGN.md §3): x right, across the rows; y forward, along the
+// Field frame (docs/design.md §3): x right, across the rows; y forward, along the
 // rows; metres; fixed at run start. Cell (col, row) covers
 //   x ∈ [origin_x + col·res, origin_x + (col+1)·res),
 //   y ∈ [origin_y + row·res, origin_y + (row+1)·res),

@@ -1,5 +1,5 @@
 #pragma once
-// The LCM channels of plantscale and their default publish rates (README.md
+// The LCM channels of plantscale and their default publish rates (docs/telemetry.md
 // has the same table). Vehicle → station unless marked otherwise.
 
 namespace plantscale::telemetry::channels {

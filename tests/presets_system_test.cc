@@ -1,5 +1,5 @@
 // Whole-simulator runs on every shipped preset: the presets differ the way
-// the thesis's sequences differ (SIMULATOR.md), and the ground truth agrees
+// the thesis's sequences differ (docs/simulator.md), and the ground truth agrees
 // with what is rendered.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Segmentation on the calibrated presets (SIMULATOR.md): the thesis's own
+// Segmentation on the calibrated presets (docs/simulator.md): the thesis's own
 // baselines must reproduce tables 2.1/2.2 within the stated bands, and ours
 // must beat the thesis's adaptive threshold's published AUC.
 #include <gtest/gtest.h>
@@ -26,7 +26,7 @@ TEST_P(SegmentationCalibration, BaselinesReproduceTheThesisAndOursBeatsIt) {
   o.sim = LoadSimulatorPreset(t.preset, DefaultConfigDir());
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   ASSERT_EQ(e.frames, 30);
-  // SIMULATOR.md: fixed-threshold AUC ± 0.02 (table 2.1), adaptive TPR at
+  // docs/simulator.md: fixed-threshold AUC ± 0.02 (table 2.1), adaptive TPR at
   // Φ = 3.644 ± 0.08 (table 2.2).
   EXPECT_NEAR(e.thesis_fixed.auc, t.fixed_auc, 0.02);
   EXPECT_NEAR(e.thesis_adaptive.rates.recall, t.adaptive_tpr, 0.08);

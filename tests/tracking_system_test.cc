@@ -1,7 +1,7 @@
-// Grid tracking on the calibrated presets (SIMULATOR.md, issue 5): the
+// Grid tracking on the calibrated presets (docs/simulator.md, issue 5): the
 // thesis's own tracker (3-state fixed grid, image-plane update, constant
 // noise per frame, adaptive threshold) run on the same frames as ours.
-// Fixed seeds; tolerances are the issue's targets and SIMULATOR.md's bands.
+// Fixed seeds; tolerances are the issue's targets and docs/simulator.md's bands.
 #include <gtest/gtest.h>
 
 #include "app/config_loader.h"

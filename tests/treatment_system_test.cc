@@ -2,7 +2,7 @@
 // calibrated presets (issue 6), with the thesis's chain (its tracker,
 // adaptive threshold, whole bounding boxes, table 7.2's classifier) on the
 // same frames. Fixed seeds. The bounds guard the figures reached now (see
-// README); where they fall short of the issue's targets the comment says so.
+// docs/results/); where they fall short of the issue's targets the comment says so.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -112,7 +112,7 @@ TEST(TreatmentSystem, FieldSprayCrop) {
   // footprints at 0.7 of the plant's own offset along; 12.9 % with the bar
   // at 200 Hz and the slip guard). 36 % of the weeds stand under a crop's
   // leaves, so the issue's "weeds hit ≤ 0.5 %" is read as the thesis's
-  // count, the weeds clear of crop (README, Treatment).
+  // count, the weeds clear of crop (docs/results/, treatment).
   EXPECT_LE(m.weed_hit_rate_clear, 0.005);
   EXPECT_LE(m.weed_hit_rate, 0.145);
   // Crop pixels labelled crop 98.7 %: issue target 95 % met on the field

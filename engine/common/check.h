@@ -1,6 +1,6 @@
 #pragma once
 // PLANTSCALE_CHECK: programming errors (broken invariants), never bad data.
-// Bad data and I/O failures use the typed exceptions in errors.h instead.
+// Bad data and I/O failures use the typed exceptions in options.h instead.
 
 #include <sstream>
 #include <stdexcept>

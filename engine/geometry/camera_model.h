@@ -3,7 +3,7 @@
 // written without its small-angle approximations and with the camera
 // height rather than the along-axis distance t_z as the parameter.
 //
-// Frames (DESIGN.md §3):
+// Frames (docs/design.md §3):
 //   vehicle: origin on the ground directly below the optical centre,
 //            x right, y forward, z up; metres.
 //   camera:  optical centre, x right, y down the image, z along the optical axis.

@@ -8,7 +8,7 @@
 //
 // Row n = 0 is the central row; rows are numbered left to right. Line m = 0
 // is the bottom-most plant line in view and m grows forward (up the image).
-// Conventions (DESIGN.md §3): t_x is where the central row crosses the
+// Conventions (docs/design.md §3): t_x is where the central row crosses the
 // vehicle's x axis (positive: the row is to the right of the camera), Y is
 // the forward distance from the vehicle origin to line 0, Ψ is the
 // vehicle's heading relative to the rows, counter-clockwise positive.

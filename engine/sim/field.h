@@ -1,9 +1,9 @@
 #pragma once
-// The synthetic field (SIMULATOR.md): one bed of crop rows planted on a grid
+// The synthetic field (docs/simulator.md): one bed of crop rows planted on a grid
 // whose spacings drift slowly along the bed, with missing plants, size
 // variation, lean, fractured leaves, weeds (some inside the rows), stones.
 //
-// Field frame (DESIGN.md §3): fixed at the start of the run, x across the
+// Field frame (docs/design.md §3): fixed at the start of the run, x across the
 // bed (right), y along the bed (direction of travel), z up; the central row
 // of the bed runs along x = 0 and rows sit at x = n·r̄(y).
 

@@ -4,7 +4,7 @@
 // image (thesis §2.3.1: plants bright, soil dark) or an RGB image, plus the
 // crop/weed/soil label image and a per-plant instance image.
 //
-// Error sources (SIMULATOR.md), each with a knob: soil texture and clods,
+// Error sources (docs/simulator.md), each with a knob: soil texture and clods,
 // stones, specular soil, an illumination gradient down the image (§2.3.4),
 // a hard-edged vehicle shadow, plant shadows (with fractured leaves they
 // split blobs), sensor noise, motion blur. Buffers are reused frame to frame.

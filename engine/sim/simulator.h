@@ -1,6 +1,6 @@
 #pragma once
 // The embedded default when no camera is attached: a field, a vehicle and a
-// camera, advanced frame by frame with complete ground truth (SIMULATOR.md).
+// camera, advanced frame by frame with complete ground truth (docs/simulator.md).
 // Seeded: the same options and seed give the same bytes.
 
 #include <cstdint>

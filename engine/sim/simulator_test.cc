@@ -203,7 +203,7 @@ TEST(Simulator, GridTruthAgreesWithThePlantedPlants) {
     geometry::GridState shifted = g;
     EXPECT_EQ(model.ShiftReference(shifted), 0) << "frame " << t.index;
     for (const PlantTruth& p : t.plants) {
-      // Vehicle position from the pose (DESIGN.md §3), to 1e-12 m.
+      // Vehicle position from the pose (docs/design.md §3), to 1e-12 m.
       const double c = std::cos(t.pose.heading_rad);
       const double s = std::sin(t.pose.heading_rad);
       const Eigen::Vector2d d = p.field_m - Eigen::Vector2d(t.pose.x_m, t.pose.y_m);

@@ -46,7 +46,7 @@ struct Pose2 {
 };
 
 // Vehicle-frame position of a field-frame point seen from `pose` (thesis
-// eq. A.1 in 2-D; DESIGN.md §3: vehicle y forward, x right).
+// eq. A.1 in 2-D; docs/design.md §3: vehicle y forward, x right).
 Eigen::Vector2d FieldToVehicle(const Pose2& pose, const Eigen::Vector2d& field_m);
 
 struct OdometrySample {

@@ -79,11 +79,7 @@ struct TrackerOptions {
   // Along, most of that trend is the parallax of the plant's own height,
   // which the plant_heights states now carry; a walk as large as the trend
   // let the offset soak it up instead, and the height stayed at its prior.
-  // Swept along on the field preset (5 seeds, spray placement RMS along):
-  // 0 → 12.1 mm, 0.003 → 12.0, 0.006 → 11.5, 0.013 (the trend) → 11.9,
-  // 0.02 → 12.5; across unchanged (9.7–9.8). Tracking on the field preset,
-  // 5 seeds, 0.013 → 0.006: lateral RMSE 2.80 → 2.77 mm, NEES in bounds
-  // 0.93 → 0.94.
+  // The walks' sweep: docs/results/2026-11-26-tracking.md.
   static constexpr double kOffsetWalkCropHeightM = 0.112;
   double plant_offset_walk_across_sd_per_sqrt_m = 0.006;
   double plant_offset_walk_along_sd_per_sqrt_m = 0.006;
@@ -113,12 +109,7 @@ struct TrackerOptions {
   // s overstates a plant's size. Blobs whose s is outside
   // [1/size_ratio_max, size_ratio_max] are merged or cut and say nothing
   // of the plant's size. Needs PlantHeightStates() and the crop's radius.
-  // Field, 5 seeds, spray placement RMS along: off 10.84 mm; e 0.011 →
-  // 10.63, 0.025 → 10.60, 0.03 → 10.33, 0.035 → 10.35, 0.04 → 10.64, 0.06
-  // → 10.60 (σ 6 mm); σ 4 / 8 mm, e 0.03 → 10.36 / 10.36. 10 seeds: 11.25
-  // → 10.53 mm, bias −0.9 → +0.1 mm.
-  // With each plant's true radius instead (an oracle), σ 2 / 6 / 12 mm:
-  // 10.63 / 10.22 / 10.32 mm: the size is not the whole of it.
+  // The sweep of e and σ: docs/results/2026-11-26-tracking.md.
   bool height_from_size = true;
   double size_height_sd_m = 0.006;
   double size_edge_loss_m = 0.03;
@@ -142,11 +133,7 @@ struct TrackerOptions {
   double track_width_m = 1.5;
   double wheel_sd_fraction = 0.03;      // σ of a wheel increment / the increment
   // Forward process noise: what the wheel scale k and the slip guard do
-  // not model (gradual slip, soil give). With the guard taking out wheel
-  // spin, 5 mm/√m instead of 10: field, 5 seeds, placement RMS along 9.62 →
-  // 9.50 mm (10 seeds 9.74 → 9.58); tracking as before (field lateral 2.74
-  // → 2.76 mm, NEES in bounds 0.938 → 0.939, forward e²/σ² 0.81 → 0.88;
-  // long 0.946 → 0.947 and 1.05 → 1.16; testbed 0.885 → 0.895).
+  // not model (gradual slip, soil give). Measured: docs/results/2026-11-26-tracking.md.
   double forward_sd_per_sqrt_m = 0.005;  // m per √m driven
   double lateral_sd_per_sqrt_m = 0.002;
   double bearing_sd_per_sqrt_m = 0.003;  // rad per √m
@@ -160,11 +147,10 @@ struct TrackerOptions {
   bool estimate_odometry_scale = true;
   double odometry_scale_sd = 0.05;                 // prior σ of k
   double odometry_scale_step_sd_per_sqrt_m = 0.002;  // random walk of k per √m driven
-  // Wheel spin and lock read from the wheels' speeds (slip_guard.h). A
-  // transient scale state beside k, read from the frames instead, took up
-  // each frame's bounce and the plants coming into view as speed and made
-  // the spray worse (field, 5 seeds, placement RMS along 10.03 → 10.18 mm;
-  // without slip bursts 9.64 → 10.13).
+  // Wheel spin and lock read from the wheels' speeds (slip_guard.h), not
+  // from the frames, which would take each frame's bounce and the plants
+  // coming into view for a change of speed (tried and not kept:
+  // docs/results/2026-11-26-tracking.md).
   SlipGuardOptions slip_guard;
   // Constant process noise per vision frame (thesis eq. 4.2); zero for ours.
   double frame_offset_sd_m = 0.0;

@@ -1,6 +1,6 @@
 #pragma once
 // The bed frame: the field frame the treatment map lives in, as the grid
-// tracker defines it (DESIGN.md §3: x across the rows with the central row at
+// tracker defines it (docs/design.md §3: x across the rows with the central row at
 // x = 0, y along the rows), anchored at the tracker's initialisation. A
 // vehicle-frame point v maps to grid coordinates g by inverting eq. A.1,
 //

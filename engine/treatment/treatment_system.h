@@ -1,5 +1,5 @@
 #pragma once
-// The treatment chain of one vehicle (DESIGN.md §1): classify each frame's
+// The treatment chain of one vehicle (docs/design.md §1): classify each frame's
 // blobs against the tracker's predicted crop grid, accumulate their
 // footprints in the treatment map and the plant registry, and from every
 // 50 Hz pose schedule the nozzles at 200 Hz (with the fail-safe). Composed

@@ -73,7 +73,7 @@ struct SegmenterOptions {
   int hull_min_area_px = 30;
   // Local method only, last: blobs grow into the shaded rim that stands
   // out of the soil around them (soil_growth.h, with its pixel figures;
-  // z 0: off; treatment figures in the README). The tracker measures the
+  // z 0: off; treatment figures in docs/results/). The tracker measures the
   // blobs before it, as before hull growth.
   SoilGrowthOptions soil_growth;
   BlobOptions blobs;

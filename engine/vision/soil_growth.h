@@ -24,23 +24,14 @@
 // time, at most `reach_px` steps: a candidate not reached from a blob (a
 // glint, a stone) stays soil.
 //
-// Cost: only the pixels growth can get to (within reach_px of a blob: 10 %
-// of the benchmark frame, beside the blobs' 21 %) are smoothed and judged;
-// the statistics need every cell. Bit rows (64 pixels a word) for the
-// clearance, the band, the seeds and the growth, as holes.h; SSE2 for the
-// samples' sums and the candidates' compare; buffers are kept. The step
-// takes 202 µs on the benchmark frame (`BM_StageGrowIntoSoilOfDefaultMask`;
-// 375 µs when it smoothed, thresholded and compared the whole image
-// through OpenCV): the two statistics passes 40, their box sums 23 and
-// means 10, the growth 28, labelling the mask 18, smoothing 18, the
-// candidates 16, the clearance 15, the band 13, the thresholds 12 µs.
+// Cost: only the pixels growth can get to (within reach_px of a blob) are
+// smoothed and judged; the statistics need every cell. Bit rows (64 pixels
+// a word) for the clearance, the band, the seeds and the growth, as
+// holes.h; SSE2 for the samples' sums and the candidates' compare; buffers
+// are kept. The soil it takes lies within reach_px of a plant.
 //
-// Measured (`evaluate segmentation`, 5 seeds × 20 frames, after notches,
-// holes and hull growth), plant pixel recall / precision, off → default:
-// A 0.959 / 0.994 → 0.964 / 0.987, B 0.922 / 0.975 → 0.977 / 0.941,
-// C 0.968 / 0.985 → 0.984 / 0.976, D 0.930 / 0.825 → 0.964 / 0.778.
-// The soil it takes lies within reach_px of a plant; what it costs the
-// treatment (bed treated, weeds hit) is in the README's Treatment section.
+// Measured (accuracy, speed, what it costs the treatment):
+// docs/results/2026-11-26-segmentation.md.
 
 #include <opencv2/core.hpp>
 #include <array>
@@ -57,8 +48,7 @@ struct SoilGrowthOptions {
   double z = 2.0;             // candidate: value >= μ + z·max(σ, 1); 0: off
   // Samples above the first pass's μ + trim_z·max(σ, 1) are left out of a
   // second (0: one pass). At the same recall it keeps more precision than
-  // a lower z: B 0.972 / 0.957 at z 2.5 with it, 0.973 / 0.945 at z 2
-  // without.
+  // a lower z.
   double trim_z = 2.5;
   int reach_px = 6;           // growth steps from a blob (pixels)
   int cell_px = 8;            // soil statistics grid (a power of two, 8–64)
@@ -68,9 +58,7 @@ struct SoilGrowthOptions {
   int min_area_px = 30;       // blobs that grow
   // Growth may join blobs only when each of them has at least this many
   // pixels, specks included (0: any join; larger than any blob: none).
-  // Shade splits a plant into parts that should join again (preset B
-  // recall 0.977 with any join, 0.957 with joins of blobs of 100 px or
-  // more, 0.950 with none, precision 0.941 to 0.943); but a weed beside a
+  // Shade splits a plant into parts that should join again; but a weed beside a
   // crop should not join it in spray-weed mode, where the crop's blob would
   // take it (treatment::SegmenterOptionsFor). The tracker measures the
   // blobs from before any growth either way.
