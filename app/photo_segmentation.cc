@@ -10,6 +10,7 @@
 #include "app/progress.h"
 #include "engine/common/options.h"
 #include "engine/vision/segmenter.h"
+#include "maps/staged_output.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;
@@ -110,16 +111,8 @@ vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& r,
 
 namespace {
 
-void WriteAtomically(const fs::path& path, const auto& write) {
-  // Same extension: encoders are chosen by it.
-  const fs::path tmp = path.parent_path() /
-                       ("." + path.stem().string() + ".partial" + path.extension().string());
-  write(tmp);
-  fs::rename(tmp, path);
-}
-
 void WriteBlobs(const fs::path& path, std::span<const vision::Blob> blobs) {
-  WriteAtomically(path, [&](const fs::path& tmp) {
+  maps::WriteStaged(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp);
     out << "id,centroid_u,centroid_v,area_px,bbox_u,bbox_v,bbox_width,bbox_height\n";
     out.precision(2);
@@ -140,7 +133,7 @@ void SegmentOne(const SegmentPhotosRequest& r, const fs::path& file) {
   const vision::Segmentation& s = segmenter.Process(input);
   const std::string stem = file.stem().string();
   const fs::path mask = r.out / (stem + "_mask.png");
-  WriteAtomically(mask, [&](const fs::path& tmp) {
+  maps::WriteStaged(mask, [&](const fs::path& tmp) {
     if (!cv::imwrite(tmp.string(), s.mask)) throw std::runtime_error("cannot write " + mask.string());
   });
   WriteBlobs(r.out / (stem + "_blobs.csv"), s.blobs);

@@ -13,17 +13,11 @@
 #include "app/photo_segmentation.h"
 #include "app/rows_eval.h"
 #include "app/segment_commands.h"
+#include "maps/staged_output.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;
 namespace {
-
-void WriteAtomically(const fs::path& path, const auto& write) {
-  const fs::path tmp = path.parent_path() /
-                       ("." + path.stem().string() + ".partial" + path.extension().string());
-  write(tmp);
-  fs::rename(tmp, path);
-}
 
 // Image rows (indices) the rows are reported on: from the bottom up to the
 // highest one the detector still tells them apart on.
@@ -32,7 +26,7 @@ int TopRowIndex(const rows::RowDetection& det) {
 }
 
 void WriteCsv(const fs::path& path, const rows::RowDetection& det) {
-  WriteAtomically(path, [&](const fs::path& tmp) {
+  maps::WriteStaged(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp);
     out << "row,v,u\n";
     out << std::fixed << std::setprecision(2);
@@ -125,13 +119,13 @@ bool DetectOne(const fs::path& file, const fs::path& out, rows::RowDetector& det
   const std::string stem = file.stem().string();
   WriteCsv(out / (stem + "_rows.csv"), det);
   const fs::path png = out / (stem + "_rows.png");
-  WriteAtomically(png, [&](const fs::path& tmp) {
+  maps::WriteStaged(png, [&](const fs::path& tmp) {
     if (!cv::imwrite(tmp.string(), Overlay(image, det))) {
       throw std::runtime_error("cannot write " + png.string());
     }
   });
   const fs::path json = out / (stem + "_rows.json");
-  WriteAtomically(json, [&](const fs::path& tmp) {
+  maps::WriteStaged(json, [&](const fs::path& tmp) {
     std::ofstream o(tmp);
     o << DetectionJson(file, det).dump(2) << '\n';
     if (!o.flush()) throw std::runtime_error("cannot write " + json.string());

@@ -1,6 +1,5 @@
 #include "app/sim_output.h"
 
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include <sstream>
 
 #include "app/progress.h"
+#include "maps/staged_output.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;
@@ -48,43 +48,6 @@ std::string FrameName(int index) {
   name << std::setw(6) << std::setfill('0') << index << ".png";
   return name.str();
 }
-
-// The staging folder sits beside the output so that the final rename is atomic.
-class Staging {
- public:
-  explicit Staging(const fs::path& out) : out_(fs::absolute(out)) {
-    staging_ = out_.parent_path() /
-               ("." + out_.filename().string() + ".partial-" + std::to_string(::getpid()));
-    std::error_code ec;
-    fs::create_directories(out_.parent_path(), ec);
-    fs::remove_all(staging_, ec);
-    if (!fs::create_directories(staging_, ec)) {
-      throw std::runtime_error(staging_.string() + ": cannot create folder: " + ec.message());
-    }
-  }
-  ~Staging() {
-    std::error_code ec;
-    if (!committed_) fs::remove_all(staging_, ec);
-  }
-  Staging(const Staging&) = delete;
-  Staging& operator=(const Staging&) = delete;
-
-  const fs::path& path() const { return staging_; }
-  void Commit() {
-    std::error_code ec;
-    const fs::path old = out_.parent_path() /
-                         ("." + out_.filename().string() + ".old-" + std::to_string(::getpid()));
-    if (fs::exists(out_)) fs::rename(out_, old);
-    fs::rename(staging_, out_);
-    committed_ = true;
-    fs::remove_all(old, ec);
-  }
-
- private:
-  fs::path out_;
-  fs::path staging_;
-  bool committed_ = false;
-};
 
 struct TruthFiles {
   explicit TruthFiles(const fs::path& folder)
@@ -196,10 +159,15 @@ nlohmann::json RunJson(const SimulateRequest& r, const SimulateSummary& s,
 SimulateSummary RunSimulation(const SimulateRequest& request, std::ostream& progress_out) {
   const auto wall_start = Clock::now();
   sim::Simulator simulator(request.options);  // validates before anything is written
-  Staging staging(request.out);
-  const fs::path root = staging.path();
-  for (const char* sub : {"frames", "labels", "instances", "truth"})
-    fs::create_directories(root / sub);
+  // The output folder is written under a temporary name beside it and
+  // replaces the old one whole once complete.
+  maps::StagedFile staging(request.out);
+  const fs::path root = staging.temp_path();
+  for (const char* sub : {"frames", "labels", "instances", "truth"}) {
+    std::error_code ec;
+    fs::create_directories(root / sub, ec);
+    if (ec) throw std::runtime_error((root / sub).string() + ": cannot create folder: " + ec.message());
+  }
   TruthFiles truth(root / "truth");
   WriteFieldTruth(root / "truth", simulator.field());
 

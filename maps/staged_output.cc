@@ -36,12 +36,15 @@ void Replace(const fs::path& from, const fs::path& to) {
 
 StagedFile::StagedFile(const fs::path& path) : path_(fs::absolute(path)) {
   MakeFolder(path_.parent_path());
-  temp_ = path_.parent_path() / ("." + path_.filename().string() + Suffix());
+  temp_ = path_.parent_path() /
+          ("." + path_.stem().string() + Suffix() + path_.extension().string());
+  std::error_code ec;
+  fs::remove_all(temp_, ec);  // left by an earlier process of the same id
 }
 
 StagedFile::~StagedFile() {
   std::error_code ec;
-  if (!committed_) fs::remove(temp_, ec);
+  if (!committed_) fs::remove_all(temp_, ec);
 }
 
 void StagedFile::Commit() {

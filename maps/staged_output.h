@@ -5,11 +5,14 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace plantscale::maps {
 
-// One file: write to temp_path(), then Commit(). The temporary is removed
+// One file or folder: write it at temp_path() (beside `path`, with the same
+// extension, so encoders chosen by extension still work), then Commit(),
+// which replaces `path` (a folder whole) with it. The temporary is removed
 // when the object dies uncommitted (an exception on the way).
 class StagedFile {
  public:
@@ -26,6 +29,14 @@ class StagedFile {
   std::filesystem::path temp_;
   bool committed_ = false;
 };
+
+// Writes `path` through a StagedFile: write(temp_path), then Commit().
+template <typename Write>
+void WriteStaged(const std::filesystem::path& path, Write&& write) {
+  StagedFile staged(path);
+  std::forward<Write>(write)(staged.temp_path());
+  staged.Commit();
+}
 
 // Several outputs of one export: staged in a hidden folder inside `dir`,
 // moved into `dir` one by one by Commit() after all were written. A failure

@@ -441,20 +441,27 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
                     std::to_string(plant.type()) + " and " + std::to_string(mask.cols) + "x" +
                     std::to_string(mask.rows) + " type " + std::to_string(mask.type()) + ")");
   }
-  // The mask's blobs (8-connected), labelled first so that mask_runs()
-  // hold this frame's whatever follows.
+  // Labelled first so that mask_runs() hold this frame's whatever follows.
+  LabelBlobs(mask);
+  plant_ = plant;
+  expanded_.release();  // Candidates(): none judged yet
+  if (mask.empty() || !options_.enabled()) return 0;
+  if (!SeedBits(static_cast<size_t>((mask.cols + 63) / 64))) return 0;
+  ModelSoilAndGrow(plant);
+  return AddGrowth(mask);
+}
+
+void SoilGrower::LabelBlobs(const cv::Mat& mask) {
   const int width = mask.cols, height = mask.rows;
   const auto words = static_cast<size_t>((width + 63) / 64);
   mask_bits_.resize(words * static_cast<size_t>(height));
   for (int v = 0; v < height; ++v) {
     detail::RowBits(mask.ptr<uint8_t>(v), width, mask_bits_.data() + static_cast<size_t>(v) * words);
   }
-  keep_.LabelMask(mask_bits_, width, height);
-  plant_ = plant;
-  expanded_.release();  // Candidates(): none judged yet
-  if (mask.empty() || !options_.enabled()) return 0;
+  keep_.LabelMask(mask_bits_, width, height);  // 8-connected
+}
 
-  // Seeds: the blobs of at least min_area_px pixels.
+bool SoilGrower::SeedBits(size_t words) {
   const std::vector<detail::RowRun>& runs = keep_.runs();
   const std::vector<int>& parent = keep_.parent();
   area_.assign(runs.size(), 0);
@@ -470,10 +477,13 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
                     runs[i].u_end);
     seeds = true;
   }
-  if (!seeds) return 0;
+  return seeds;
+}
 
+void SoilGrower::ModelSoilAndGrow(const cv::Mat& plant) {
   // The soil statistics need the smoothed image on the sampled rows, the
   // candidates only within reach of a seed (band_).
+  const int width = plant.cols, height = plant.rows;
   Band(width, height);
   Smooth(plant, false);
   cells_w_ = (width + options_.cell_px - 1) / options_.cell_px;
@@ -491,8 +501,13 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
   }
   Thresholds();
   GrowBits(width, height);
+}
 
+int SoilGrower::AddGrowth(cv::Mat& mask) {
   if (options_.join_min_area_px > 0) {
+    // Growth may join blobs only where one of them is small.
+    const std::vector<detail::RowRun>& runs = keep_.runs();
+    const std::vector<int>& parent = keep_.parent();
     small_.assign(runs.size(), 0);
     for (size_t i = 0; i < runs.size(); ++i) {
       const auto root = static_cast<size_t>(parent[i]);
@@ -501,8 +516,9 @@ int SoilGrower::Grow(const cv::Mat& plant, cv::Mat& mask) {
     for (size_t i = 0; i < grown_bits_.size(); ++i) grown_bits_[i] |= mask_bits_[i];
     return keep_.Add(mask_bits_, grown_bits_, nullptr, mask, &small_);
   }
+  const auto words = static_cast<size_t>((mask.cols + 63) / 64);
   int added = 0;
-  for (int v = 0; v < height; ++v) {
+  for (int v = 0; v < mask.rows; ++v) {
     const size_t row = static_cast<size_t>(v) * words;
     uint8_t* m = mask.ptr<uint8_t>(v);
     for (size_t w = 0; w < words; ++w) {

@@ -90,6 +90,13 @@ class SoilGrower {
   const std::vector<int>& mask_parent() const { return keep_.parent(); }
 
  private:
+  // The steps of Grow(): label the mask's blobs (mask_bits_, keep_); mark the
+  // blobs of min_area_px as seeds (false when there are none); model the
+  // soil around them and grow; write the growth into the mask.
+  void LabelBlobs(const cv::Mat& mask);
+  bool SeedBits(size_t words);
+  void ModelSoilAndGrow(const cv::Mat& plant);
+  int AddGrowth(cv::Mat& mask);
   void ClearanceBits(int width, int height);
   // Sums the samples (capped: those at or below their cell's cap_) per
   // cell, then box-sums them into mean_ and sd_.

@@ -119,7 +119,10 @@ can_frame Encode(const ProtocolIds& ids, const NozzleFaults& m) {
   return f;
 }
 
-BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
+namespace {
+
+// The message kind of a frame of the bar's block; throws for anything else.
+MessageKind KindOf(const ProtocolIds& ids, const can_frame& f) {
   if ((f.can_id & CAN_ERR_FLAG) != 0) {
     Fail(f, "error frame from the CAN controller (class " + Hex(f.can_id & CAN_ERR_MASK) + ")");
   }
@@ -138,65 +141,77 @@ BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
     Fail(f, std::string(kNames[k]) + ": DLC " + std::to_string(f.can_dlc) + ", expected " +
                 std::to_string(kDlc[k]));
   }
-  switch (static_cast<MessageKind>(k)) {
-    case MessageKind::kCommand: {
-      NozzleCommand m;
-      m.seq = f.data[0];
-      m.flags = f.data[1] & 0x0F;
-      m.section = f.data[1] >> 4;
-      m.open_mask = GetU32(f.data + 2);
-      m.hold_ms = static_cast<uint16_t>(f.data[6] | (f.data[7] << 8));
-      if ((m.flags & ~NozzleCommand::kFlagFailsafe) != 0) {
-        Fail(f, "nozzle command: unknown flag bits");
-      }
-      if (m.section >= kMaxSections) {
-        Fail(f, "nozzle command: section " + std::to_string(m.section) + " beyond 0..1");
-      }
-      if (m.hold_ms == 0) Fail(f, "nozzle command: hold_ms is 0");
-      if ((m.flags & NozzleCommand::kFlagFailsafe) != 0 && m.open_mask != 0) {
-        Fail(f, "nozzle command: fail-safe flag with nozzles open");
-      }
-      return m;
-    }
-    case MessageKind::kAck: {
-      NozzleAck m;
-      m.seq = f.data[0];
-      if (f.data[1] > static_cast<uint8_t>(AckStatus::kRejected)) {
-        Fail(f, "nozzle ack: unknown status " + std::to_string(f.data[1]));
-      }
-      m.status = static_cast<AckStatus>(f.data[1]);
-      m.applied_mask = GetU32(f.data + 2);
-      m.section = f.data[6];
-      if (m.section >= kMaxSections) {
-        Fail(f, "nozzle ack: section " + std::to_string(m.section) + " beyond 0..1");
-      }
-      RequireZero(f, "nozzle ack", 7, 8);
-      return m;
-    }
-    case MessageKind::kHeartbeat: {
-      BarHeartbeat m;
-      m.counter = f.data[0];
-      if (f.data[1] > static_cast<uint8_t>(BarState::kFault)) {
-        Fail(f, "bar heartbeat: unknown state " + std::to_string(f.data[1]));
-      }
-      m.state = static_cast<BarState>(f.data[1]);
-      m.num_nozzles = f.data[2];
-      if (m.num_nozzles < 1 || m.num_nozzles > kMaxNozzles) {
-        Fail(f, "bar heartbeat: nozzle count " + std::to_string(m.num_nozzles) + " not in 1.." +
-                    std::to_string(kMaxNozzles));
-      }
-      m.protocol_version = f.data[3];
-      return m;
-    }
-    case MessageKind::kFaults:
-    case MessageKind::kFaultsHigh: {
-      NozzleFaults m;
-      m.section = k == static_cast<int>(MessageKind::kFaults) ? 0 : 1;
-      for (int i = 0; i < kSectionNozzles; ++i) {
-        m.fault[i] = static_cast<NozzleFault>((f.data[i / 4] >> (2 * (i % 4))) & 0x3u);
-      }
-      return m;
-    }
+  return static_cast<MessageKind>(k);
+}
+
+NozzleCommand DecodeCommand(const can_frame& f) {
+  NozzleCommand m;
+  m.seq = f.data[0];
+  m.flags = f.data[1] & 0x0F;
+  m.section = f.data[1] >> 4;
+  m.open_mask = GetU32(f.data + 2);
+  m.hold_ms = static_cast<uint16_t>(f.data[6] | (f.data[7] << 8));
+  if ((m.flags & ~NozzleCommand::kFlagFailsafe) != 0) Fail(f, "nozzle command: unknown flag bits");
+  if (m.section >= kMaxSections) {
+    Fail(f, "nozzle command: section " + std::to_string(m.section) + " beyond 0..1");
+  }
+  if (m.hold_ms == 0) Fail(f, "nozzle command: hold_ms is 0");
+  if ((m.flags & NozzleCommand::kFlagFailsafe) != 0 && m.open_mask != 0) {
+    Fail(f, "nozzle command: fail-safe flag with nozzles open");
+  }
+  return m;
+}
+
+NozzleAck DecodeAck(const can_frame& f) {
+  NozzleAck m;
+  m.seq = f.data[0];
+  if (f.data[1] > static_cast<uint8_t>(AckStatus::kRejected)) {
+    Fail(f, "nozzle ack: unknown status " + std::to_string(f.data[1]));
+  }
+  m.status = static_cast<AckStatus>(f.data[1]);
+  m.applied_mask = GetU32(f.data + 2);
+  m.section = f.data[6];
+  if (m.section >= kMaxSections) {
+    Fail(f, "nozzle ack: section " + std::to_string(m.section) + " beyond 0..1");
+  }
+  RequireZero(f, "nozzle ack", 7, 8);
+  return m;
+}
+
+BarHeartbeat DecodeHeartbeat(const can_frame& f) {
+  BarHeartbeat m;
+  m.counter = f.data[0];
+  if (f.data[1] > static_cast<uint8_t>(BarState::kFault)) {
+    Fail(f, "bar heartbeat: unknown state " + std::to_string(f.data[1]));
+  }
+  m.state = static_cast<BarState>(f.data[1]);
+  m.num_nozzles = f.data[2];
+  if (m.num_nozzles < 1 || m.num_nozzles > kMaxNozzles) {
+    Fail(f, "bar heartbeat: nozzle count " + std::to_string(m.num_nozzles) + " not in 1.." +
+                std::to_string(kMaxNozzles));
+  }
+  m.protocol_version = f.data[3];
+  return m;
+}
+
+NozzleFaults DecodeFaults(const can_frame& f, int section) {
+  NozzleFaults m;
+  m.section = static_cast<uint8_t>(section);
+  for (int i = 0; i < kSectionNozzles; ++i) {
+    m.fault[i] = static_cast<NozzleFault>((f.data[i / 4] >> (2 * (i % 4))) & 0x3u);
+  }
+  return m;
+}
+
+}  // namespace
+
+BarMessage Decode(const ProtocolIds& ids, const can_frame& f) {
+  switch (KindOf(ids, f)) {
+    case MessageKind::kCommand: return DecodeCommand(f);
+    case MessageKind::kAck: return DecodeAck(f);
+    case MessageKind::kHeartbeat: return DecodeHeartbeat(f);
+    case MessageKind::kFaults: return DecodeFaults(f, 0);
+    case MessageKind::kFaultsHigh: return DecodeFaults(f, 1);
   }
   Fail(f, "unreachable");
 }
