@@ -1,5 +1,6 @@
 #include "ui/synthetic_run.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -64,8 +65,16 @@ class Generator {
 
 void Generator::PlantField() {
   int64_t id = 0;
-  for (double y = 0.5; y < o_.length_m + 3.0; y += o_.plant_spacing_m) {
-    for (int n = -1; n <= 1; ++n) plants_.push_back({id++, tm::PlantKind::kCrop, {n * o_.row_spacing_m, y}});
+  int line = 0;
+  for (double y = 0.5; y < o_.length_m + 3.0; y += o_.plant_spacing_m, ++line) {
+    for (int n = -1; n <= 1; ++n) {
+      const int64_t plant_id = id++;  // ids as without missing plants
+      if (std::find(o_.missing_crops.begin(), o_.missing_crops.end(), std::make_pair(n, line)) !=
+          o_.missing_crops.end()) {
+        continue;
+      }
+      plants_.push_back({plant_id, tm::PlantKind::kCrop, {n * o_.row_spacing_m, y}});
+    }
   }
   std::uniform_real_distribution<double> ux(-0.7, 0.7), uy(0.3, o_.length_m + 3.0);
   const int weeds = static_cast<int>(o_.weeds_per_m * (o_.length_m + 3.0));
