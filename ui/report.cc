@@ -241,7 +241,10 @@ ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem
     result.problems.push_back("no crop plant records in the log: no agronomic figures per row");
   }
   if (o.truth && run_config && !a.rows.empty()) {
-    StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m};
+    StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m, {}};
+    for (const auto& [id, r] : model.plants()) {
+      if (r.plant.kind == tm::PlantKind::kCrop) stand.crops_m.emplace_back(r.plant.position_m.x(), r.plant.position_m.y());
+    }
     try {
       result.truth = o.truth(*run_config, stand);
     } catch (const std::exception& e) {

@@ -30,6 +30,7 @@ struct StandWindow {
   double y0_m = 0.0, y1_m = 0.0;  // along the rows, field frame
   int first_row = 0, last_row = 0;
   double row_spacing_m = 0.0;
+  std::vector<std::pair<double, double>> crops_m;  // the crop records (x, y), to register a truth against
 };
 
 struct ReportOptions {
