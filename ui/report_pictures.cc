@@ -142,7 +142,7 @@ void DistanceTicks(cv::Mat& img, const Window& w, double y0, double y1, double s
     const bool labelled = i % label_every == 0;
     cv::line(img, {u, w.origin.y - (labelled ? 7 : 4)}, {u, w.origin.y - 1}, kInk, 1);
     if (labelled) {
-      const std::string s = Fixed(i * step, 0) + " m";
+      const std::string s = Fixed(i * step, step * label_every < 1.0 - 1e-9 ? 1 : 0) + " m";
       Text(img, s, {u - TextWidth(s, 0.4) / 2, w.origin.y - 9}, 0.4);
     }
   }
@@ -302,14 +302,17 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
 
 cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const PictureOptions& o) {
   const int left = 12, top = 56;
-  const double ppm = (o.closeup_width_px - 2 * left) / o.closeup_length_m;
+  // The plants in view and, when it is near (the camera looks ahead), the vehicle.
+  double y_lo = s.y_m - 0.5 * o.closeup_length_m, y_hi = s.y_m + 0.5 * o.closeup_length_m;
+  if (s.pose && s.pose->y_m < y_lo && s.pose->y_m > y_lo - o.closeup_length_m) y_lo = s.pose->y_m - 0.3;
+  const double length = y_hi - y_lo;
+  const double ppm = (o.closeup_width_px - 2 * left) / length;
   Window w;
-  w.y0_m = s.y_m - 0.5 * o.closeup_length_m;
+  w.y0_m = y_lo;
   w.x0_m = x_lo;
   w.ppm = ppm;
   w.origin = {left, top};
-  w.size = {static_cast<int>(std::lround(o.closeup_length_m * ppm)),
-            static_cast<int>(std::lround((x_hi - x_lo) * ppm))};
+  w.size = {static_cast<int>(std::lround(length * ppm)), static_cast<int>(std::lround((x_hi - x_lo) * ppm))};
   cv::Mat img(top + w.size.height + 64, o.closeup_width_px, CV_8UC3, kWhite);
   Text(img, s.reason, {left, 18}, 0.5);
   Text(img, "at " + Fixed(s.distance_m, 1) + " m driven; " + Fixed(100.0 * o.ellipse_confidence, 0) +
@@ -322,6 +325,8 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
   Window local = w;
   local.origin = {0, 0};
   const double k = std::sqrt(EllipseScale2d(o.ellipse_confidence));
+  bool plant_covariance = false;
+  for (const tm::PlantObservation& p : s.plants) plant_covariance |= p.covariance.trace() > 0.0;
   for (const tm::PlantObservation& p : s.plants) {
     DrawPlant(roi, p, local);
     DrawEllipse(roi, local.At(p.position_m.x(), p.position_m.y()), p.covariance, k, o.ellipse_magnification,
@@ -334,16 +339,22 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
                 Bgr(palette::kVehicle), 2);
   }
   cv::rectangle(img, frame, kInk, 1);
-  DistanceTicks(img, w, w.y0_m, w.y0_m + o.closeup_length_m, 0.1, 5);
+  DistanceTicks(img, w, w.y0_m, w.y0_m + length, 0.1, 5);
   const int by = top + w.size.height + 24;
   ScaleBar(img, {left, by}, ppm, 0.5, "0.5 m");
   Legend(img, {left + static_cast<int>(0.5 * ppm) + 60, by},
          {{Bgr(palette::kPlantEllipse), "plant ellipse"}, {Bgr(palette::kVehicle), "vehicle + ellipse"}});
+  std::string note;
   if (s.grid) {
-    Text(img, "offset sd " + Fixed(1e3 * std::sqrt(std::max(0.0, s.grid->covariance(0, 0))), 1) +
-                  " mm (true size; drawn x" + Fixed(o.ellipse_magnification, 0) + ")",
-         {left, by + 24}, 0.45);
+    note = "tracker offset sd " + Fixed(1e3 * std::sqrt(std::max(0.0, s.grid->covariance(0, 0))), 1) + " mm";
   }
+  if (s.pose) {
+    note += (note.empty() ? "" : "; ") + std::string("vehicle sd x ") +
+            Fixed(1e3 * std::sqrt(std::max(0.0, s.pose->covariance(0, 0))), 1) + " mm, y " +
+            Fixed(1e3 * std::sqrt(std::max(0.0, s.pose->covariance(1, 1))), 1) + " mm";
+  }
+  if (!plant_covariance && !s.plants.empty()) note += "; plant covariances not in the log (drawn as dots)";
+  Text(img, note, {left, by + 24}, 0.45);
   return img;
 }
 
@@ -401,10 +412,17 @@ cv::Mat DrawOffsetTrace(const RunModel& model, const PictureOptions& o) {
   }
   Text(img, "distance driven, m", {left + pw / 2 - 60, top + ph + 38}, 0.45);
   std::optional<cv::Point> prev, tprev;
+  std::optional<std::pair<cv::Point, cv::Point>> band;  // previous column's low and high
   for (int c = 0; c < pw; ++c) {
     if (cnt[c] == 0) continue;
     const double m = sum[c] / cnt[c], s2 = 2.0 * sd[c] / cnt[c];
-    cv::line(img, {left + c, v(m - s2)}, {left + c, v(m + s2)}, {250, 210, 170}, 1);
+    const cv::Point lo(left + c, v(m - s2)), hi(left + c, v(m + s2));
+    if (band) {
+      const std::vector<cv::Point> quad{band->first, band->second, hi, lo};
+      cv::fillConvexPoly(img, quad, {250, 210, 170});
+    }
+    cv::line(img, lo, hi, {250, 210, 170}, 1);
+    band = std::make_pair(lo, hi);
   }
   for (int c = 0; c < pw; ++c) {
     if (cnt[c] > 0) {
