@@ -143,7 +143,7 @@ void DistanceTicks(cv::Mat& img, const Window& w, double y0, double y1, double s
     cv::line(img, {u, w.origin.y - (labelled ? 7 : 4)}, {u, w.origin.y - 1}, kInk, 1);
     if (labelled) {
       const std::string s = Fixed(i * step, step * label_every < 1.0 - 1e-9 ? 1 : 0) + " m";
-      Text(img, s, {u - TextWidth(s, 0.4) / 2, w.origin.y - 9}, 0.4);
+      Text(img, s, {std::clamp(u - TextWidth(s, 0.4) / 2, 0, img.cols - TextWidth(s, 0.4)), w.origin.y - 9}, 0.4);
     }
   }
 }
@@ -313,7 +313,7 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
   w.ppm = ppm;
   w.origin = {left, top};
   w.size = {static_cast<int>(std::lround(length * ppm)), static_cast<int>(std::lround((x_hi - x_lo) * ppm))};
-  cv::Mat img(top + w.size.height + 64, o.closeup_width_px, CV_8UC3, kWhite);
+  cv::Mat img(top + w.size.height + 84, o.closeup_width_px, CV_8UC3, kWhite);
   Text(img, s.reason, {left, 18}, 0.5);
   Text(img, "at " + Fixed(s.distance_m, 1) + " m driven; " + Fixed(100.0 * o.ellipse_confidence, 0) +
                 " % ellipses MAGNIFIED x" + Fixed(o.ellipse_magnification, 0),
@@ -332,11 +332,19 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
     DrawEllipse(roi, local.At(p.position_m.x(), p.position_m.y()), p.covariance, k, o.ellipse_magnification,
                 ppm, Bgr(palette::kPlantEllipse), 2);
   }
+  // The vehicle's ellipse: its pose covariance, else (a log without it) the
+  // tracker's covariance of offset and forward position.
+  bool pose_covariance = false, grid_ellipse = false;
   if (s.pose) {
     const cv::Point2d c = local.At(s.pose->x_m, s.pose->y_m);
     cv::drawMarker(roi, c, Bgr(palette::kVehicle), cv::MARKER_CROSS, 16, 2);
-    DrawEllipse(roi, c, s.pose->covariance.topLeftCorner<2, 2>(), k, o.ellipse_magnification, ppm,
-                Bgr(palette::kVehicle), 2);
+    Eigen::Matrix2d cov = s.pose->covariance.topLeftCorner<2, 2>();
+    pose_covariance = cov.trace() > 0.0;
+    if (!pose_covariance && s.grid) {
+      cov << s.grid->covariance(0, 0), s.grid->covariance(0, 1), s.grid->covariance(1, 0), s.grid->covariance(1, 1);
+      grid_ellipse = cov.trace() > 0.0;
+    }
+    DrawEllipse(roi, c, cov, k, o.ellipse_magnification, ppm, Bgr(palette::kVehicle), 2);
   }
   cv::rectangle(img, frame, kInk, 1);
   DistanceTicks(img, w, w.y0_m, w.y0_m + length, 0.1, 5);
@@ -346,15 +354,21 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
          {{Bgr(palette::kPlantEllipse), "plant ellipse"}, {Bgr(palette::kVehicle), "vehicle + ellipse"}});
   std::string note;
   if (s.grid) {
-    note = "tracker offset sd " + Fixed(1e3 * std::sqrt(std::max(0.0, s.grid->covariance(0, 0))), 1) + " mm";
+    note = "tracker sd: offset " + Fixed(1e3 * std::sqrt(std::max(0.0, s.grid->covariance(0, 0))), 1) +
+           " mm, forward " + Fixed(1e3 * std::sqrt(std::max(0.0, s.grid->covariance(1, 1))), 1) + " mm";
   }
-  if (s.pose) {
+  if (s.pose && pose_covariance) {
     note += (note.empty() ? "" : "; ") + std::string("vehicle sd x ") +
             Fixed(1e3 * std::sqrt(std::max(0.0, s.pose->covariance(0, 0))), 1) + " mm, y " +
             Fixed(1e3 * std::sqrt(std::max(0.0, s.pose->covariance(1, 1))), 1) + " mm";
   }
-  if (!plant_covariance && !s.plants.empty()) note += "; plant covariances not in the log (drawn as dots)";
-  Text(img, note, {left, by + 24}, 0.45);
+  Text(img, note, {left, by + 22}, 0.45);
+  std::string note2;
+  if (grid_ellipse) note2 = "vehicle ellipse: tracker offset/forward covariance";
+  if (!plant_covariance && !s.plants.empty()) {
+    note2 += (note2.empty() ? "" : "; ") + std::string("no plant covariances in the log");
+  }
+  Text(img, note2, {left, by + 42}, 0.4);
   return img;
 }
 
