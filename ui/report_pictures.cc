@@ -112,7 +112,8 @@ void DrawPlant(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
   const cv::Point2d c = w.At(p.position_m.x(), p.position_m.y());
   const int r = std::max(2, static_cast<int>(std::lround(std::sqrt(p.size_m2 / M_PI) * w.ppm)));
   cv::circle(img, c, r, PlantColour(p), cv::FILLED, cv::LINE_AA);
-  cv::circle(img, c, r, p.sprayed ? Bgr(palette::kTreated) : kBlack, p.sprayed ? 2 : 1, cv::LINE_AA);
+  cv::circle(img, c, r + (p.sprayed ? 1 : 0), p.sprayed ? Bgr(palette::kTreated) : kBlack, p.sprayed && r > 4 ? 2 : 1,
+             cv::LINE_AA);
 }
 
 // The ellipse of covariance `c` (field x, y) at `centre`, `k` Mahalanobis
