@@ -5,15 +5,24 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <sstream>
 #include <thread>
 #include <vector>
 
 extern char** environ;
 
+#include "app/config_loader.h"
+#include "app/run_config.h"
+#include "engine/sim/simulator.h"
 #include "telemetry/command_auth.h"
 #include "ui/canvas.h"
 #include "ui/report.h"
@@ -30,19 +39,144 @@ struct StationArgs {
 struct ReportArgs {
   std::string log;
   std::string out;
-  double closeup_every_m = 10.0;
   double confidence = 0.95;
+  double rate_l_ha = 200.0;
+  double strip_length_m = 10.0;
+  int max_strip_pictures = 4;
+  double magnification = 20.0;
+  bool json = false;
+  std::string config_dir;
 };
 
-// Without DISPLAY VTK would abort the process; say so and how to fix it
-// rather than re-executing under xvfb-run behind the user's back.
 int NoDisplay(const ui::DisplayError& e) {
   std::cerr << "plantscale: error: " << e.what() << '\n';
   return 2;
 }
 
+bool OnPath(const std::string& program) {
+  return std::system(("command -v " + program + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+// Without DISPLAY, runs this very command again under its own virtual X
+// server (`xvfb-run -a`, as demo does) when xvfb-run is installed; returns
+// only when that is not possible (then the caller goes on without one).
+void RerunUnderXvfb() {
+  if (ui::DisplayAvailable() || std::getenv("PLANTSCALE_XVFB") != nullptr || !OnPath("xvfb-run")) return;
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  const std::string raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::string> args{"xvfb-run", "-a", "-s", "-screen 0 1280x1024x24 -noreset"};
+  args.push_back(std::filesystem::read_symlink("/proc/self/exe").string());
+  size_t at = raw.find('\0');  // skip argv[0]: the path of this executable instead
+  while (at != std::string::npos && at + 1 < raw.size()) {
+    const size_t end = raw.find('\0', at + 1);
+    args.push_back(raw.substr(at + 1, end - at - 1));
+    at = end;
+  }
+  std::vector<char*> argv;
+  for (std::string& s : args) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  setenv("PLANTSCALE_XVFB", "1", 1);
+  std::cout.flush();
+  execvp(argv[0], argv.data());
+}
+
+// The shift (rows, metres along) that takes the report's bed frame (y from
+// where the tracker started) to the simulated field's: the one under which
+// most crop records have a true crop within 6 cm. The pattern of missing
+// plants and the spacing drift make it unique.
+std::pair<int, double> RegisterOnField(const ui::StandWindow& stand, const sim::Field& field) {
+  std::map<int, std::vector<double>> rows;  // true crop y by row
+  for (const sim::Plant& p : field.plants()) {
+    if (p.cls == sim::PlantClass::kCrop) rows[p.row].push_back(p.position_m.y());
+  }
+  for (auto& [n, ys] : rows) std::sort(ys.begin(), ys.end());
+  std::vector<std::pair<int, double>> records;  // row, y; at most 400 spread over the run
+  const size_t step = std::max<size_t>(1, stand.crops_m.size() / 400);
+  for (size_t i = 0; i < stand.crops_m.size(); i += step) {
+    records.emplace_back(static_cast<int>(std::lround(stand.crops_m[i].first / stand.row_spacing_m)),
+                         stand.crops_m[i].second);
+  }
+  const auto matches = [&](int dr, double dy) {
+    int n = 0;
+    for (const auto& [row, y] : records) {
+      const auto it = rows.find(row + dr);
+      if (it == rows.end()) continue;
+      const auto at = std::lower_bound(it->second.begin(), it->second.end(), y + dy - 0.06);
+      n += at != it->second.end() && *at <= y + dy + 0.06;
+    }
+    return n;
+  };
+  std::pair<int, double> best{0, 0.0};
+  int best_n = -1;
+  for (int dr = -1; dr <= 1; ++dr) {
+    for (int k = -1000; k <= 1000; ++k) {  // ±10 m in 1 cm steps
+      const int n = matches(dr, 0.01 * k);
+      if (n > best_n) best_n = n, best = {dr, 0.01 * k};
+    }
+  }
+  return best;
+}
+
+// Simulator truth over the report's stand, from the log's run_config event:
+// the simulated field rebuilt (app/run_config.h), registered on the crop
+// records, and its plants counted in the same rows and along the same stand.
+std::optional<ui::AgronomyTruth> SimTruth(const std::string& run_config, const ui::StandWindow& stand,
+                                          const std::string& config_dir_option) {
+  const SimRunConfig run = ParseRunConfig(run_config, "run_config event");
+  std::filesystem::path dir = config_dir_option;
+  std::error_code ec;
+  if (dir.empty()) dir = !run.config_dir.empty() && std::filesystem::is_directory(run.config_dir, ec)
+                             ? std::filesystem::path(run.config_dir) : DefaultConfigDir();
+  const sim::Simulator simulator(SimulatorOptionsOf(run, dir));
+  const sim::Field& field = simulator.field();
+  const auto [dr, dy] = RegisterOnField(stand, field);
+  const double spacing = field.options().plant_spacing_m;
+  const double y0 = stand.y0_m + dy - 0.25 * spacing, y1 = stand.y1_m + dy + 0.25 * spacing;
+  const int first_row = stand.first_row + dr, last_row = stand.last_row + dr;
+  ui::AgronomyTruth t;
+  std::ostringstream source;
+  source << "simulator: preset " << run.preset << ", seed " << run.seed << ", " << run.length_m
+         << " m; the bed frame registered on the field at " << std::showpos << dr << " rows, " << std::fixed
+         << std::setprecision(2) << dy << " m";
+  t.source = source.str();
+  std::set<std::pair<int, int>> present;  // row, line
+  std::vector<double> radii;
+  const double x_lo = (first_row - 0.5) * stand.row_spacing_m, x_hi = (last_row + 0.5) * stand.row_spacing_m;
+  for (const sim::Plant& p : field.plants()) {
+    const double x = p.position_m.x(), y = p.position_m.y();
+    if (p.cls == sim::PlantClass::kCrop) {
+      if (p.row < first_row || p.row > last_row || y < y0 || y > y1) continue;
+      ++t.crop;
+      radii.push_back(p.radius_m);
+      present.insert({p.row, p.line});
+    } else if (x >= x_lo && x <= x_hi && y >= stand.y0_m + dy && y <= stand.y1_m + dy) {
+      ++t.weeds;
+    }
+  }
+  const std::vector<double>& lines = field.line_y_m();
+  for (int row = first_row; row <= last_row; ++row) {
+    bool in_gap = false;
+    for (size_t line = 0; line < lines.size(); ++line) {
+      if (lines[line] < y0 || lines[line] > y1) continue;
+      const bool missing = !present.count({row, static_cast<int>(line)});
+      t.missing += missing;
+      t.gaps += missing && !in_gap;
+      in_gap = missing;
+    }
+  }
+  std::sort(radii.begin(), radii.end());
+  if (!radii.empty()) {
+    const size_t n = radii.size();
+    t.median_radius_m = n % 2 ? radii[n / 2] : 0.5 * (radii[n / 2 - 1] + radii[n / 2]);
+  }
+  const double area = (x_hi - x_lo) * (stand.y1_m - stand.y0_m);
+  t.weeds_per_m2 = area > 0.0 ? t.weeds / area : 0.0;
+  return t;
+}
+
 int Station(StationArgs& a) {
   a.options.log = a.log;
+  if (!a.options.screenshot.empty()) RerunUnderXvfb();
   try {
     const ui::StationResult r = ui::RunStation(a.options);
     std::cout << "station: " << r.frames << " frames in " << std::fixed << std::setprecision(1)
@@ -59,19 +193,33 @@ int Station(StationArgs& a) {
 }
 
 int Report(const ReportArgs& a) {
+  RerunUnderXvfb();  // for the camera views at events (VTK); the rest needs no display
   ui::ReportOptions options;
-  options.closeup_every_m = a.closeup_every_m;
-  options.ellipse_confidence = a.confidence;
+  options.pictures.ellipse_confidence = a.confidence;
+  options.pictures.strip_length_m = a.strip_length_m;
+  options.pictures.max_strip_pictures = a.max_strip_pictures;
+  options.pictures.ellipse_magnification = a.magnification;
+  options.agronomy.rate_l_ha = a.rate_l_ha;
+  const std::string config_dir = a.config_dir;
+  options.truth = [config_dir](const std::string& run_config, const ui::StandWindow& stand) {
+    return SimTruth(run_config, stand, config_dir);
+  };
   const auto start = std::chrono::steady_clock::now();
-  try {
-    const ui::ReportResult r = ui::WriteReport(a.log, a.out, options);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << "report: " << r.index.string() << " (" << r.pictures.size() << " pictures, "
-              << std::fixed << std::setprecision(2) << r.summary.distance_m << " m, " << s << " s)\n";
-    for (const std::string& p : r.problems) std::cout << "report: problem: " << p << '\n';
-  } catch (const ui::DisplayError& e) {
-    return NoDisplay(e);
+  const ui::ReportResult r = ui::WriteReport(a.log, a.out, options);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (a.json) {
+    std::ifstream in(std::filesystem::path(a.out) / "summary.json", std::ios::binary);
+    std::cout << in.rdbuf();
+    return 0;
   }
+  std::cout << "report: " << r.index.string() << " (" << r.pictures.size() << " pictures, " << std::fixed
+            << std::setprecision(2) << r.summary.distance_m << " m, " << s << " s)\n";
+  const ui::AgronomySummary& g = r.agronomy;
+  std::cout << "report: crop " << g.crop << " (" << std::setprecision(2) << g.plants_per_m << "/m), gaps "
+            << g.gaps << " (" << g.missing << " missing, longest " << g.longest_gap << "), radius median "
+            << std::setprecision(1) << 100 * g.crop_size.median_m << " cm, weeds " << std::setprecision(2)
+            << g.weeds_per_m2 << "/m2\n";
+  for (const std::string& p : r.problems) std::cout << "report: problem: " << p << '\n';
   return 0;
 }
 
@@ -83,10 +231,6 @@ struct DemoArgs {
   std::string lcm_url = "udpm://239.255.76.67:7668?ttl=0";  // a port apart from LCM's default
   std::string origin = "52.0063,-0.4206";  // WGS84 of the field-frame origin for the map exports
 };
-
-bool OnPath(const std::string& program) {
-  return std::system(("command -v " + program + " >/dev/null 2>&1").c_str()) == 0;
-}
 
 // Starts `args` (args[0] looked up on PATH); returns the child's pid, or -1.
 pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& output) {
@@ -220,11 +364,23 @@ void AddUiCommands(CommandRegistry& registry) {
 
   ReportArgs& r = registry.Keep(ReportArgs{});
   CLI::App* report = registry.Add("report", "render a run report (index.html and PNGs) from a log",
-                                  [&r] { return Report(r); });
+                                  [&r, &registry] {
+                                    r.config_dir = registry.global().config_dir;  // the truth's preset
+                                    return Report(r);
+                                  });
   report->add_option("LOG", r.log, "LCM log of the run")->required()->check(CLI::ExistingFile);
   report->add_option("--out", r.out, "output folder")->required();
-  report->add_option("--closeup-every-m", r.closeup_every_m, "ellipse close-up spacing (default 10 m)");
-  report->add_option("--confidence", r.confidence, "ellipse confidence (default 0.95)");
+  report->add_option("--confidence", r.confidence, "ellipse confidence")->capture_default_str();
+  report->add_option("--rate-l-ha", r.rate_l_ha, "product rate on the treated area, L/ha (product used)")
+      ->capture_default_str();
+  report->add_option("--strip-length-m", r.strip_length_m, "bed strip length")->capture_default_str();
+  report->add_option("--max-strip-pictures", r.max_strip_pictures,
+                     "bed pictures (5 strips each) at most; a longer run shows the strips that matter")
+      ->capture_default_str();
+  report->add_option("--magnification", r.magnification, "covariance ellipses drawn this many times their size")
+      ->capture_default_str();
+  report->add_flag("--json", r.json, "print summary.json (run, agronomy per row, truth, problems) instead of text");
+
 
   // `demo` (what ./plantscale.sh demo runs) and `demo-system` are the same command.
   for (const char* name : {"demo", "demo-system"}) {

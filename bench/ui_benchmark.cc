@@ -3,7 +3,8 @@
 //    render the 1280×720 window) with a 100 m bed map loaded (the vehicle has
 //    driven 100 m; counter map_length_m) while the log plays on at 60 frames
 //    per log second; target ≥ 60 fps, i.e. ≤ 16.7 ms per frame.
-//  - BM_Report40m: `plantscale report` of a 40 m run; target ≤ 10 s.
+//  - BM_Report/40, /1000, /5000: `plantscale report` of a 40 m, 1 km and 5 km
+//    run; targets ≤ 10 s and ≤ 60 s, linear in distance (ratio_5km_1km ≈ 5).
 // Both use the synthetic run (ui/synthetic_run.h) until the tracker and the
 // treatment map publish for real.
 
@@ -12,7 +13,9 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
+#include <map>
 
 #include "ui/canvas.h"
 #include "ui/report.h"
@@ -97,19 +100,42 @@ void BM_StationRenderOnly(benchmark::State& state) {
 }
 BENCHMARK(BM_StationRenderOnly)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
-void BM_Report40m(benchmark::State& state) {
-  if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
+// `plantscale report` of a synthetic run of state.range(0) metres (40 m,
+// 1 km, 5 km; the log is written once per length, outside the timing).
+// Counters: ms_per_m, and at 5 km ratio_5km_1km, the time of 5 km over that
+// of 1 km (5.0 when the cost is linear in distance). Targets: ≤ 10 s at
+// 40 m, ≤ 60 s at 5 km.
+std::map<int64_t, double>& ReportSeconds() {
+  static std::map<int64_t, double> seconds;
+  return seconds;
+}
+
+void BM_Report(benchmark::State& state) {
+  const int64_t length = state.range(0);
   const auto dir = std::filesystem::temp_directory_path() / "plantscale_ui_bench";
   std::filesystem::create_directories(dir);
-  SyntheticRunOptions run;
-  run.length_m = 40.0;
-  WriteSyntheticLog(dir / "run40.lcmlog", run);
+  const auto log = dir / ("run" + std::to_string(length) + "m.lcmlog");
+  if (!std::filesystem::exists(log)) {
+    SyntheticRunOptions run;
+    run.length_m = static_cast<double>(length);
+    WriteSyntheticLog(log, run);
+  }
+  double seconds = 0.0;
   for (auto _ : state) {
-    const ReportResult r = WriteReport(dir / "run40.lcmlog", dir / "report");
+    const auto start = std::chrono::steady_clock::now();
+    const ReportResult r = WriteReport(log, dir / ("report" + std::to_string(length)));
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     benchmark::DoNotOptimize(r.summary.distance_m);
+    state.counters["pictures"] = static_cast<double>(r.pictures.size());
+  }
+  ReportSeconds()[length] = seconds;
+  state.counters["ms_per_m"] = 1e3 * seconds / static_cast<double>(length);
+  state.counters["log_mb"] = static_cast<double>(std::filesystem::file_size(log)) / 1e6;
+  if (length == 5000 && ReportSeconds().count(1000)) {
+    state.counters["ratio_5km_1km"] = seconds / ReportSeconds()[1000];
   }
 }
-BENCHMARK(BM_Report40m)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
+BENCHMARK(BM_Report)->Arg(40)->Arg(1000)->Arg(5000)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
 }  // namespace plantscale::ui

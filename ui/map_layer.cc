@@ -52,6 +52,17 @@ vtkSmartPointer<vtkImageData> TileImage(const telemetry::MapTileDelta& t) {
 void MapLayer::Update(const RunModel& model) {
   if (renderer_ == nullptr || model.tile_revision_sum() == seen_revisions_) return;
   seen_revisions_ = model.tile_revision_sum();
+  // Tiles the model no longer has (the station sought back in its log: the
+  // model was replayed from the start) leave the map, so that a log time
+  // shows the map as it was then, however one got there.
+  for (auto it = tiles_.begin(); it != tiles_.end();) {
+    if (model.tiles().count(it->first) == 0) {
+      renderer_->RemoveActor(it->second.actor);
+      it = tiles_.erase(it);
+    } else {
+      ++it;
+    }
+  }
   for (const auto& [key, tile] : model.tiles()) {
     Tile& slot = tiles_[key];
     if (slot.revision == tile.revision && slot.actor) continue;

@@ -1,13 +1,15 @@
 #include "ui/report.h"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include "telemetry/log.h"
 #include "ui/canvas.h"
-#include "ui/map_view.h"
-#include "ui/offset_trace.h"
 #include "ui/palette.h"
 #include "ui/report_html.h"
 
@@ -16,104 +18,303 @@ namespace {
 
 namespace tm = plantscale::telemetry;
 
-// Renders pieces of the run into PNG files in the output folder.
-class Renderer {
+std::string Fixed(double v, int decimals) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << v;
+  return out.str();
+}
+
+std::string CameraPicture(const std::filesystem::path& dir, const ReportOptions& o, const EventSnapshot& s,
+                          int index) {
+  Canvas canvas(o.camera_width_px, o.camera_height_px);
+  CameraView view(o.camera);
+  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
+  view.Show(s.thumbnail ? &*s.thumbnail : nullptr, s.grid ? &*s.grid : nullptr);
+  const std::string name = "camera_event_" + std::to_string(index) + ".png";
+  WritePng(canvas.Render(), dir / name);
+  return name;
+}
+
+// Where the plants in view are (the close-up's centre): the mean y of the
+// latest frame's plants, else the vehicle.
+std::optional<double> ViewY(const RunModel& model) {
+  if (!model.plants_in_frame().empty()) {
+    double y = 0.0;
+    for (const tm::PlantObservation& p : model.plants_in_frame()) y += p.position_m.y();
+    return y / static_cast<double>(model.plants_in_frame().size());
+  }
+  if (model.pose()) return model.pose()->y_m;
+  return std::nullopt;
+}
+
+// Watches the replay for the close-ups: warning/error events and the
+// largest offset error against truth (else the largest offset sd).
+class CloseupPicker {
  public:
-  Renderer(const std::filesystem::path& dir, const ReportOptions& o) : dir_(dir), o_(o) {}
+  CloseupPicker(const ReportOptions& o, double half_length_m) : o_(o), half_(half_length_m) {}
 
-  std::string Map(const RunModel& model, const std::string& name, std::optional<FieldWindow> window,
-                  int w, int h) {
-    Canvas canvas(w, h);
-    MapViewParams params;
-    params.ellipses.confidence = o_.ellipse_confidence;
-    MapView view(params);
-    view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
-    view.Update(model);  // first pass builds the layers so that WholeRun sees the tiles
-    view.SetWindow(window ? window : std::optional<FieldWindow>(view.WholeRun(model)));
-    view.Update(model);
-    return Save(canvas.Render(), name);
+  void After(const RunModel& model) {
+    while (events_seen_ < model.events().size()) {
+      const plantscale_event_t& e = model.events()[events_seen_++];
+      if (e.severity < plantscale_event_t::SEVERITY_WARNING ||
+          static_cast<int>(events_.size()) >= o_.max_event_closeups) {
+        continue;
+      }
+      if (const auto y = ViewY(model)) events_.push_back(TakeCloseup(model, *y, half_, "event: " + e.text));
+    }
+    CheckOffset(model);
   }
 
-  std::string Trace(const RunModel& model) {
-    Canvas canvas(o_.trace_width_px, o_.trace_height_px);
-    OffsetTrace trace;
-    trace.AddTo(canvas.AddRenderer(0, 0, 1, 1, {1, 1, 1}));
-    trace.Update(model);
-    return Save(canvas.Render(), "offset_trace.png");
-  }
-
-  std::string Camera(const EventSnapshot& s, int index) {
-    Canvas canvas(o_.camera_width_px, o_.camera_height_px);
-    CameraView view(o_.camera);
-    view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
-    view.Show(s.thumbnail ? &*s.thumbnail : nullptr, s.grid ? &*s.grid : nullptr);
-    return Save(canvas.Render(), "camera_event_" + std::to_string(index) + ".png");
+  std::vector<CloseupSnapshot> All() const {
+    std::vector<CloseupSnapshot> all = events_;
+    if (worst_) all.push_back(*worst_);
+    std::stable_sort(all.begin(), all.end(),
+                     [](const CloseupSnapshot& a, const CloseupSnapshot& b) { return a.distance_m < b.distance_m; });
+    return all;
   }
 
  private:
-  std::string Save(const cv::Mat& image, const std::string& name) {
-    WritePng(image, dir_ / name);
-    return name;
+  static void Remember(std::map<int64_t, double>& m, int64_t utime, double v) {
+    m[utime] = v;
+    if (m.size() > 64) m.erase(m.begin());
   }
-  std::filesystem::path dir_;
-  ReportOptions o_;
+
+  void Consider(const RunModel& model, double score, const std::string& what) {
+    // A new close-up only when 10 % worse than the last: a bounded number of
+    // snapshots (each a pass over the map) however the error grows.
+    if (model.distance_m() < o_.settle_m || score < 1e-3 || score <= 1.1 * worst_score_) return;
+    const auto y = ViewY(model);
+    if (!y) return;
+    worst_score_ = score;
+    worst_ = TakeCloseup(model, *y, half_, what + " " + Fixed(1e3 * score, 1) + " mm");
+  }
+
+  void CheckOffset(const RunModel& model) {
+    const bool est_new = model.trace().size() > trace_seen_, truth_new = model.truth_trace().size() > truth_seen_;
+    trace_seen_ = model.trace().size();
+    truth_seen_ = model.truth_trace().size();
+    if (est_new) {
+      const TraceSample& t = model.trace().back();
+      Remember(est_, t.utime, t.offset_m);
+      const auto it = truth_.find(t.utime);
+      if (it != truth_.end()) {
+        Consider(model, std::abs(t.offset_m - it->second), "largest offset error (tracker - truth)");
+      } else if (model.truth_trace().empty() && t.mode == tm::FilterMode::kTracking) {
+        Consider(model, t.offset_sigma_m, "largest offset sd");
+      }
+    }
+    if (truth_new) {
+      const TraceSample& t = model.truth_trace().back();
+      Remember(truth_, t.utime, t.offset_m);
+      const auto it = est_.find(t.utime);
+      if (it != est_.end()) Consider(model, std::abs(it->second - t.offset_m), "largest offset error (tracker - truth)");
+    }
+  }
+
+  const ReportOptions& o_;
+  double half_;
+  size_t events_seen_ = 0, trace_seen_ = 0, truth_seen_ = 0;
+  std::map<int64_t, double> est_, truth_;
+  std::vector<CloseupSnapshot> events_;
+  std::optional<CloseupSnapshot> worst_;
+  double worst_score_ = 0.0;
 };
+
+// Across the bed: the crop rows ± half a spacing and a margin, else the map.
+std::pair<double, double> BedAcross(const RunModel& model, const AgronomySummary& a) {
+  if (!a.rows.empty()) {
+    return {(a.rows.front().row - 0.5) * a.row_spacing_m - 0.15, (a.rows.back().row + 0.5) * a.row_spacing_m + 0.15};
+  }
+  double lo = 1e300, hi = -1e300;
+  for (const auto& [key, t] : model.tiles()) {
+    lo = std::min(lo, t.origin_m.x());
+    hi = std::max(hi, t.origin_m.x() + t.width * t.resolution_m);
+  }
+  if (lo < hi) return {lo, hi};
+  return {-1.0, 1.0};
+}
+
+// Along the bed: the stand, else the map, else the path.
+std::optional<std::pair<double, double>> BedAlong(const RunModel& model, const AgronomySummary& a) {
+  if (a.crop > 0) return std::make_pair(a.y0_m, a.y1_m);
+  double lo = 1e300, hi = -1e300;
+  for (const auto& [key, t] : model.tiles()) {
+    lo = std::min(lo, t.origin_m.y());
+    hi = std::max(hi, t.origin_m.y() + t.height * t.resolution_m);
+  }
+  for (const auto& [x, y] : model.path()) lo = std::min(lo, y), hi = std::max(hi, y);
+  if (lo < hi) return std::make_pair(lo, hi);
+  return std::nullopt;
+}
+
+// The strips to draw: all of them when they fit, else the first, those with
+// a close-up, the longest gap and the most weeds, then evenly spaced.
+std::vector<int> PickStrips(int total, int max_strips, const std::vector<double>& wanted_y, double y0, double length,
+                            const AgronomySummary& a, std::vector<std::string>& why) {
+  std::vector<int> all;
+  if (total <= max_strips) {
+    for (int i = 0; i < total; ++i) all.push_back(i);
+    return all;
+  }
+  std::set<int> picked{0};
+  why.push_back("the start");
+  const auto strip_of = [&](double y) { return std::clamp(static_cast<int>((y - y0) / length), 0, total - 1); };
+  for (double y : wanted_y) {
+    if (static_cast<int>(picked.size()) < max_strips) picked.insert(strip_of(y));
+  }
+  if (!wanted_y.empty()) why.push_back("the close-ups");
+  for (const RowAgronomy& r : a.rows) {
+    if (r.longest_gap == a.longest_gap && a.longest_gap > 0 && static_cast<int>(picked.size()) < max_strips) {
+      picked.insert(strip_of(r.longest_gap_at_m));
+      why.push_back("the longest gap");
+      break;
+    }
+  }
+  // Weeds per strip.
+  std::vector<std::pair<int, int>> weeds;  // count, strip
+  std::map<int, int> per;
+  for (const HeatCell& c : a.cells) per[strip_of(a.y0_m + (c.index + 0.5) * a.cell_length_m)] += c.weeds;
+  for (const auto& [s, n] : per) weeds.emplace_back(-n, s);
+  std::sort(weeds.begin(), weeds.end());
+  for (size_t i = 0; i < weeds.size() && i < 2 && static_cast<int>(picked.size()) < max_strips; ++i) {
+    picked.insert(weeds[i].second);
+  }
+  if (!weeds.empty()) why.push_back("the most weeds");
+  for (int k = 1; static_cast<int>(picked.size()) < max_strips && k < 4 * max_strips; ++k) {
+    picked.insert(static_cast<int>(std::lround(static_cast<double>(k) * (total - 1) / (max_strips - 1))) % total);
+  }
+  why.push_back("evenly spaced");
+  return {picked.begin(), picked.end()};
+}
 
 }  // namespace
 
 OptionErrors ReportOptions::Validate() const {
   OptionErrors e;
-  RequirePositive(e, "closeup_every_m", closeup_every_m);
-  RequirePositive(e, "closeup_length_m", closeup_length_m);
-  RequireInRange(e, "ellipse_confidence", ellipse_confidence, 0.0, 1.0, false, false);
-  for (const auto& [key, v] : {std::pair{"map_width_px", map_width_px}, {"map_height_px", map_height_px},
-                               {"trace_width_px", trace_width_px}, {"camera_width_px", camera_width_px}}) {
-    RequireInRange(e, key, v, 16, 8192);
+  RequirePositive(e, "strip_length_m", pictures.strip_length_m);
+  RequireInRange(e, "strips_per_picture", pictures.strips_per_picture, 1, 50);
+  RequireInRange(e, "max_strip_pictures", pictures.max_strip_pictures, 0, 100);
+  RequirePositive(e, "closeup_length_m", pictures.closeup_length_m);
+  RequirePositive(e, "ellipse_magnification", pictures.ellipse_magnification);
+  RequireInRange(e, "ellipse_confidence", pictures.ellipse_confidence, 0.0, 1.0, false, false);
+  RequireNonNegative(e, "max_event_closeups", max_event_closeups);
+  for (const auto& [key, v] : {std::pair{"strip_width_px", pictures.strip_width_px},
+                               {"closeup_width_px", pictures.closeup_width_px},
+                               {"overview_width_px", pictures.overview_width_px},
+                               {"trace_width_px", pictures.trace_width_px},
+                               {"trace_height_px", pictures.trace_height_px},
+                               {"camera_width_px", camera_width_px}}) {
+    RequireInRange(e, key, v, 100, 8192);
   }
+  const OptionErrors more = agronomy.Validate();
+  e.insert(e.end(), more.begin(), more.end());
   return e;
 }
 
 ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem::path& out_dir,
                          const ReportOptions& o) {
   ThrowIfInvalid("report options", o.Validate());
-  RequireDisplay("plantscale report");
   std::filesystem::create_directories(out_dir);
   tm::LogReader reader(log);
   tm::Subscriber subscriber;
   RunModel model;
   model.Follow(subscriber);
-  Renderer render(out_dir, o);
   ReportResult result;
-  std::vector<std::string> closeups;
-  double next_closeup_m = o.closeup_every_m;
+  CloseupPicker picker(o, 0.5 * o.pictures.closeup_length_m + 0.3);
   int64_t clock = 0;
+  std::optional<std::string> run_config;
   while (const std::optional<tm::LogEvent> e = reader.Next()) {
     clock = e->utime;
-    subscriber.Feed(e->channel, e->data.data(), e->data.size(), e->utime);
-    if (model.distance_m() >= next_closeup_m && model.pose()) {
-      const double y = model.pose()->y_m;
-      const std::string name = "closeup_" + std::to_string(static_cast<int>(next_closeup_m)) + "m.png";
-      closeups.push_back(render.Map(model, name, FieldWindow{y - 0.5 * o.closeup_length_m, y + 0.5 * o.closeup_length_m, 0.0},
-                                    o.closeup_width_px, o.closeup_height_px));
-      next_closeup_m += o.closeup_every_m;
-    }
+    model.Feed(subscriber, e->channel, e->data.data(), e->data.size(), e->utime);
+    picker.After(model);
   }
-  if (!reader.error().empty()) result.problems.push_back("log: " + reader.error());
+  for (const plantscale_event_t& e : model.events()) {
+    if (e.kind == "run_config" && !run_config) run_config = e.text;
+  }
+  if (!reader.error().empty()) result.problems.push_back("log: " + reader.error() + " (the report shows what came before)");
   if (reader.events_read() == 0) result.problems.push_back("log: no events in " + log.string());
   for (const std::string& p : model.Problems(clock)) result.problems.push_back(p);
   result.summary = model.Summary();
+  result.agronomy = Agronomy(model, result.summary, o.agronomy);
+  const AgronomySummary& a = result.agronomy;
+  if (a.crop == 0 && reader.events_read() > 0) {
+    result.problems.push_back("no crop plant records in the log: no agronomic figures per row");
+  }
+  if (o.truth && run_config && !a.rows.empty()) {
+    StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m, {}};
+    for (const auto& [id, r] : model.plants()) {
+      if (r.plant.kind == tm::PlantKind::kCrop) stand.crops_m.emplace_back(r.plant.position_m.x(), r.plant.position_m.y());
+    }
+    try {
+      result.truth = o.truth(*run_config, stand);
+    } catch (const std::exception& e) {
+      result.problems.push_back(std::string("simulator truth not rebuilt: ") + e.what());
+    }
+  }
+
   ReportPictures pictures;
-  pictures.map = render.Map(model, "map.png", std::nullopt, o.map_width_px, o.map_height_px);
-  pictures.trace = render.Trace(model);
-  pictures.closeups = closeups;
-  pictures.ellipse_confidence = o.ellipse_confidence;
-  for (size_t i = 0; i < model.event_snapshots().size(); ++i) {
-    pictures.cameras.push_back({render.Camera(model.event_snapshots()[i], static_cast<int>(i)),
-                                model.event_snapshots()[i].event.text});
+  pictures.ellipse_confidence = o.pictures.ellipse_confidence;
+  pictures.magnification = o.pictures.ellipse_magnification;
+  const auto save = [&](const cv::Mat& img, const std::string& name) {
+    WritePng(img, out_dir / name);
+    return name;
+  };
+  const auto [x_lo, x_hi] = BedAcross(model, a);
+  if (a.cells_along > 0 && !a.rows.empty()) pictures.overview = save(DrawOverview(a, o.pictures), "overview.png");
+  std::vector<CloseupSnapshot> closeups = picker.All();
+  if (const auto along = BedAlong(model, a)) {
+    const double L = o.pictures.strip_length_m;
+    const double y0 = std::floor(along->first);
+    const int total = std::max(1, static_cast<int>(std::ceil((along->second - y0) / L - 1e-9)));
+    std::vector<double> wanted;
+    for (const CloseupSnapshot& c : closeups) wanted.push_back(c.y_m);
+    const std::vector<int> strips = PickStrips(total, o.pictures.max_strip_pictures * o.pictures.strips_per_picture,
+                                               wanted, y0, L, a, pictures.strips_why);
+    pictures.strips_total = total;
+    for (size_t i = 0; i < strips.size(); i += static_cast<size_t>(o.pictures.strips_per_picture)) {
+      std::vector<double> starts;
+      std::string caption;
+      for (size_t k = i; k < strips.size() && k < i + static_cast<size_t>(o.pictures.strips_per_picture); ++k) {
+        starts.push_back(y0 + strips[k] * L);
+        caption += (caption.empty() ? "" : ", ") + Fixed(starts.back(), 0) + "–" + Fixed(starts.back() + L, 0) + " m";
+      }
+      const std::string name = "bed_" + std::to_string(pictures.strips.size() + 1) + ".png";
+      pictures.strips.emplace_back(save(DrawStrips(model, a, starts, x_lo, x_hi, o.pictures), name), caption);
+      pictures.strips_shown += static_cast<int>(starts.size());
+    }
+  }
+  for (size_t i = 0; i < closeups.size(); ++i) {
+    pictures.closeups.emplace_back(
+        save(DrawCloseup(closeups[i], x_lo, x_hi, o.pictures), "closeup_" + std::to_string(i + 1) + ".png"),
+        closeups[i].reason + ", at " + Fixed(closeups[i].distance_m, 1) + " m");
+  }
+  pictures.trace = save(DrawOffsetTrace(model, o.pictures), "offset_trace.png");
+  if (a.crop_size.count + a.weed_size.count > 0) pictures.histogram = save(DrawSizeHistograms(a), "plant_size.png");
+  if (!model.event_snapshots().empty()) {
+    if (DisplayAvailable()) {
+      for (size_t i = 0; i < model.event_snapshots().size(); ++i) {
+        pictures.cameras.push_back({CameraPicture(out_dir, o, model.event_snapshots()[i], static_cast<int>(i)),
+                                    model.event_snapshots()[i].event.text});
+      }
+    } else {
+      result.problems.push_back("camera views at the events not drawn: no X display (plantscale report starts "
+                                "xvfb-run itself when it is installed)");
+    }
+  }
+  {
+    std::ofstream csv(out_dir / "summary.csv", std::ios::binary);
+    csv << AgronomyCsv(a);
+    if (!csv) throw std::runtime_error((out_dir / "summary.csv").string() + ": cannot write");
+  }
+  {
+    std::ofstream json(out_dir / "summary.json", std::ios::binary);
+    json << ReportJson(log.filename().string(), result.summary, a, result.truth, result.problems);
+    if (!json) throw std::runtime_error((out_dir / "summary.json").string() + ": cannot write");
   }
   result.index = out_dir / "index.html";
   std::ofstream html(result.index, std::ios::binary);
-  html << ReportHtml(log.filename().string(), result.summary, result.problems, model.events(), pictures);
+  html << ReportHtml(log.filename().string(), result.summary, a, result.truth, result.problems, model.events(),
+                     pictures);
   if (!html) throw std::runtime_error(result.index.string() + ": cannot write");
   result.pictures = pictures.AllFiles();
   return result;

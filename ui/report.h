@@ -1,42 +1,64 @@
 #pragma once
 // `plantscale report`: replays an LCM log through the subscriber into a run
-// model, renders off-screen (the map with overlays, ellipse close-ups along
-// the run, the offset trace, camera snapshots at warning/error events) and
-// writes DIR/index.html with a summary table and the pictures. Nothing in
-// the output depends on the wall clock, so the same log gives the same bytes.
+// model once, then writes DIR/index.html with the run summary and the
+// agronomic summary (ui/agronomy.h, per run and per row; also
+// DIR/summary.csv and DIR/summary.json) and the pictures of
+// ui/report_pictures.h: the overview heat maps, the bed as 10 m strips, the
+// ellipse close-ups (at warning/error events and at the largest offset
+// error, a bounded number however long the run), the offset trace, the
+// plant-size histograms, and the camera view at warning/error events (VTK:
+// drawn only with an X display, else the page says so). The cost is linear
+// in the log's length. Nothing in the output depends on the wall clock, so
+// the same log gives the same bytes.
 
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/common/options.h"
+#include "ui/agronomy.h"
 #include "ui/camera_view.h"
+#include "ui/report_pictures.h"
 #include "ui/run_model.h"
 
 namespace plantscale::ui {
 
+// Where the stand of a run lies, for the truth to be counted over.
+struct StandWindow {
+  double y0_m = 0.0, y1_m = 0.0;  // along the rows, field frame
+  int first_row = 0, last_row = 0;
+  double row_spacing_m = 0.0;
+  std::vector<std::pair<double, double>> crops_m;  // the crop records (x, y), to register a truth against
+};
+
 struct ReportOptions {
-  double closeup_every_m = 10.0;  // an ellipse close-up each time the run passes a multiple
-  double closeup_length_m = 3.0;  // field length of a close-up
-  double ellipse_confidence = 0.95;
-  int map_width_px = 1200, map_height_px = 240;
-  int closeup_width_px = 400, closeup_height_px = 300;
-  int trace_width_px = 900, trace_height_px = 320;
+  PictureOptions pictures;
+  AgronomyOptions agronomy;
+  int max_event_closeups = 6;  // close-ups at warning/error events
+  double settle_m = 2.0;       // the largest offset error is looked for past this distance
   int camera_width_px = 320, camera_height_px = 240;
   CameraViewParams camera;
+  // Simulator truth over the stand, given the text of the log's run_config
+  // event (the app rebuilds the field); may return nothing or throw.
+  std::function<std::optional<AgronomyTruth>(const std::string& run_config, const StandWindow& stand)> truth;
 
   OptionErrors Validate() const;
 };
 
 struct ReportResult {
   RunSummary summary;
+  AgronomySummary agronomy;
+  std::optional<AgronomyTruth> truth;
   std::vector<std::string> pictures;  // file names inside the output folder
   std::vector<std::string> problems;  // what was wrong with the log
   std::filesystem::path index;
 };
 
-// Throws InvalidOptionsError, telemetry::LogError (cannot open the log),
-// DisplayError (no X display) or std::runtime_error (cannot write DIR).
+// Throws InvalidOptionsError, telemetry::LogError (cannot open the log) or
+// std::runtime_error (cannot write DIR). A log that is empty, cut off or of
+// another program gives a report of what could be read, the problem stated.
 ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem::path& out_dir,
                          const ReportOptions& options = {});
 

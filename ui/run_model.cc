@@ -79,7 +79,10 @@ void RunModel::Observe(const std::string& channel, bool applied, const tm::Telem
   channels_ = s.channels;
   unknown_messages_ = s.unknown_channel_messages;
   const auto stats = s.channels.find(channel);
-  if (stats != s.channels.end()) last_message_utime_ = stats->second.last_recv_utime;
+  if (stats != s.channels.end()) {
+    last_message_utime_ = stats->second.last_recv_utime;
+    if (first_message_utime_ == 0) first_message_utime_ = last_message_utime_;
+  }
   if (!applied) return;
   if (channel == kGrid && s.grid) ObserveGrid(*s.grid, trace_), grid_ = s.grid;
   if (channel == kSimTruth && s.truth) ObserveGrid(*s.truth, truth_trace_), truth_ = s.truth;
@@ -131,7 +134,27 @@ void RunModel::ObservePlants(const tm::TelemetrySnapshot& s) {
   }
 }
 
+void RunModel::Feed(tm::Subscriber& subscriber, const std::string& channel, const void* data, size_t size,
+                    int64_t recv_utime) {
+  tile_hint_.reset();
+  if (channel == tm::channels::kMapTiles) {
+    plantscale_map_tile_t m;
+    if (m.decode(data, 0, static_cast<int>(size)) >= 0) tile_hint_ = std::make_pair(m.tile_x, m.tile_y);
+  }
+  subscriber.Feed(channel, data, size, recv_utime);
+  tile_hint_.reset();
+}
+
 void RunModel::ObserveTiles(const tm::TelemetrySnapshot& s) {
+  if (tile_hint_) {
+    const auto in = s.tiles.find(*tile_hint_);
+    if (in == s.tiles.end()) return;
+    const auto it = tiles_.find(*tile_hint_);
+    if (it != tiles_.end() && it->second.revision == in->second.revision) return;
+    tile_revisions_ += in->second.revision + 1 - (it != tiles_.end() ? it->second.revision + 1 : 0);
+    tiles_[*tile_hint_] = in->second;
+    return;
+  }
   int sum = 0;
   for (const auto& [key, tile] : s.tiles) {
     sum += tile.revision + 1;

@@ -90,6 +90,12 @@ class RunModel {
   void Observe(const std::string& channel, bool applied, const telemetry::TelemetrySnapshot& state);
   // Attaches Observe to `subscriber` (the model must outlive it).
   void Follow(telemetry::Subscriber& subscriber);
+  // Feeds one logged message to `subscriber` (followed by this model),
+  // telling the model which map tile it carries so that a map tile costs
+  // one look-up, not a pass over every tile of the run (the report's cost
+  // stays linear in distance). Never throws on bad bytes.
+  void Feed(telemetry::Subscriber& subscriber, const std::string& channel, const void* data, size_t size,
+            int64_t recv_utime);
 
   const std::optional<telemetry::GridEstimate>& grid() const { return grid_; }
   const std::optional<telemetry::GridEstimate>& truth() const { return truth_; }
@@ -112,6 +118,7 @@ class RunModel {
   double distance_m() const { return distance_m_; }
   double speed_m_s() const { return speed_m_s_; }  // mean of the wheel speeds
   int64_t last_message_utime() const { return last_message_utime_; }
+  int64_t first_message_utime() const { return first_message_utime_; }
   int64_t messages() const { return messages_; }
 
   // Heartbeat state at `now_utime` (the log clock when replaying).
@@ -139,6 +146,7 @@ class RunModel {
   std::map<int64_t, PlantRecord> registry_;
   std::map<std::pair<int, int>, telemetry::MapTileDelta> tiles_;
   int tile_revisions_ = 0;
+  std::optional<std::pair<int, int>> tile_hint_;  // the tile of the message being fed
   std::vector<TraceSample> trace_, truth_trace_;
   std::vector<std::pair<double, double>> path_;
   std::vector<telemetry::NozzleShot> shots_;
@@ -154,6 +162,7 @@ class RunModel {
   double speed_m_s_ = 0.0;
   int64_t first_boot_utime_ = 0;
   int64_t last_message_utime_ = 0;
+  int64_t first_message_utime_ = 0;
   int64_t messages_ = 0;
   int64_t plant_messages_ = 0;
 };

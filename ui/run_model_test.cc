@@ -10,6 +10,7 @@
 #include "telemetry/convert.h"
 #include "ui/run_model.h"
 #include "ui/scene_test_util.h"
+#include "ui/synthetic_run.h"
 
 namespace plantscale::ui {
 namespace {
@@ -21,6 +22,30 @@ bool Mentions(const std::vector<std::string>& lines, const std::string& what) {
     if (l.find(what) != std::string::npos) return true;
   }
   return false;
+}
+
+// RunModel::Feed looks up only the tile a message carries; the model must
+// end where a pass over every tile after each message ends.
+TEST(RunModel, FeedWithTileLookUpMatchesFullPass) {
+  SyntheticRunOptions run;
+  run.length_m = 8.0;
+  const std::vector<tm::LogEvent> events = SyntheticRun(run);
+  tm::Subscriber sub_a, sub_b;
+  RunModel a, b;
+  a.Follow(sub_a);
+  b.Follow(sub_b);
+  for (const tm::LogEvent& e : events) {
+    a.Feed(sub_a, e.channel, e.data.data(), e.data.size(), e.utime);
+    sub_b.Feed(e.channel, e.data.data(), e.data.size(), e.utime);
+    ASSERT_EQ(a.tile_revision_sum(), b.tile_revision_sum());
+  }
+  ASSERT_GT(a.tiles().size(), 5u);
+  ASSERT_EQ(a.tiles().size(), b.tiles().size());
+  for (const auto& [key, t] : b.tiles()) {
+    ASSERT_TRUE(a.tiles().count(key));
+    EXPECT_EQ(a.tiles().at(key).revision, t.revision);
+    EXPECT_EQ(a.tiles().at(key).cells, t.cells);
+  }
 }
 
 TEST(RunModel, EllipseScaleIsChiSquareTwoDof) {

@@ -12,6 +12,12 @@
 #include "ui/offset_trace.h"
 #include "ui/palette.h"
 #include "ui/scene_test_util.h"
+#include "ui/map_layer.h"
+#include "ui/station_timeline.h"
+#include "ui/synthetic_run.h"
+
+#include <vtkPropCollection.h>
+#include <vtkNew.h>
 
 namespace plantscale::ui {
 namespace {
@@ -34,6 +40,33 @@ cv::Mat RenderMap(const RunModel& model, std::initializer_list<MapLayerId> layer
   view.SetWindow(window);
   view.Update(model);
   return canvas.Render();
+}
+
+// Issue 36: seeking back in a log left map tiles from later on screen. The
+// map after seeking back to 10 s must be the map of a forward pass to 10 s.
+TEST(MapLayer, SeekBackShowsTheMapAsItWasThen) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions run;
+  run.length_m = 20.0;
+  LogTimeline sought(SyntheticRun(run), "");
+  vtkNew<vtkRenderer> renderer_sought, renderer_forward;
+  MapLayer back, forward;
+  back.AddTo(renderer_sought);
+  forward.AddTo(renderer_forward);
+  sought.Seek(35.0);
+  back.Update(sought.model());
+  const int actors_at_35s = renderer_sought->GetViewProps()->GetNumberOfItems();
+  sought.Seek(10.0);
+  back.Update(sought.model());
+  LogTimeline fresh(SyntheticRun(run), "");
+  fresh.Seek(10.0);
+  forward.Update(fresh.model());
+  double b[4], f[4];
+  ASSERT_TRUE(back.Bounds(b));
+  ASSERT_TRUE(forward.Bounds(f));
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(b[i], f[i], 1e-9) << i;  // the same tiles, exactly
+  EXPECT_LT(renderer_sought->GetViewProps()->GetNumberOfItems(), actors_at_35s);
+  EXPECT_EQ(renderer_sought->GetViewProps()->GetNumberOfItems(), renderer_forward->GetViewProps()->GetNumberOfItems());
 }
 
 TEST(SceneGolden, MapLayerShowsCropWeedSoilTreated) {

@@ -39,7 +39,7 @@ void LogTimeline::FeedUpTo(double position_s) {
   const int64_t until = now_utime();
   while (next_ < events_.size() && events_[next_].utime <= until) {
     const telemetry::LogEvent& e = events_[next_++];
-    subscriber_->Feed(e.channel, e.data.data(), e.data.size(), e.utime);
+    model_->Feed(*subscriber_, e.channel, e.data.data(), e.data.size(), e.utime);  // one look-up per map tile
   }
 }
 

@@ -1,5 +1,6 @@
 #include "ui/synthetic_run.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -49,12 +50,17 @@ class Generator {
   void Tiles(const tm::Pose& p, int64_t utime, bool flush);
   void Thumbnail(int frame, const tm::Pose& p, int64_t utime);
   uint8_t CellAt(const Eigen::Vector2d& f) const;
+  // The plants with y in [y0, y1], in the order of plants_ (so that the
+  // random draws per plant are those of a pass over every plant): the run's
+  // cost stays linear in its length.
+  std::vector<const FieldPlant*> Between(double y0, double y1) const;
 
   SyntheticRunOptions o_;
   std::mt19937 rng_;
   std::normal_distribution<double> noise_{0.0, 1.0};
   geometry::CameraModel camera_;
   std::vector<FieldPlant> plants_;
+  std::vector<std::pair<double, size_t>> by_y_;  // (y, index into plants_), sorted
   std::map<std::string, int64_t> seq_;
   std::vector<tm::LogEvent> events_;
   int next_tile_row_ = 0;
@@ -64,12 +70,34 @@ class Generator {
 
 void Generator::PlantField() {
   int64_t id = 0;
-  for (double y = 0.5; y < o_.length_m + 3.0; y += o_.plant_spacing_m) {
-    for (int n = -1; n <= 1; ++n) plants_.push_back({id++, tm::PlantKind::kCrop, {n * o_.row_spacing_m, y}});
+  int line = 0;
+  for (double y = 0.5; y < o_.length_m + 3.0; y += o_.plant_spacing_m, ++line) {
+    for (int n = -1; n <= 1; ++n) {
+      const int64_t plant_id = id++;  // ids as without missing plants
+      if (std::find(o_.missing_crops.begin(), o_.missing_crops.end(), std::make_pair(n, line)) !=
+          o_.missing_crops.end()) {
+        continue;
+      }
+      plants_.push_back({plant_id, tm::PlantKind::kCrop, {n * o_.row_spacing_m, y}});
+    }
   }
   std::uniform_real_distribution<double> ux(-0.7, 0.7), uy(0.3, o_.length_m + 3.0);
   const int weeds = static_cast<int>(o_.weeds_per_m * (o_.length_m + 3.0));
   for (int i = 0; i < weeds; ++i) plants_.push_back({id++, tm::PlantKind::kWeed, {ux(rng_), uy(rng_)}});
+  for (size_t i = 0; i < plants_.size(); ++i) by_y_.emplace_back(plants_[i].position.y(), i);
+  std::sort(by_y_.begin(), by_y_.end());
+}
+
+std::vector<const FieldPlant*> Generator::Between(double y0, double y1) const {
+  std::vector<size_t> index;
+  for (auto it = std::lower_bound(by_y_.begin(), by_y_.end(), std::make_pair(y0, size_t{0}));
+       it != by_y_.end() && it->first <= y1; ++it) {
+    index.push_back(it->second);
+  }
+  std::sort(index.begin(), index.end());
+  std::vector<const FieldPlant*> out;
+  for (size_t i : index) out.push_back(&plants_[i]);
+  return out;
 }
 
 tm::Pose Generator::PoseAt(double y) const {
@@ -186,7 +214,8 @@ void Generator::Grid(int frame, const tm::Pose& p, double t, int64_t utime) {
 
 void Generator::Plants(int frame, const tm::Pose& p, int64_t utime) {
   std::vector<tm::PlantObservation> seen;
-  for (const FieldPlant& f : plants_) {
+  for (const FieldPlant* fp : Between(p.y_m - 0.5, p.y_m + 3.5)) {
+    const FieldPlant& f = *fp;
     const Eigen::Vector2d v = ToVehicle(p, f.position);
     if (v.y() < 0.9 || v.y() > 2.3 || std::abs(v.x()) > 0.8) continue;
     tm::PlantObservation o;
@@ -209,7 +238,8 @@ void Generator::Nozzles(const tm::Pose& p, double prev_y, int64_t utime) {
   bar.fault.assign(static_cast<size_t>(o_.nozzles), 0);
   bar.failsafe = false;
   const double width = 1.5 / o_.nozzles;
-  for (const FieldPlant& f : plants_) {
+  for (const FieldPlant* fp : Between(prev_y, p.y_m)) {
+    const FieldPlant& f = *fp;
     if (f.kind != tm::PlantKind::kWeed || f.position.y() <= prev_y || f.position.y() > p.y_m) continue;
     const int n = std::clamp(static_cast<int>((f.position.x() + 0.75) / width), 0, o_.nozzles - 1);
     bar.open[static_cast<size_t>(n)] = true;
@@ -220,7 +250,8 @@ void Generator::Nozzles(const tm::Pose& p, double prev_y, int64_t utime) {
 
 uint8_t Generator::CellAt(const Eigen::Vector2d& f) const {
   uint8_t cell = plantscale_map_tile_t::CELL_SOIL;
-  for (const FieldPlant& p : plants_) {
+  for (const FieldPlant* pp : Between(f.y() - 0.1, f.y() + 0.1)) {
+    const FieldPlant& p = *pp;
     if (std::abs(p.position.y() - f.y()) > 0.1) continue;
     const double d = (p.position - f).norm();
     if (p.kind == tm::PlantKind::kCrop && d < 0.06) cell = plantscale_map_tile_t::CELL_CROP;
@@ -263,7 +294,8 @@ void Generator::Thumbnail(int frame, const tm::Pose& p, int64_t utime) {
   m.source_width = static_cast<int16_t>(camera_.width());
   m.source_height = static_cast<int16_t>(camera_.height());
   m.width = 160, m.height = 120;
-  for (const FieldPlant& f : plants_) {
+  for (const FieldPlant* fp : Between(p.y_m - 1.0, p.y_m + 5.5)) {
+    const FieldPlant& f = *fp;
     const Eigen::Vector2d v = ToVehicle(p, f.position);
     if (v.y() < 0.3 || v.y() > 4.0) continue;
     const auto uv = camera_.Project({v.x(), v.y(), 0.0});

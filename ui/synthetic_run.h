@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "telemetry/log.h"
@@ -33,6 +34,7 @@ struct SyntheticRunOptions {
   std::optional<double> heartbeat_stops_at_s;  // no PLANTSCALE_HEALTH after this
   std::optional<double> restart_at_s;          // new boot time, sequences from 0
   std::optional<double> nan_grid_at_s;         // one grid message with a NaN offset
+  std::vector<std::pair<int, int>> missing_crops;  // (row −1..1, plant line from 0 at y = 0.5 m) not planted
 };
 
 std::vector<telemetry::LogEvent> SyntheticRun(const SyntheticRunOptions& options);

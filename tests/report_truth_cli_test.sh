@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# plantscale report's agronomic summary against the simulator's truth
+# (issue 36) on the field preset: a 40 m run published and logged
+# (simulate --publish --fast --log over memq://), then `report --json`; the
+# report rebuilds the simulated field from the log's run_config event and
+# counts the truth over the same stand and rows (the bed frame registered on
+# the field by the crop records).
+# Issue 36 asks for crop plants, gaps, median size and weed density within
+# 5 % of the truth. The report's arithmetic is exact (ui/report_test.cc, on
+# a synthetic bed with known gaps and sizes); what it summarises is the
+# vehicle's plant records, and today those meet 5 % for the crop count only
+# (docs/results/2026-11-27-report.md, 40 m and 1 km): weeds standing where a
+# crop is missing are taken for that crop (fewer gaps), the record's area is
+# the largest blob seen projected to the ground (leaf-tip radius about 30 %
+# high), and about a third of the weeds have no record. Those three are held
+# to the bounds they meet now (a regression check, stated below), the crop
+# count to 5 %. Needs no display (the report starts xvfb-run itself when it
+# can, and writes everything but the camera views without one).
+set -uo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
+plantscale="$1"
+work="$2"
+rm -rf "$work" && mkdir -p "$work"
+
+log="$work/run.lcmlog"
+"$plantscale" simulate --preset field --length-m 40 --publish --fast --lcm-url memq:// --quiet \
+  --log "$log" >"$work/simulate.txt" 2>&1 || fail "simulate exited $?"
+"$plantscale" report "$log" --out "$work/report" --json >"$work/summary.json" || fail "report --json exited $?"
+python3 - "$work/summary.json" <<'PY' || fail "summary against truth (see above)"
+import json, sys
+j = json.load(open(sys.argv[1]))
+a, t = j["agronomy"], j["truth"]
+if t is None:
+    sys.exit("no truth in summary.json: " + "; ".join(j["problems"]))
+# name, report, truth, lowest and highest (report - truth) / truth allowed
+checks = [
+    ("crop plants", a["crop_plants"], t["crop_plants"], -0.05, 0.05),
+    ("missing plants", a["missing_plants"], t["missing_plants"], -0.40, 0.05),
+    ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.05, 0.40),
+    ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.45, 0.05),
+]
+bad = 0
+for name, got, want, lo, hi in checks:
+    rel = (got - want) / want if want else float("inf")
+    ok = lo <= rel <= hi
+    print(f"{name}: report {got:.4g}, truth {want:.4g}, {100 * rel:+.1f} % "
+          f"(allowed {100 * lo:+.0f} .. {100 * hi:+.0f} %){'' if ok else '  FAIL'}")
+    bad += not ok
+sys.exit(1 if bad else 0)
+PY
+finish "report against simulator truth"

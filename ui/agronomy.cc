@@ -1,0 +1,235 @@
+#include "ui/agronomy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <sstream>
+
+namespace plantscale::ui {
+namespace {
+
+namespace tm = plantscale::telemetry;
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Quantile q of sorted `v`, linear between order statistics.
+double Quantile(const std::vector<double>& v, double q) {
+  if (v.empty()) return 0.0;
+  const double at = q * static_cast<double>(v.size() - 1);
+  const size_t i = static_cast<size_t>(std::floor(at));
+  const size_t j = std::min(i + 1, v.size() - 1);
+  return v[i] + (at - static_cast<double>(i)) * (v[j] - v[i]);
+}
+
+double RowSpacing(const RunModel& model, const std::vector<const PlantRecord*>& crops, std::string& source) {
+  if (model.grid()) {
+    source = "tracker";
+    return model.grid()->state.row_spacing_m;
+  }
+  if (model.truth()) {
+    source = "simulator truth";
+    return model.truth()->state.row_spacing_m;
+  }
+  source = "plants";
+  std::vector<double> x;
+  for (const PlantRecord* r : crops) x.push_back(r->plant.position_m.x());
+  std::sort(x.begin(), x.end());
+  std::vector<double> steps;
+  for (size_t i = 1; i < x.size(); ++i) {
+    if (x[i] - x[i - 1] > 0.15) steps.push_back(x[i] - x[i - 1]);
+  }
+  return steps.empty() ? 0.475 : Median(steps);
+}
+
+std::string Num(double v, int decimals) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(decimals);
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+OptionErrors AgronomyOptions::Validate() const {
+  OptionErrors e;
+  RequireNonNegative(e, "rate_l_ha", rate_l_ha);
+  RequireInRange(e, "outline_area_fraction", outline_area_fraction, 0.1, 1.0);
+  RequirePositive(e, "cell_length_m", cell_length_m);
+  RequirePositive(e, "histogram_bin_m", histogram_bin_m);
+  RequireInRange(e, "histogram_bins", histogram_bins, 1, 1000);
+  return e;
+}
+
+double LeafTipRadius(double area_m2, double outline_area_fraction) {
+  return std::sqrt(std::max(0.0, area_m2) / (std::numbers::pi * outline_area_fraction));
+}
+
+SizeStats SizeStatsOf(std::vector<double> radii_m, double bin_m, int bins) {
+  SizeStats s;
+  s.bin_m = bin_m;
+  s.histogram.assign(static_cast<size_t>(bins), 0);
+  std::sort(radii_m.begin(), radii_m.end());
+  s.count = static_cast<int>(radii_m.size());
+  s.median_m = Quantile(radii_m, 0.5);
+  s.q1_m = Quantile(radii_m, 0.25);
+  s.q3_m = Quantile(radii_m, 0.75);
+  for (double r : radii_m) {
+    const int b = std::clamp(static_cast<int>(r / bin_m), 0, bins - 1);
+    ++s.histogram[static_cast<size_t>(b)];
+  }
+  return s;
+}
+
+AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const AgronomyOptions& o) {
+  ThrowIfInvalid("agronomy options", o.Validate());
+  AgronomySummary a;
+  a.distance_m = run.distance_m;
+  a.duration_s = 1e-6 * static_cast<double>(model.last_message_utime() - model.first_message_utime());
+  a.rate_l_ha = o.rate_l_ha;
+  a.shots = run.shots;
+  a.faults = static_cast<int>(run.faults.size());
+  a.cell_length_m = o.cell_length_m;
+  a.area_treated_m2 = run.area_treated_m2;
+  if (run.area_treated_m2) a.product_l = *run.area_treated_m2 * 1e-4 * o.rate_l_ha;
+
+  std::vector<const PlantRecord*> crops, weeds;
+  for (const auto& [id, r] : model.plants()) {
+    if (r.plant.kind == tm::PlantKind::kCrop) crops.push_back(&r);
+    if (r.plant.kind == tm::PlantKind::kWeed) weeds.push_back(&r);
+  }
+  a.row_spacing_m = RowSpacing(model, crops, a.row_spacing_source);
+  const double rs = a.row_spacing_m;
+  const auto row_of = [rs](double x) { return static_cast<int>(std::lround(x / rs)); };
+
+  // Crops by row, sorted along it.
+  std::map<int, std::vector<const PlantRecord*>> by_row;
+  for (const PlantRecord* r : crops) by_row[row_of(r->plant.position_m.x())].push_back(r);
+  // A "row" with a handful of crop records is a stray (a weed taken for a
+  // crop between rows): keep rows holding ≥ 10 % of the fullest row.
+  size_t fullest = 0;
+  for (const auto& [n, v] : by_row) fullest = std::max(fullest, v.size());
+  for (auto it = by_row.begin(); it != by_row.end();) {
+    it = it->second.size() * 10 < fullest ? by_row.erase(it) : std::next(it);
+  }
+  if (by_row.empty()) return a;
+  a.y0_m = 1e300;
+  a.y1_m = -1e300;
+  std::vector<double> all_radii;
+  for (auto& [n, v] : by_row) {
+    std::sort(v.begin(), v.end(), [](const PlantRecord* p, const PlantRecord* q) {
+      return p->plant.position_m.y() < q->plant.position_m.y();
+    });
+    a.y0_m = std::min(a.y0_m, v.front()->plant.position_m.y());
+    a.y1_m = std::max(a.y1_m, v.back()->plant.position_m.y());
+  }
+  const double x_lo = (by_row.begin()->first - 0.5) * rs, x_hi = (by_row.rbegin()->first + 0.5) * rs;
+  const double length = std::max(0.0, a.y1_m - a.y0_m);
+  a.surveyed_area_m2 = (x_hi - x_lo) * length;
+  a.cells_along = std::max(1, static_cast<int>(std::ceil(length / o.cell_length_m)));
+  const auto cell_of = [&](double y) {
+    return std::clamp(static_cast<int>((y - a.y0_m) / o.cell_length_m), 0, a.cells_along - 1);
+  };
+  std::map<int, size_t> row_index;
+  double row_metres = 0.0;
+  for (auto& [n, v] : by_row) {
+    RowAgronomy r;
+    r.row = n;
+    r.crop = static_cast<int>(v.size());
+    r.stand_length_m = v.back()->plant.position_m.y() - v.front()->plant.position_m.y();
+    std::vector<double> steps, radii;
+    for (size_t i = 1; i < v.size(); ++i) steps.push_back(v[i]->plant.position_m.y() - v[i - 1]->plant.position_m.y());
+    r.plant_spacing_m = Median(steps);
+    for (size_t i = 1; i < v.size() && r.plant_spacing_m > 0.0; ++i) {
+      const int missing = static_cast<int>(std::lround(steps[i - 1] / r.plant_spacing_m)) - 1;
+      if (missing <= 0) continue;
+      ++r.gaps;
+      r.missing += missing;
+      if (missing > r.longest_gap) r.longest_gap = missing, r.longest_gap_at_m = v[i - 1]->plant.position_m.y();
+    }
+    // Plants per metre of row: the plants that would stand at one spacing
+    // each over the stand, so a run of n plants covers n·l̄.
+    const double row_m = r.stand_length_m + r.plant_spacing_m;
+    r.plants_per_m = row_m > 0.0 ? r.crop / row_m : 0.0;
+    row_metres += row_m;
+    for (const PlantRecord* p : v) radii.push_back(LeafTipRadius(p->plant.size_m2, o.outline_area_fraction));
+    all_radii.insert(all_radii.end(), radii.begin(), radii.end());
+    r.crop_size = SizeStatsOf(radii, o.histogram_bin_m, o.histogram_bins);
+    a.crop += r.crop;
+    a.gaps += r.gaps;
+    a.missing += r.missing;
+    a.longest_gap = std::max(a.longest_gap, r.longest_gap);
+    row_index[n] = a.rows.size();
+    a.rows.push_back(r);
+  }
+  a.plants_per_m = row_metres > 0.0 ? a.crop / row_metres : 0.0;
+  a.crop_size = SizeStatsOf(all_radii, o.histogram_bin_m, o.histogram_bins);
+
+  a.cells.resize(a.rows.size() * static_cast<size_t>(a.cells_along));
+  for (size_t i = 0; i < a.rows.size(); ++i) {
+    for (int c = 0; c < a.cells_along; ++c) {
+      HeatCell& h = a.cells[i * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
+      h.row = a.rows[i].row;
+      h.index = c;
+    }
+  }
+  const auto cell = [&](int row, double y) -> HeatCell* {
+    const auto it = row_index.find(row);
+    if (it == row_index.end()) return nullptr;
+    return &a.cells[it->second * static_cast<size_t>(a.cells_along) + static_cast<size_t>(cell_of(y))];
+  };
+  for (const auto& [n, v] : by_row) {
+    for (const PlantRecord* p : v) {
+      if (HeatCell* h = cell(n, p->plant.position_m.y())) ++h->crop;
+    }
+  }
+  std::vector<double> weed_radii;
+  for (const PlantRecord* w : weeds) {
+    const Eigen::Vector2d& p = w->plant.position_m;
+    if (p.x() < x_lo || p.x() > x_hi || p.y() < a.y0_m || p.y() > a.y1_m) continue;
+    ++a.weeds;
+    weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));
+    if (HeatCell* h = cell(row_of(p.x()), p.y())) {
+      ++h->weeds;
+      h->weed_area_m2 += w->plant.size_m2;
+      ++a.rows[row_index[h->row]].weeds;
+    }
+  }
+  a.weeds_per_m2 = a.surveyed_area_m2 > 0.0 ? a.weeds / a.surveyed_area_m2 : 0.0;
+  for (RowAgronomy& r : a.rows) {
+    const double area = rs * (r.stand_length_m > 0.0 ? length : 0.0);
+    r.weeds_per_m2 = area > 0.0 ? r.weeds / area : 0.0;
+  }
+  a.weed_size = SizeStatsOf(weed_radii, o.histogram_bin_m, o.histogram_bins);
+  return a;
+}
+
+std::string AgronomyCsv(const AgronomySummary& a) {
+  std::ostringstream out;
+  out << "row,crop_plants,stand_length_m,plants_per_m,plant_spacing_m,gaps,missing_plants,longest_gap_plants,"
+         "crop_radius_median_m,crop_radius_q1_m,crop_radius_q3_m,weeds,weeds_per_m2,weed_radius_median_m,"
+         "area_treated_m2,product_l,rate_l_ha,distance_m,duration_s,faults\n";
+  for (const RowAgronomy& r : a.rows) {
+    out << r.row << ',' << r.crop << ',' << Num(r.stand_length_m, 2) << ',' << Num(r.plants_per_m, 3) << ','
+        << Num(r.plant_spacing_m, 3) << ',' << r.gaps << ',' << r.missing << ',' << r.longest_gap << ','
+        << Num(r.crop_size.median_m, 4) << ',' << Num(r.crop_size.q1_m, 4) << ',' << Num(r.crop_size.q3_m, 4)
+        << ',' << r.weeds << ',' << Num(r.weeds_per_m2, 3) << ",,,,,,,\n";
+  }
+  const double length = a.y1_m - a.y0_m;
+  out << "all," << a.crop << ',' << Num(std::max(0.0, length), 2) << ',' << Num(a.plants_per_m, 3) << ",,"
+      << a.gaps << ',' << a.missing << ',' << a.longest_gap << ',' << Num(a.crop_size.median_m, 4) << ','
+      << Num(a.crop_size.q1_m, 4) << ',' << Num(a.crop_size.q3_m, 4) << ',' << a.weeds << ','
+      << Num(a.weeds_per_m2, 3) << ',' << Num(a.weed_size.median_m, 4) << ','
+      << (a.area_treated_m2 ? Num(*a.area_treated_m2, 3) : std::string()) << ','
+      << (a.product_l ? Num(*a.product_l, 4) : std::string()) << ',' << Num(a.rate_l_ha, 1) << ','
+      << Num(a.distance_m, 2) << ',' << Num(a.duration_s, 1) << ',' << a.faults << '\n';
+  return out.str();
+}
+
+}  // namespace plantscale::ui

@@ -1,0 +1,123 @@
+#pragma once
+// The agronomic summary of a run (issue 36): what an agronomist asks first,
+// per run and per crop row, from the run model a log was replayed into:
+// crop plants and plants per metre of row, gaps (missing plants against the
+// plant spacing), plant size as leaf-tip radius, weeds per m² and their
+// sizes, area treated and product used at a rate, time, distance, faults;
+// and the 1 m × row cells of the overview heat map. No VTK here.
+//
+// Definitions (docs/cli/report.md#agronomic-summary):
+//  - a crop record belongs to row n = round(x / r̄), r̄ the row spacing of
+//    the newest grid estimate (tracker, else simulator truth, else the
+//    median spacing between crop rows);
+//  - a row's stand runs from its first to its last crop record; plants per
+//    metre = crops / that length; the plant spacing l̄ is the median of the
+//    gaps between neighbours along the row; between two neighbours
+//    round(Δy / l̄) − 1 plants are missing; a gap is one such run, its
+//    length the number of missing plants;
+//  - leaf-tip radius from the record's ground area A: R = √(A / (π f)),
+//    f the area of a lobed outline over πR² (engine/sim/plant_shape.h:
+//    f = (1−d)² + (4/π)(1−d)d + d²/2, 0.832 for lobe depth d = 0.25); weeds
+//    as the radius of a disc of the same area;
+//  - weeds per m² over the surveyed band: the crop rows' span across plus
+//    r̄/2 on each side, times the stand length.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/common/options.h"
+#include "ui/run_model.h"
+
+namespace plantscale::ui {
+
+struct AgronomyOptions {
+  double rate_l_ha = 200.0;            // product applied on the treated area, litres per hectare
+  double outline_area_fraction = 0.832;  // crop area / (π R²), see above
+  double cell_length_m = 1.0;          // heat map cells along the row
+  double histogram_bin_m = 0.01;       // plant-size histogram bin (radius)
+  int histogram_bins = 25;
+
+  OptionErrors Validate() const;
+};
+
+struct SizeStats {
+  int count = 0;
+  double median_m = 0.0, q1_m = 0.0, q3_m = 0.0;  // radius quartiles
+  std::vector<int> histogram;                      // counts per bin, the last bin open-ended
+  double bin_m = 0.01;
+};
+
+struct RowAgronomy {
+  int row = 0;  // 0 the central row, negative to the left
+  int crop = 0;
+  double stand_length_m = 0.0;  // first to last crop along the row
+  double plants_per_m = 0.0;
+  double plant_spacing_m = 0.0;  // median neighbour spacing
+  int gaps = 0;                  // runs of missing plants
+  int missing = 0;               // plants missing in all gaps
+  int longest_gap = 0;           // plants missing in the longest gap
+  double longest_gap_at_m = 0.0; // y where the longest gap starts
+  SizeStats crop_size;
+  int weeds = 0;  // weeds within r̄/2 of the row
+  double weeds_per_m2 = 0.0;
+};
+
+// One 1 m × row cell of the overview.
+struct HeatCell {
+  int row = 0;
+  int index = 0;  // along the run: y from y0_m + index · cell_length_m
+  int crop = 0;
+  int weeds = 0;
+  double weed_area_m2 = 0.0;
+};
+
+struct AgronomySummary {
+  double distance_m = 0.0;
+  double duration_s = 0.0;  // first to last message
+  double row_spacing_m = 0.0;
+  std::string row_spacing_source;  // "tracker", "simulator truth" or "plants"
+  double y0_m = 0.0, y1_m = 0.0;   // stand along the rows (field frame)
+  double surveyed_area_m2 = 0.0;
+  int crop = 0;
+  double plants_per_m = 0.0;  // crops / row metres
+  int gaps = 0, missing = 0, longest_gap = 0;
+  SizeStats crop_size;
+  int weeds = 0;
+  double weeds_per_m2 = 0.0;
+  SizeStats weed_size;
+  std::optional<double> area_treated_m2;
+  std::optional<double> product_l;
+  double rate_l_ha = 0.0;
+  int shots = 0;
+  int faults = 0;
+  std::vector<RowAgronomy> rows;
+  double cell_length_m = 1.0;
+  int cells_along = 0;
+  std::vector<HeatCell> cells;  // rows × cells_along, row-major by row order of `rows`
+};
+
+// Leaf-tip radius of a crop of ground area `area_m2` (see above).
+double LeafTipRadius(double area_m2, double outline_area_fraction);
+// Median, quartiles (linear interpolation) and histogram of `radii_m`.
+SizeStats SizeStatsOf(std::vector<double> radii_m, double bin_m, int bins);
+
+// Throws InvalidOptionsError.
+AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const AgronomyOptions& options = {});
+
+// Simulator truth over the same stand (filled by the app, which can rebuild
+// the simulated field from the log's run_config event).
+struct AgronomyTruth {
+  std::string source;  // e.g. "simulator: preset field, seed 1"
+  int crop = 0;
+  int missing = 0;  // missing plants (planting gaps)
+  int gaps = 0;
+  double median_radius_m = 0.0;
+  double weeds_per_m2 = 0.0;
+  int weeds = 0;
+};
+
+// CSV: one line per row and one for the whole run (row = "all").
+std::string AgronomyCsv(const AgronomySummary& a);
+
+}  // namespace plantscale::ui
