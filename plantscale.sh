@@ -25,6 +25,8 @@ PACKAGES=(
 )
 # tests/fuzz (docs/fuzzing.md): clang and its libFuzzer/ASan runtimes.
 FUZZ_PACKAGES=(clang libclang-rt-dev)
+# The full test suite also opens a report in headless Chromium (cli.report_browser).
+TEST_PACKAGES=(chromium)
 
 ensure_packages() {
   local missing=()
@@ -127,7 +129,7 @@ case "$command" in
     ./build/app/plantscale demo "$@"
     ;;
   test)
-    ensure_packages
+    if [[ "${1:-}" == --fast ]]; then ensure_packages; else ensure_packages "${TEST_PACKAGES[@]}"; fi
     build
     if [[ "${1:-}" == --fast ]]; then
       (cd build && ctest -L '^unit$' --output-on-failure --parallel "$(nproc)" --timeout 300)
