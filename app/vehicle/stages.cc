@@ -337,10 +337,12 @@ void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
       pipeline_.Step(frame.utime, frame.frame_index, frame.image, frame.odometry, &ticks_);
   blobs_ = r.blobs;
   status.faults.insert(status.faults.end(), r.faults.begin(), r.faults.end());
+  // Wheel slip this frame (a burst may begin and end between two frames).
   const tracking::SlipGuard& slip = pipeline_.tracker().slip_guard();
-  if (slip.slipping()) {
+  if (slip.slipping() || slip.bursts() != slip_bursts_) {
     status.faults.push_back("odometry: wheel slip (burst " + std::to_string(slip.bursts()) +
                             "): dead reckoning with the ground speed from before it");
+    slip_bursts_ = slip.bursts();
   }
   if (r.accepted) PublishGrid(r, publisher);
   if (!pipeline_.treatment()) return;

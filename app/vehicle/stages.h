@@ -176,6 +176,7 @@ class PipelineStage : public Stage, public BlobView {
   std::vector<int> changed_plants_;  // record ids since the last plant list
   int64_t last_plants_utime_ = -1;
   int64_t last_frame_index_ = 0;     // of the last frame processed
+  int slip_bursts_ = 0;              // the slip guard's, as last reported
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on
