@@ -119,7 +119,6 @@ struct Injector {
   FaultRunResult* result = nullptr;
   int64_t start = -1;
   bool active = false;
-  bool waiting_for_tick = false;  // onset: the next tick
   int hits = 0;  // frames or samples changed
 
   bool In(int64_t utime) const {
@@ -137,7 +136,6 @@ struct Injector {
       case FaultKind::kDiskFull: on ? disk->Impose(log) : disk->Lift(); break;
       default: break;
     }
-    if (on && !IsFrameFault(fault.kind) && !IsOdometryFault(fault.kind)) waiting_for_tick = true;
   }
   void Frame(VehicleFrame& frame) {
     if (start < 0) start = frame.utime;
@@ -145,6 +143,8 @@ struct Injector {
     if (in != active) {
       if (in) result->published_at_injection = result->published.size();
       const bool switched = !IsFrameFault(fault.kind) && !IsOdometryFault(fault.kind);
+      result->broken_part = switched;
+      if (in && switched) Onset(frame.utime);
       if (!in && switched && result->clear_utime < 0) result->clear_utime = frame.utime;
       Switch(in);
       active = in;
@@ -215,6 +215,7 @@ class Observer : public vehicle::Stage {
       r.utime = t.utime;
       r.open_mask = t.open_mask;
       r.fail_reasons = t.fail_reasons;
+      r.frame_utime = frame.utime;
       result_.ticks.push_back(r);
     }
     // The bar after the frame's last tick (earlier ones: from the sink).
@@ -313,11 +314,7 @@ FaultRunResult RunWithFault(const FaultRunOptions& options) {
     // between frames).
     std::vector<std::pair<bool, uint64_t>> bar_before;
     const can::SprayBar& bar = *endpoint.bar;
-    treatment::NozzleSink observe = [&](int64_t utime, uint64_t) {
-      if (injector.waiting_for_tick) {
-        injector.Onset(utime);
-        injector.waiting_for_tick = false;
-      }
+    treatment::NozzleSink observe = [&](int64_t, uint64_t) {
       bar_before.emplace_back(bar.status().failsafe, bar.status().commanded_mask);
     };
     vehicle::SimFrameSource sim_source(simulator, boot);
@@ -332,7 +329,10 @@ FaultRunResult RunWithFault(const FaultRunOptions& options) {
       throw std::logic_error("the sink saw " + std::to_string(bar_before.size()) +
                              " ticks, the pipeline stage " + std::to_string(result.ticks.size()));
     }
+    // A frame's last tick keeps the Observer's record: the next frame's bar
+    // stage polls before the next tick.
     for (size_t i = 0; i + 1 < result.ticks.size(); ++i) {
+      if (result.ticks[i + 1].frame_utime != result.ticks[i].frame_utime) continue;
       result.ticks[i].bar_failsafe = bar_before[i + 1].first;
       result.ticks[i].commanded_mask = bar_before[i + 1].second;
     }

@@ -59,7 +59,8 @@ struct FaultRunOptions {
 };
 
 struct TickRecord {
-  int64_t utime = 0;
+  int64_t utime = 0;           // the tick's (message time)
+  int64_t frame_utime = 0;     // the frame whose processing sent it
   uint64_t open_mask = 0;      // the scheduler's
   uint32_t fail_reasons = 0;   // the scheduler's
   bool bar_failsafe = false;   // the spray bar's state after the tick's command
@@ -82,7 +83,9 @@ struct Published {
 
 struct FaultRunResult {
   int64_t start_utime = 0;  // first frame
-  int64_t onset_utime = -1; // the first tick, frame or sample the fault met
+  // When the fault arose: the bad sample's time, the bad frame's capture,
+  // the frame at which a part was broken.
+  int64_t onset_utime = -1;
   // When it cleared: the first good frame after bad ones, the end of the
   // last bad sample's period, the frame at which a broken part was mended.
   int64_t clear_utime = -1;
@@ -93,6 +96,7 @@ struct FaultRunResult {
   std::vector<plantscale_event_t> station_events;
   std::vector<Published> published;  // every message handed to LCM, in order
   size_t published_at_injection = 0;  // how many before the fault was injected
+  bool broken_part = false;  // CAN, bar, link or disk (else a bad frame or sample)
   std::vector<telemetry::LogEvent> log;
   std::string log_error;  // LogReader's; empty: read whole
   telemetry::LogStatus log_status;
