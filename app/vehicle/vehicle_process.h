@@ -54,7 +54,7 @@ class VehicleProcess {
   telemetry::Transport& transport() { return *transport_; }
   // Station commands on transport(), authenticated by `auth`.
   void ListenForCommands(CommandAuthOptions auth);
-  // Adds every stage (once). `bar` and `pipeline` must outlive the process.
+  // Adds every stage (once). `bar` must outlive the process.
   void AddStages(const SprayBarEndpoint& bar, const std::optional<PipelineSetup>& pipeline);
   RunSummary Run(FrameSource& source, const std::atomic<bool>* stop = nullptr);
 
