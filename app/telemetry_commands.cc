@@ -103,17 +103,10 @@ tm::can::SprayBarOptions BarOptionsOfTreatment() {
 
 using SourceFactory =
     std::function<std::unique_ptr<vehicle::FrameSource>(tm::Transport& transport, int64_t boot)>;
+using vehicle::PipelineSetup;
 
-// The vehicle process: LCM (and the log) around a runner with its stages;
-// the simulator's truth stage only when `sim_truth`. With a calibrated
-// camera the vehicle pipeline runs (segmentation, tracking, treatment and
-// the bar); without one, segmentation alone for the thumbnails.
-struct PipelineSetup {
-  const geometry::CameraModel& camera;
-  pipeline::PipelineOptions options;
-  treatment::NozzleSink nozzle_sink = {};  // a spray bar: every tick's open mask
-};
-
+// The vehicle process (app/vehicle/vehicle_process.h) on LCM; the
+// simulator's truth stage only when `sim_truth`.
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
                const std::string& title, const SprayBarEndpoint& endpoint,
                const std::optional<PipelineSetup>& tracker = {},
@@ -121,73 +114,37 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   vehicle::CommandAuthOptions command_auth = VehicleCommandAuth(args.command_key);  // refuses a bad key file
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
-  std::unique_ptr<tm::LogWriter> log;
-  std::unique_ptr<tm::LoggingTransport> logged;
-  tm::Transport* transport = &lcm;
-  const vehicle::VehicleRunner* clock = nullptr;
-  if (!args.log.empty()) {
-    log = std::make_unique<tm::LogWriter>(args.log);
-    logged = std::make_unique<tm::LoggingTransport>(
-        lcm, *log, [&clock] { return clock ? clock->now_utime() : tm::WallUtime(); });
-    transport = logged.get();
-  }
-  tm::Publisher publisher(*transport, tm::PublisherOptions{});
-  std::unique_ptr<vehicle::FrameSource> source = make_source(*transport, boot);
-  vehicle::VehicleRunner runner(publisher, vehicle::RunnerOptions{!args.fast, run_config}, boot);
-  clock = &runner;
-  runner.ListenForCommands(*transport, std::move(command_auth));  // start, pause and mode from the station
-  // The spray bar (--can): with the treatment stage (a calibrated camera)
-  // its scheduler drives the bar through the bar's sink every tick; without
-  // one the bar stage commands every nozzle closed each frame so the bar
-  // stays supervised. The bar stage goes before HealthStage, which reports
-  // its fail-safe state and faults; the simulated bar steps after the
-  // treatment stage has commanded it.
-  tm::can::SprayBar* bar = endpoint.bar.get();
-  treatment::NozzleSink nozzle_sink = tracker ? tracker->nozzle_sink : treatment::NozzleSink{};
-  if (bar != nullptr) {
-    const bool scheduler_drives_bar = tracker.has_value();
-    if (scheduler_drives_bar) {
-      const treatment::NozzleSink to_bar = bar->Sink();
-      const treatment::NozzleSink other = nozzle_sink;
-      nozzle_sink = [to_bar, other](int64_t utime, uint64_t mask) {
-        if (other) other(utime, mask);
-        to_bar(utime, mask);
-      };
-    }
-    runner.AddStage(std::make_unique<vehicle::SprayBarStage>(*bar, !scheduler_drives_bar));
-  }
-  runner.AddStage(std::make_unique<vehicle::OdometryStage>());
-  const vehicle::BlobView* blobs = nullptr;
-  if (tracker) {
-    auto stage =
-        std::make_unique<vehicle::PipelineStage>(tracker->camera, tracker->options, nozzle_sink);
-    blobs = stage.get();
-    runner.AddStage(std::move(stage));
-  } else {
-    auto stage = std::make_unique<vehicle::SegmentationStage>(
-        treatment::SegmenterOptionsFor(treatment::TreatmentOptions{}.scheduler.mode));
-    blobs = stage.get();
-    runner.AddStage(std::move(stage));
-  }
-  // After every stage that reports faults or the fail-safe state this frame
-  // (the runner starts each frame's fault list afresh from the source).
-  runner.AddStage(std::make_unique<vehicle::HealthStage>());
-  runner.AddStage(std::make_unique<vehicle::ThumbnailStage>(vehicle::ThumbnailOptions{}, blobs));
-  if (endpoint.simulated) {
-    runner.AddStage(std::make_unique<vehicle::SimulatedBarStage>(*endpoint.simulated));
-  }
-  if (sim_truth) runner.AddStage(std::make_unique<vehicle::SimTruthStage>());
+  vehicle::VehicleProcessOptions options;
+  options.real_time = !args.fast;
+  options.log = args.log;
+  options.run_config = run_config;
+  options.sim_truth = sim_truth;
+  vehicle::VehicleProcess process(lcm, options, boot);
+  std::unique_ptr<vehicle::FrameSource> source = make_source(process.transport(), boot);
+  process.ListenForCommands(std::move(command_auth));  // start, pause and mode from the station
+  process.AddStages(endpoint, tracker);
   g_stop = false;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
-  const vehicle::RunSummary s = runner.Run(*source, &g_stop);
+  // A file size limit (ulimit -f) is a full disk to the log: its write
+  // fails and the vehicle goes on (docs/faults.md), not killed by SIGXFSZ.
+  std::signal(SIGXFSZ, SIG_IGN);
+  const vehicle::RunSummary s = process.Run(*source, &g_stop);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   std::cout << title << ", " << s.frames << " frames (" << s.dropped_frames << " dropped) over "
             << std::fixed << std::setprecision(1) << s.seconds << " s on "
             << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
-  PrintPublisherTraffic(publisher, s.seconds);
-  if (log) std::cout << "  log               " << args.log << " (" << log->events() << " events)\n";
+  PrintPublisherTraffic(process.publisher(), s.seconds);
+  if (const tm::LogWriter* log = process.log()) {
+    std::cout << "  log               " << args.log << " (" << log->events() << " events)\n";
+    const tm::LogStatus& ls = process.logging()->status();
+    if (ls.failures > 0) {
+      std::cout << "    " << ls.not_logged << " messages not logged after " << ls.failures
+                << " write failure(s), last: " << ls.error << '\n';
+    }
+  }
+  tm::can::SprayBar* bar = endpoint.bar.get();
   if (bar != nullptr) {
     const tm::can::SprayBarStatus& b = bar->status();
     std::cout << "  spray bar         " << bar->endpoint() << ": " << b.commands_sent

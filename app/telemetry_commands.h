@@ -14,6 +14,7 @@
 #include "app/command_auth_commands.h"
 #include "app/command_registry.h"
 #include "app/run_config.h"
+#include "app/vehicle/vehicle_process.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
@@ -34,10 +35,7 @@ void AddPublishOptions(CLI::App* command, PublishArgs& args);
 void AddCanOption(CLI::App* command, PublishArgs& args);
 // The spray bar of --can: a SocketCAN interface, or (simulate only) the
 // word `simulated` for a SimulatedBar in process over a socketpair.
-struct SprayBarEndpoint {
-  std::unique_ptr<telemetry::can::SprayBar> bar;  // nullptr: no --can
-  std::unique_ptr<telemetry::can::SimulatedBar> simulated;
-};
+using vehicle::SprayBarEndpoint;  // bar nullptr: no --can
 inline constexpr char kSimulatedBar[] = "simulated";
 // Throws CanError naming the interface and why it cannot be opened;
 // ConfigError for --fast with a real interface, or `simulated` without

@@ -1,9 +1,12 @@
 #include "telemetry/log.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <lcm/lcm-cpp.hpp>
 #include <system_error>
 
@@ -23,10 +26,32 @@ void LogWriter::Write(const std::string& channel, const void* data, size_t size,
   event.channel = channel;
   event.datalen = static_cast<int32_t>(size);
   event.data = const_cast<void*>(data);  // lcm::LogEvent is not const-correct; only read
+  if (!file_) throw LogError(path_.string() + ": not open (an earlier write failed)");
+  errno = 0;
   if (file_->writeEvent(&event) != 0 || std::fflush(file_->getFilePtr()) != 0) {
-    throw LogError(path_.string() + ": write failed after " + std::to_string(events_) + " events");
+    const std::string why = errno != 0 ? std::strerror(errno) : "short write";
+    const std::string cut = CutBack() ? "the log ends with the last whole event, at byte "
+                                      : "could not cut the log back to its whole events, at byte ";
+    throw LogError(path_.string() + ": write failed after " + std::to_string(events_) +
+                   " events (" + why + "); " + cut + std::to_string(whole_bytes_));
   }
   ++events_;
+  whole_bytes_ = std::ftell(file_->getFilePtr());
+}
+
+// What the failed write left in the file (part of an event) and in the
+// stream's buffer goes: closing flushes the buffer (it fails again, or
+// writes more of the event), then the file is cut back to its whole events.
+bool LogWriter::CutBack() {
+  file_.reset();
+  return ::truncate(path_.c_str(), static_cast<off_t>(whole_bytes_)) == 0;
+}
+
+void LogWriter::Reopen() {
+  if (file_) return;
+  auto file = std::make_unique<lcm::LogFile>(path_.string(), "a");
+  if (!file->good()) throw LogError(path_.string() + ": cannot open the LCM log again to append");
+  file_ = std::move(file);
 }
 
 LogReader::LogReader(const std::filesystem::path& path)
@@ -93,8 +118,34 @@ std::optional<LogEvent> LogReader::Next() {
 }
 
 void LoggingTransport::Publish(const std::string& channel, const void* data, size_t size) {
+  Log(channel, data, size);
   inner_.Publish(channel, data, size);
-  log_.Write(channel, data, size, clock_());
+}
+
+void LoggingTransport::Log(const std::string& channel, const void* data, size_t size) {
+  const int64_t now = clock_();
+  if (!status_.writing) {
+    if (now < next_retry_utime_) {
+      ++status_.not_logged;
+      return;
+    }
+    try {
+      log_.Reopen();
+    } catch (const LogError& e) {
+      status_.error = e.what();
+    }
+  }
+  try {
+    log_.Write(channel, data, size, now);
+    if (!status_.writing) ++status_.resumed;
+    status_.writing = true;
+  } catch (const LogError& e) {
+    if (status_.writing) ++status_.failures, status_.failed_utime = now;
+    status_.writing = false;
+    status_.error = e.what();
+    ++status_.not_logged;
+    next_retry_utime_ = now + retry_us_;
+  }
 }
 
 }  // namespace plantscale::telemetry

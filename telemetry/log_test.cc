@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 #include <lcm/eventlog.h>
 
+#include <sys/resource.h>
+
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
@@ -142,6 +145,90 @@ TEST(Log, LoggingTransportLogsWhatItPublishesAtItsClock) {
   ASSERT_TRUE(a && b);
   EXPECT_EQ(b->utime - a->utime, 500'000);
   EXPECT_EQ(std::string(b->data.begin(), b->data.end()), "cd");
+}
+
+
+// The disk fills (a file size limit, as a full disk to write(): the limit
+// falls inside the next event): the write throws, what it wrote of the
+// event is cut off, the log reads whole up to the event before it, and
+// after Reopen the log goes on after it.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(uintmax_t bytes) {
+    ::getrlimit(RLIMIT_FSIZE, &saved_);
+    std::signal(SIGXFSZ, SIG_IGN);
+    rlimit r = saved_;
+    r.rlim_cur = bytes;
+    ::setrlimit(RLIMIT_FSIZE, &r);
+  }
+  ~FileSizeLimit() { ::setrlimit(RLIMIT_FSIZE, &saved_); }
+
+ private:
+  rlimit saved_{};
+};
+
+TEST(Log, AWriteThatFailsIsCutOffAndTheLogReadsWhole) {
+  const fs::path path = TempLog("full.lcmlog");
+  const std::string payload(1000, 'p');
+  LogWriter w(path);
+  for (int i = 0; i < 5; ++i) w.Write("A", payload.data(), payload.size(), i);
+  const uintmax_t whole = fs::file_size(path);
+  {
+    const FileSizeLimit disk(whole + 300);  // 300 bytes of the next event fit
+    EXPECT_THROW(w.Write("A", payload.data(), payload.size(), 5), LogError);
+    EXPECT_FALSE(w.open());
+    EXPECT_THROW(w.Write("A", payload.data(), payload.size(), 6), LogError);  // until Reopen
+  }
+  EXPECT_EQ(fs::file_size(path), whole);
+  {
+    LogReader r(path);
+    int n = 0;
+    while (r.Next()) ++n;
+    EXPECT_EQ(n, 5);
+    EXPECT_EQ(r.error(), "");
+  }
+  w.Reopen();
+  w.Write("B", "after", 5, 7);
+  LogReader r(path);
+  std::vector<LogEvent> events;
+  while (auto e = r.Next()) events.push_back(*e);
+  EXPECT_EQ(r.error(), "");
+  ASSERT_EQ(events.size(), 6u);
+  EXPECT_EQ(events.back().channel, "B");
+  EXPECT_EQ(events.back().utime, 7);
+}
+
+// A log that cannot be written never stops publishing: the messages are
+// counted as not logged, and the log is tried again every retry period.
+TEST(Log, LoggingTransportGoesOnPublishingWhenTheLogFails) {
+  const fs::path path = TempLog("full_transport.lcmlog");
+  testing::RecordingTransport inner;
+  LogWriter w(path);
+  int64_t now = 0;
+  LoggingTransport t(inner, w, [&] { return now; }, 1'000'000);
+  const std::string payload(500, 'q');
+  t.Publish("A", payload.data(), payload.size());
+  const uintmax_t whole = fs::file_size(path);
+  {
+    const FileSizeLimit disk(whole + 100);
+    for (int i = 0; i < 20; ++i, now += 100'000) t.Publish("A", payload.data(), payload.size());
+    EXPECT_FALSE(t.status().writing);
+    EXPECT_EQ(t.status().failures, 1);
+    EXPECT_EQ(t.status().failed_utime, 0);
+    EXPECT_NE(t.status().error.find("File too large"), std::string::npos) << t.status().error;
+  }
+  EXPECT_EQ(inner.sent.size(), 21u);  // all published
+  now += 50'000;                      // 2.05 s: a retry is due (last at 2.0 s)
+  t.Publish("B", "x", 1);
+  EXPECT_TRUE(t.status().writing);
+  EXPECT_EQ(t.status().resumed, 1);
+  EXPECT_EQ(t.status().not_logged, 20);
+  LogReader r(path);
+  std::vector<LogEvent> events;
+  while (auto e = r.Next()) events.push_back(*e);
+  EXPECT_EQ(r.error(), "");
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events.back().channel, "B");
 }
 
 TEST(LogStats, RatesAndBandwidthPerChannel) {

@@ -87,15 +87,23 @@ bool Publisher::PublishBytes(const std::string& channel, const Bytes& bytes, int
     ++c.dropped_budget;
     return false;
   }
-  Send(channel, bytes);
-  return true;
+  return Send(channel, bytes, utime);
 }
 
-void Publisher::Send(const std::string& channel, const Bytes& bytes) {
-  transport_.Publish(channel, bytes.data(), bytes.size());
+bool Publisher::Send(const std::string& channel, const Bytes& bytes, int64_t utime) {
   ChannelCounters& c = counters_[channel];
+  try {
+    transport_.Publish(channel, bytes.data(), bytes.size());
+  } catch (const TransportError& e) {
+    ++c.failed;
+    ++failures_.count;
+    failures_.last_utime = utime;
+    failures_.last_error = e.what();
+    return false;
+  }
   ++c.sent;
   c.bytes += static_cast<int64_t>(bytes.size());
+  return true;
 }
 
 int64_t Publisher::total_dropped() const {

@@ -4,7 +4,9 @@
 // (default 250 kbit/s; 12.5 Hz state channels, 2 Hz thumbnails and
 // heartbeat). What is dropped is counted per channel and reason. Rate and
 // budget run on message time (utime), so a --fast run drops exactly what a
-// real-time run would.
+// real-time run would. A message the transport cannot send (TransportError:
+// the network is down, the station's link gone) is counted as failed, never
+// thrown: telemetry is not what keeps the vehicle safe (docs/faults.md).
 
 #include <cstdint>
 #include <map>
@@ -40,6 +42,14 @@ struct ChannelCounters {
   int64_t bytes = 0;
   int64_t dropped_rate = 0;    // over the channel's rate
   int64_t dropped_budget = 0;  // over the bandwidth budget
+  int64_t failed = 0;          // the transport could not send it
+};
+
+// The transport's failures, for the heartbeat.
+struct TransportFailures {
+  int64_t count = 0;          // messages not sent
+  int64_t last_utime = -1;    // message time of the latest
+  std::string last_error;     // its TransportError::what
 };
 
 class Publisher {
@@ -60,7 +70,7 @@ class Publisher {
   template <typename Message>
   void PublishFinal(const std::string& channel, Message message) {
     message.seq = counters_[channel].sent;
-    Send(channel, Encode(message));
+    Send(channel, Encode(message), message.utime);
   }
   // True when a message on `channel` at `utime` would pass the rate limit
   // (lets a stage skip costly work, e.g. JPEG encoding, for a dropped frame).
@@ -70,12 +80,13 @@ class Publisher {
 
   const std::map<std::string, ChannelCounters>& counters() const { return counters_; }
   int64_t total_dropped() const;
+  const TransportFailures& transport_failures() const { return failures_; }
 
  private:
   bool RateAllows(const std::string& channel, int64_t utime);
   bool BudgetAllows(const ChannelLimit& limit, size_t bytes, int64_t utime);
   const ChannelLimit& LimitFor(const std::string& channel) const;
-  void Send(const std::string& channel, const Bytes& bytes);
+  bool Send(const std::string& channel, const Bytes& bytes, int64_t utime);
 
   Transport& transport_;
   PublisherOptions options_;
@@ -83,6 +94,7 @@ class Publisher {
   std::map<std::string, int64_t> next_slot_utime_;
   double budget_bytes_ = 0.0;  // token bucket
   int64_t budget_utime_ = -1;
+  TransportFailures failures_;
 };
 
 }  // namespace plantscale::telemetry

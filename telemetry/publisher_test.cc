@@ -38,6 +38,33 @@ TEST(Publisher, RateLimitsA50HzStreamTo12_5Hz) {
   EXPECT_EQ(p.counters().at(channels::kOdometry).dropped_rate, 500 - t.Count(channels::kOdometry));
 }
 
+
+// The network gone (the station's link): a message the transport cannot
+// send is counted as failed, not thrown, and the next one goes out.
+TEST(Publisher, TransportFailuresAreCountedNotThrown) {
+  class Broken : public RecordingTransport {
+   public:
+    void Publish(const std::string& channel, const void* data, size_t size) override {
+      if (down) throw TransportError("LCM URL 'memq://': publish on " + channel + " failed");
+      RecordingTransport::Publish(channel, data, size);
+    }
+    bool down = true;
+  } t;
+  Publisher p(t, PublisherOptions{});
+  plantscale_event_t e{};
+  e.utime = 1'000'000;
+  EXPECT_FALSE(p.Publish(channels::kEvents, e));
+  EXPECT_EQ(p.counters().at(channels::kEvents).failed, 1);
+  EXPECT_EQ(p.counters().at(channels::kEvents).sent, 0);
+  EXPECT_EQ(p.transport_failures().count, 1);
+  EXPECT_EQ(p.transport_failures().last_utime, 1'000'000);
+  EXPECT_NE(p.transport_failures().last_error.find("publish on PLANTSCALE_EVENTS failed"), std::string::npos);
+  t.down = false;
+  e.utime = 2'000'000;
+  EXPECT_TRUE(p.Publish(channels::kEvents, e));
+  EXPECT_EQ(t.Count(channels::kEvents), 1);
+}
+
 TEST(Publisher, ThumbnailsAt2HzFromJitteryFrames) {
   RecordingTransport t;
   Publisher p(t, PublisherOptions{});

@@ -3,9 +3,12 @@
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <plantscale_lcmtypes/plantscale_odometry_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
@@ -37,9 +40,98 @@ void HealthStage::Process(const VehicleFrame& frame, RunStatus& status, Publishe
   h.dropped_frames = status.dropped_frames;
   h.distance_m = status.distance_m;
   h.failsafe = status.failsafe;
-  h.faults = status.faults;
+  h.faults = HeldFaults(frame.utime, status.faults);
   h.telemetry_dropped = publisher.total_dropped();
   publisher.Publish(channels::kHealth, ToLcm(h, frame.utime));
+}
+
+namespace {
+
+// A fault line without its numbers: "no heartbeat for 0.260 s" and "... for
+// 0.340 s" are the same fault.
+std::string FaultKey(const std::string& line) {
+  std::string key;
+  for (const char c : line) {
+    if (std::isdigit(static_cast<unsigned char>(c)) || (c == '.' && !key.empty() && key.back() == '#')) {
+      if (key.empty() || key.back() != '#') key += '#';
+    } else {
+      key += c;
+    }
+  }
+  return key;
+}
+
+}  // namespace
+
+std::vector<std::string> HealthStage::HeldFaults(int64_t utime, const std::vector<std::string>& now) {
+  for (const std::string& line : now) {
+    const std::string key = FaultKey(line);
+    const auto it = std::find_if(held_.begin(), held_.end(), [&](const Held& h) { return h.key == key; });
+    if (it == held_.end()) {
+      held_.push_back({key, line, utime});
+    } else {
+      it->line = line;
+      it->utime = utime;
+    }
+  }
+  std::erase_if(held_, [&](const Held& h) { return h.utime < utime - hold_us_; });
+  std::vector<std::string> lines;
+  for (const Held& h : held_) lines.push_back(h.line);
+  return lines;
+}
+
+namespace {
+
+std::string SecondsText(int64_t us) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f s", 1e-6 * static_cast<double>(us));
+  return b;
+}
+
+void Event(Publisher& publisher, int64_t utime, const std::string& kind, const std::string& text) {
+  plantscale_event_t e{};
+  e.utime = utime;
+  e.severity = plantscale_event_t::SEVERITY_WARNING;
+  e.kind = kind;
+  e.text = text;
+  publisher.Publish(channels::kEvents, e);
+}
+
+}  // namespace
+
+void RecordsStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  if (log_ != nullptr) LogFaults(frame, status, publisher);
+  const telemetry::TransportFailures& f = publisher.transport_failures();
+  if (f.count > 0 && f.last_utime >= frame.utime - hold_us_) {
+    status.faults.push_back("telemetry: " + std::to_string(f.count) +
+                            " messages not sent (the log has them), the last " +
+                            SecondsText(frame.utime - f.last_utime) + " ago: " + f.last_error);
+  }
+}
+
+void RecordsStage::LogFaults(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
+  const telemetry::LogStatus& s = log_->status();
+  if (s.failures > log_failures_) {
+    log_failures_ = s.failures;
+    Event(publisher, frame.utime, "log_failed",
+          "log not written from here on (retried every second): " + s.error);
+  }
+  if (s.resumed > log_resumed_) {
+    log_resumed_ = s.resumed;
+    resumed_utime_ = frame.utime;
+    Event(publisher, frame.utime, "log_resumed",
+          "log written again; " + std::to_string(s.not_logged - not_logged_at_resume_) +
+              " messages were not logged since " + SecondsText(frame.utime - s.failed_utime) +
+              " ago, after: " + s.error);
+    not_logged_at_resume_ = s.not_logged;
+  }
+  if (!s.writing) {
+    status.faults.push_back("log: not written for " + SecondsText(frame.utime - s.failed_utime) +
+                            ", " + std::to_string(s.not_logged - not_logged_at_resume_) +
+                            " messages not logged: " + s.error);
+  } else if (resumed_utime_ >= 0 && frame.utime - resumed_utime_ <= hold_us_) {
+    status.faults.push_back("log: written again after a write failure: " + s.error);
+  }
 }
 
 OptionErrors ThumbnailOptions::Validate() const {
@@ -97,6 +189,9 @@ void ThumbnailStage::Process(const VehicleFrame& frame, RunStatus&, Publisher& p
 
 void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) {
   for (const pipeline::OdometrySample& s : frame.odometry) {
+    // A sample that is not a number (refused by the tracker) adds nothing:
+    // one NaN would make the distance NaN for the rest of the run.
+    if (!std::isfinite(s.left_m_s) || !std::isfinite(s.right_m_s)) continue;
     if (last_utime_ >= 0) {
       status.distance_m +=
           0.5 * (s.left_m_s + s.right_m_s) * 1e-6 * static_cast<double>(s.utime - last_utime_);
@@ -110,7 +205,7 @@ void OdometryStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
   m.left_m_s = latest.left_m_s;
   m.right_m_s = latest.right_m_s;
   m.distance_m = status.distance_m;
-  m.valid = 1;
+  m.valid = std::isfinite(latest.left_m_s) && std::isfinite(latest.right_m_s) ? 1 : 0;
   publisher.Publish(channels::kOdometry, m);
 }
 
@@ -242,6 +337,13 @@ void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
       pipeline_.Step(frame.utime, frame.frame_index, frame.image, frame.odometry, &ticks_);
   blobs_ = r.blobs;
   status.faults.insert(status.faults.end(), r.faults.begin(), r.faults.end());
+  // Wheel slip this frame (a burst may begin and end between two frames).
+  const tracking::SlipGuard& slip = pipeline_.tracker().slip_guard();
+  if (slip.slipping() || slip.bursts() != slip_bursts_) {
+    status.faults.push_back("odometry: wheel slip (burst " + std::to_string(slip.bursts()) +
+                            "): dead reckoning with the ground speed from before it");
+    slip_bursts_ = slip.bursts();
+  }
   if (r.accepted) PublishGrid(r, publisher);
   if (!pipeline_.treatment()) return;
   ReportTicks(status);

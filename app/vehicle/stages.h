@@ -12,19 +12,57 @@
 #include "engine/geometry/camera_model.h"
 #include "engine/pipeline/pipeline.h"
 #include "engine/vision/segmenter.h"
+#include "telemetry/log.h"
 #include "telemetry/types.h"
 
 namespace plantscale::vehicle {
 
 // Heartbeat (PLANTSCALE_HEALTH, every frame offered; the publisher's rate
 // sends 2 Hz). Frame rate over the last `window` frames of message time.
+// A fault line stays in the heartbeat for `hold_us` of message time after
+// the frame it was last seen in, so that a fault of a frame or two (a
+// refused odometry sample, a corrupt frame) reaches the 2 Hz heartbeat and
+// the log; lines that differ only in their numbers are one fault, shown as
+// last seen.
 class HealthStage : public Stage {
  public:
+  explicit HealthStage(int64_t hold_us = 1'000'000) : hold_us_(hold_us) {}
   std::string name() const override { return "health"; }
   void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
 
  private:
+  std::vector<std::string> HeldFaults(int64_t utime, const std::vector<std::string>& now);
+
+  int64_t hold_us_;
   std::deque<int64_t> frame_utimes_;
+  struct Held {
+    std::string key;   // the line without its numbers
+    std::string line;  // as last seen
+    int64_t utime;     // last seen
+  };
+  std::vector<Held> held_;  // in order of first appearance
+};
+
+// The vehicle's records: a log that cannot be written (disk full) and
+// messages the transport could not send (the station's network gone) are
+// fault lines while they last and `hold_us` after; the log's stopping and
+// starting again are events (the second one reaches the log, with what was
+// not logged). `log` may be null (no --log). Add it before HealthStage.
+class RecordsStage : public Stage {
+ public:
+  explicit RecordsStage(const telemetry::LoggingTransport* log, int64_t hold_us = 2'000'000)
+      : log_(log), hold_us_(hold_us) {}
+  std::string name() const override { return "records"; }
+  void Process(const VehicleFrame& frame, RunStatus& status, Publisher& publisher) override;
+
+ private:
+  void LogFaults(const VehicleFrame& frame, RunStatus& status, Publisher& publisher);
+
+  const telemetry::LoggingTransport* log_;
+  int64_t hold_us_;
+  int64_t log_failures_ = 0, log_resumed_ = 0;
+  int64_t resumed_utime_ = -1;
+  int64_t not_logged_at_resume_ = 0;
 };
 
 struct ThumbnailOptions {
@@ -103,6 +141,8 @@ class PipelineStage : public Stage, public BlobView {
   void Finish(int64_t utime, Publisher& publisher) override;
   std::span<const vision::Blob> blobs() const override { return blobs_; }
   const pipeline::Pipeline& pipeline() const { return pipeline_; }
+  // Every scheduler tick of the frame processed last, in time order.
+  const std::vector<treatment::TickResult>& ticks() const { return ticks_; }
 
  private:
   void PublishGrid(const pipeline::FrameResult& r, Publisher& publisher);
@@ -136,6 +176,7 @@ class PipelineStage : public Stage, public BlobView {
   std::vector<int> changed_plants_;  // record ids since the last plant list
   int64_t last_plants_utime_ = -1;
   int64_t last_frame_index_ = 0;     // of the last frame processed
+  int slip_bursts_ = 0;              // the slip guard's, as last reported
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on

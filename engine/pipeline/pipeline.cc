@@ -194,17 +194,23 @@ void Pipeline::CloseIfOdometryStopped() {
 const FrameResult& Pipeline::Step(int64_t utime, int frame_index, const cv::Mat& image,
                                   std::span<const OdometrySample> odometry,
                                   std::vector<treatment::TickResult>* ticks) {
+  std::vector<std::string> refused;  // the step's odometry the tracker refused, for `faults`
   const auto feed = [&](bool before) {
     for (const OdometrySample& o : odometry) {
       if ((o.utime <= utime) != before) continue;
       const PoseResult& p = AddOdometry(o);
       if (ticks) ticks->insert(ticks->end(), p.ticks.begin(), p.ticks.end());
+      if (!p.input.accepted) {
+        refused.push_back("odometry: sample at " + Seconds(o.utime - utime) + " from the frame: " +
+                          p.input.reason);
+      }
     }
   };
   feed(true);
   ProcessFrame(utime, frame_index, image);
   if (ticks) ticks->insert(ticks->end(), frame_.ticks.begin(), frame_.ticks.end());
   feed(false);
+  frame_.faults.insert(frame_.faults.end(), refused.begin(), refused.end());
   return frame_;
 }
 

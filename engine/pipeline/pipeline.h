@@ -107,7 +107,8 @@ class Pipeline {
   const FrameResult& ProcessFrame(int64_t utime, int frame_index, const cv::Mat& image);
   // A frame with the odometry that came with it, in time order: the samples
   // up to its capture, the frame, the samples after it. `ticks` (optional)
-  // collects every tick of the step.
+  // collects every tick of the step. The frame's faults end with one line
+  // per odometry sample the tracker refused ("odometry: sample at ...").
   const FrameResult& Step(int64_t utime, int frame_index, const cv::Mat& image,
                           std::span<const OdometrySample> odometry,
                           std::vector<treatment::TickResult>* ticks = nullptr);
