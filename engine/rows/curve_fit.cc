@@ -58,7 +58,7 @@ std::complex<double> Dft(const float* p, int n, double s0, double ds, double ref
   const std::complex<double> step(std::cos(b), std::sin(b));
   std::complex<double> sum = 0.0;
   for (int x = 0; x < n; ++x) {
-    if (p[x] != 0.0F) sum += static_cast<double>(p[x]) * z;
+    sum += static_cast<double>(p[x]) * z;
     z *= step;
     if ((x & 63) == 63) z /= std::abs(z);  // keep the phasor on the unit circle
   }
@@ -164,6 +164,25 @@ CurveFit CurveFitter::Fit(const cv::Mat& plant, double kfw, double kfh, double W
   const int M = o.phase_steps;
   // Bins: 12 per period of the closest spacing.
   rectify(prior, 12.0 * std::exp(-min_scale));
+  // Each band's profile less its running mean over one prior spacing: the
+  // mean's transfer is zero at the comb's frequency, so the comb keeps all
+  // of its signal while the band's broad envelope (a bed of a few wide
+  // rows on bare soil, light falling off) leaks none into it.
+  {
+    const int width = std::max(1, static_cast<int>(std::lround(prior.spacing / ds)));
+    std::vector<double>& cum = next_;  // reused below by the programme
+    cum.assign(static_cast<size_t>(rw) + 1, 0.0);
+    for (int k = 0; k < n_bands; ++k) {
+      if (!bands[static_cast<size_t>(k)].usable) continue;
+      float* prof = &profiles_[static_cast<size_t>(k) * static_cast<size_t>(rw)];
+      for (int x = 0; x < rw; ++x) cum[static_cast<size_t>(x) + 1] = cum[static_cast<size_t>(x)] + static_cast<double>(prof[x]);
+      for (int x = 0; x < rw; ++x) {
+        const int x0 = std::max(0, x - width / 2), x1 = std::min(rw, x0 + width);
+        const double mean = (cum[static_cast<size_t>(x1)] - cum[static_cast<size_t>(x0)]) / (x1 - x0);
+        prof[x] = static_cast<float>(static_cast<double>(prof[x]) - mean);
+      }
+    }
+  }
 
   double mass_sum = 0.0;
   int usable = 0;
@@ -278,7 +297,6 @@ CurveFit CurveFitter::Fit(const cv::Mat& plant, double kfw, double kfh, double W
 
   // Unwrapped phase (spacings) and log-spacing per band, lightly smoothed.
   std::vector<double> phi(static_cast<size_t>(n_bands)), sigma(static_cast<size_t>(n_bands));
-  double coherent = 0.0, mass_used = 0.0;
   for (int k = 0; k < n_bands; ++k) {
     double p = static_cast<double>(ms[static_cast<size_t>(k)]) / M;
     if (k == 0) {
@@ -289,16 +307,7 @@ CurveFit CurveFitter::Fit(const cv::Mat& plant, double kfw, double kfh, double W
     }
     phi[static_cast<size_t>(k)] = p;
     sigma[static_cast<size_t>(k)] = (j_lo + js[static_cast<size_t>(k)]) * o.scale_step;
-    const BandInfo& b = bands[static_cast<size_t>(k)];
-    if (b.usable && b.mass > 0.0) {
-      const size_t i = static_cast<size_t>(k) * J + static_cast<size_t>(js[static_cast<size_t>(k)]);
-      const int mm = ms[static_cast<size_t>(k)];
-      coherent += (z[i].real() * cos_m[static_cast<size_t>(mm)] +
-                   z[i].imag() * sin_m[static_cast<size_t>(mm)]) * mean_mass;
-      mass_used += b.mass;
-    }
   }
-  out.coherence = mass_used > 0.0 ? coherent / mass_used : 0.0;
   // c and d smooth in v: weighted least-squares polynomials (degree
   // `curve_degree`, fewer with few bands) through the DP's bands, each
   // band weighted by its plant matter; bands without any carry none.
@@ -342,6 +351,25 @@ CurveFit CurveFitter::Fit(const cv::Mat& plant, double kfw, double kfh, double W
       }
     }
   }
+
+  // Coherence of a curve: the plant matter lined up with its comb (Σ of the
+  // cosine comb over the bands with data) over all of it.
+  const auto coherence = [&](const std::vector<double>& ph, const std::vector<double>& sg) {
+    double coherent = 0.0, mass_used = 0.0;
+    for (int k = 0; k < n_bands; ++k) {
+      const BandInfo& b = bands[static_cast<size_t>(k)];
+      if (!b.usable || b.mass <= 0.0) continue;
+      const float* prof = &profiles_[static_cast<size_t>(k) * static_cast<size_t>(rw)];
+      const double period = prior.spacing * std::exp(sg[static_cast<size_t>(k)]);
+      const std::complex<double> zk = Dft(prof, rw, s_first, ds, prior.centre_u, period);
+      const double a = kTwoPi * ph[static_cast<size_t>(k)];
+      coherent += zk.real() * std::cos(a) + zk.imag() * std::sin(a);
+      mass_used += b.mass;
+    }
+    return mass_used > 0.0 ? coherent / mass_used : 0.0;
+  };
+  out.coherence = coherence(phi, sigma);
+  out.prior_coherence = coherence(std::vector<double>(phi.size(), 0.0), std::vector<double>(phi.size(), 0.0));
 
   out.top_v_px = v_bottom;
   out.knots.reserve(static_cast<size_t>(n_bands));

@@ -52,7 +52,7 @@ struct CurveFitOptions {
   int max_phase_jump = 4;         // phase steps per band
   double phase_smoothness = 25.0; // cost per (Δφ)² (φ in spacings) between bands
   double scale_smoothness = 8.0;  // cost per (Δσ)² between bands
-  double scale_prior = 0.3;       // cost per σ² in each band
+  double scale_prior = 1.0;       // cost per σ² in each band
   double half_comb_weight = 0.5;  // weight of the half-spacing comb's magnitude
   int curve_degree = 2;           // c and d: polynomials of this degree in v through the bands
   double min_shrink = 0.12;       // rectified rows compressed below this are not used
@@ -74,6 +74,7 @@ struct CurvePrior {
 struct CurveFit {
   std::vector<CurveKnot> knots;  // bottom to top
   double coherence = 0.0;        // Σ comb score / Σ plant matter of the bands with data
+  double prior_coherence = 0.0;  // the same of the prior's straight rows
   double top_v_px = 0.0;         // highest image v whose band had plant matter and usable spacing
   CurvePrior prior;              // the prior used (the free one when none was given)
 };

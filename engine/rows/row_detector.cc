@@ -43,6 +43,7 @@ OptionErrors RowDetectorOptions::Validate() const {
   if (orientation_candidates < 0) e.push_back({"orientation_candidates", "must be >= 0"});
   for (const OptionError& c : curve.Validate()) e.push_back({"curve." + c.key, c.reason});
   RequireInRange(e, "min_curve_coherence", min_curve_coherence, 0.0, 1.0);
+  RequireInRange(e, "min_curve_gain", min_curve_gain, -1.0, 1.0);
   return e;
 }
 
@@ -166,6 +167,13 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     if (free.knots.size() >= 2 && free.coherence > fit.coherence) fit = std::move(free);
   }
   if (fit.knots.size() < 2) return det;
+  // Where the straight model found rows, the curve replaces it only when it
+  // lines up clearly more plant matter than the straight rows do.
+  if (det.confidence > 0.0 && fit.prior.valid &&
+      fit.coherence < fit.prior_coherence + options_.min_curve_gain) {
+    det.curve_coherence = fit.coherence;
+    return det;
+  }
   RowDetection curved = det;
   curved.curve = fit.knots;
   curved.curve_coherence = fit.coherence;
@@ -188,7 +196,15 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
     det.reason += "; curved rows: coherence " + std::to_string(fit.coherence);
     return det;
   }
-  curved.rows = CurveRows(curved);
+  double contrast = 0.0;
+  curved.rows = CurveRows(curved, contrast);
+  curved.contrast = contrast;
+  if (curved.rows.size() >= 2 && contrast < options_.min_contrast) {
+    det.curve_coherence = fit.coherence;
+    if (det.confidence > 0.0) return det;
+    det.reason += "; curved rows: contrast " + std::to_string(contrast) + " between rows and gaps";
+    return det;
+  }
   if (curved.rows.size() < 2) {
     det.curve_coherence = fit.coherence;
     if (det.confidence > 0.0) return det;
@@ -203,7 +219,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   return curved;
 }
 
-std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det) const {
+std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det, double& contrast) const {
+  contrast = 0.0;
   const double W = det.width_px, H = det.height_px;
   const double v_bottom = H - 0.5;
   const int fw = fit_.cols, fh = fit_.rows;
@@ -217,6 +234,8 @@ std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det) const {
   if (n_hi - n_lo > 200) return {};
   const size_t n_rows = static_cast<size_t>(n_hi - n_lo + 1);
   std::vector<int> in_image(n_rows, 0), occupied(n_rows, 0);
+  int visible_bands = 0;
+  double on_sum = 0.0, between_sum = 0.0;  // plant matter on the rows and half-way between
   std::vector<double> profile(static_cast<size_t>(fw));
   std::vector<double> cum(static_cast<size_t>(fw) + 1);
   std::vector<double> density(n_rows);
@@ -227,6 +246,7 @@ std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det) const {
     if (v < det.top_v_px) break;
     const double d = det.SpacingAt(v);
     if (d < options_.min_visible_spacing_px) break;
+    ++visible_bands;
     std::fill(profile.begin(), profile.end(), 0.0);
     for (int r = r0; r < r1; ++r) {
       const float* row = fit_.ptr<float>(r);
@@ -255,6 +275,10 @@ std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det) const {
         }
       }
     }
+    for (size_t i = 0; i < n_rows; ++i) {
+      if (density[i] >= 0.0) on_sum += density[i];
+    }
+    between_sum += background;
     background = n_background > 0 ? background / n_background : 0.0;
     const double level = std::max(0.02, 1.3 * background);
     for (size_t i = 0; i < n_rows; ++i) {
@@ -265,8 +289,12 @@ std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det) const {
   }
   std::vector<double> occupancy(n_rows, -1.0);
   int first = -1, last = -1;
+  // A row is judged where it is in the image for a third of the visible
+  // height at least (rows fanning in at the top corners are not).
+  contrast = on_sum > 0.0 ? 1.0 - between_sum / on_sum : 0.0;
+  const int min_in_image = std::max(2, visible_bands / 3);
   for (size_t i = 0; i < n_rows; ++i) {
-    if (in_image[i] < 2) continue;
+    if (in_image[i] < min_in_image) continue;
     occupancy[i] = static_cast<double>(occupied[i]) / in_image[i];
     if (occupancy[i] < options_.min_row_occupancy) continue;
     if (first < 0) first = static_cast<int>(i);

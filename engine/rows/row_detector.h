@@ -103,7 +103,10 @@ struct RowDetectorOptions {
   // their prior; when it found no rows (or none at all), the curve decides.
   bool curves = true;
   CurveFitOptions curve;
-  double min_curve_coherence = 0.3;  // the curve's comb coherence below this: no rows
+  double min_curve_coherence = 0.4;  // the curve's comb coherence below this: no rows
+  // Where the straight model found rows, the curve is taken when its
+  // coherence beats the straight rows' by this much.
+  double min_curve_gain = 0.02;
   // The free prior (parallel rows, spacing searched) as well as the straight
   // model's: 0 only where the straight model found no rows, 1 instead of it,
   // 2 both, the more coherent curve wins.
@@ -167,7 +170,8 @@ class RowDetector {
   RowDetection DetectStraight(const cv::Mat& plant);
   // The rows of `det`'s curve with plant matter along them (as the
   // straight model keeps rows), with their occupancy.
-  std::vector<DetectedRow> CurveRows(const RowDetection& det) const;
+  // `contrast`: 1 − (plant matter half-way between the rows) / (on them).
+  std::vector<DetectedRow> CurveRows(const RowDetection& det, double& contrast) const;
 
   RowDetectorOptions options_;
   CurveFitter curve_fitter_;
