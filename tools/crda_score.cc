@@ -15,7 +15,10 @@
 //            rows (a missing neighbour scores 0);
 //   nearest  each true row is matched to the detected row nearest it.
 //
-// usage: crda_score --labels DIR --rows DIR [--categories FILE] [--per-image]
+// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]
+//   --shape: categories "curved" and "straight" from the labels themselves
+//   (the central label line departs from a straight line by more than 5 %
+//   of the spacing somewhere, or not).
 //   DIR of labels: NAME.{jpg,png}; DIR of rows: NAME_rows.csv, NAME_rows.json.
 //   --categories: lines "NAME,category"; otherwise the category is the
 //   file name up to its first digit ("" → "all").
@@ -161,6 +164,56 @@ Score ScoreImage(const cv::Mat& label, const Detected& det) {
   return s;
 }
 
+// "curved" when the label's central line bends: the centres of the label
+// line nearest the image's centre column, followed from the bottom up, depart
+// from their least-squares straight line by more than `tolerance` × the
+// label spacing somewhere; else "straight".
+std::string LabelShape(const cv::Mat& label, double tolerance) {
+  std::vector<double> vs, us;
+  double spacing_sum = 0.0;
+  int spacing_n = 0;
+  double prev = 0.5 * label.cols;
+  for (int y = label.rows - 1; y >= 0; --y) {
+    std::vector<double> centres;
+    const uint8_t* p = label.ptr<uint8_t>(y);
+    for (int x = 0; x < label.cols;) {
+      if (p[x] < 128) {
+        ++x;
+        continue;
+      }
+      const int start = x;
+      while (x < label.cols && p[x] >= 128) ++x;
+      centres.push_back(0.5 * (start + x));
+    }
+    if (centres.size() < 2) continue;
+    size_t c = 0;
+    for (size_t i = 1; i < centres.size(); ++i) {
+      if (std::abs(centres[i] - prev) < std::abs(centres[c] - prev)) c = i;
+    }
+    if (!vs.empty() && std::abs(centres[c] - prev) > 8.0) break;  // lost the line
+    prev = centres[c];
+    vs.push_back(y);
+    us.push_back(centres[c]);
+    const double gap = c + 1 < centres.size() ? centres[c + 1] - centres[c] : centres[c] - centres[c - 1];
+    spacing_sum += gap;
+    ++spacing_n;
+  }
+  if (vs.size() < 10) return "unknown";
+  double sv = 0, su = 0, svv = 0, svu = 0;
+  const double n = static_cast<double>(vs.size());
+  for (size_t i = 0; i < vs.size(); ++i) {
+    sv += vs[i];
+    su += us[i];
+    svv += vs[i] * vs[i];
+    svu += vs[i] * us[i];
+  }
+  const double b = (n * svu - sv * su) / (n * svv - sv * sv);
+  const double a = (su - b * sv) / n;
+  double worst = 0.0;
+  for (size_t i = 0; i < vs.size(); ++i) worst = std::max(worst, std::abs(us[i] - a - b * vs[i]));
+  return worst > tolerance * spacing_sum / spacing_n ? "curved" : "straight";
+}
+
 struct Tally {
   int images = 0, found = 0;
   double ordered = 0.0, nearest = 0.0;
@@ -170,15 +223,16 @@ struct Tally {
 
 int main(int argc, char** argv) {
   fs::path labels, rows, categories_file;
-  bool per_image = false;
+  bool per_image = false, shape = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--labels" && i + 1 < argc) labels = argv[++i];
     else if (a == "--rows" && i + 1 < argc) rows = argv[++i];
     else if (a == "--categories" && i + 1 < argc) categories_file = argv[++i];
     else if (a == "--per-image") per_image = true;
+    else if (a == "--shape") shape = true;
     else {
-      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE] [--per-image]\n";
+      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]\n";
       return 2;
     }
   }
@@ -226,6 +280,7 @@ int main(int argc, char** argv) {
     if (const auto it = category_of.find(name); it != category_of.end()) category = it->second;
     else category = name.substr(0, name.find_first_of("0123456789"));
     if (category.empty()) category = "all";
+    if (shape) category = LabelShape(label, 0.05);
     for (Tally* t : {&tallies[category], &all}) {
       ++t->images;
       t->found += det.found ? 1 : 0;
