@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
       else if (key == "half_comb_weight") options.curve.half_comb_weight = value;
       else if (key == "curve_degree") options.curve.curve_degree = static_cast<int>(value);
       else if (key == "min_curve_gain") options.min_curve_gain = value;
+      else if (key == "curve_gain_per_confidence") options.curve_gain_per_confidence = value;
       else if (key == "curve_free_prior") options.curve_free_prior = static_cast<int>(value);
       else if (key == "min_free_spacing_fraction") options.curve.min_free_spacing_fraction = value;
       else if (key == "free_max_scale") options.curve.free_max_scale = value;

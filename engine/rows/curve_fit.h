@@ -47,7 +47,7 @@ struct CurveFitOptions {
   int bands = 24;                 // horizontal bands of the DP
   int phase_steps = 48;           // phase states per spacing
   double scale_step = 0.04;       // log-spacing step
-  double max_scale = 0.4;         // |ln(d_band / d_prior)| with a straight prior
+  double max_scale = 0.12;        // |ln(d_band / d_prior)| with a straight prior
   double free_max_scale = 1.0;    // ... without one
   int max_phase_jump = 4;         // phase steps per band
   double phase_smoothness = 25.0; // cost per (Δφ)² (φ in spacings) between bands

@@ -44,6 +44,7 @@ OptionErrors RowDetectorOptions::Validate() const {
   for (const OptionError& c : curve.Validate()) e.push_back({"curve." + c.key, c.reason});
   RequireInRange(e, "min_curve_coherence", min_curve_coherence, 0.0, 1.0);
   RequireInRange(e, "min_curve_gain", min_curve_gain, -1.0, 1.0);
+  RequireInRange(e, "curve_gain_per_confidence", curve_gain_per_confidence, 0.0, 10.0);
   return e;
 }
 
@@ -170,7 +171,8 @@ RowDetection RowDetector::Detect(const cv::Mat& plant) {
   // Where the straight model found rows, the curve replaces it only when it
   // lines up clearly more plant matter than the straight rows do.
   if (det.confidence > 0.0 && fit.prior.valid &&
-      fit.coherence < fit.prior_coherence + options_.min_curve_gain) {
+      fit.coherence < fit.prior_coherence + options_.min_curve_gain +
+                          options_.curve_gain_per_confidence * det.confidence) {
     det.curve_coherence = fit.coherence;
     return det;
   }

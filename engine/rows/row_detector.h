@@ -105,8 +105,11 @@ struct RowDetectorOptions {
   CurveFitOptions curve;
   double min_curve_coherence = 0.4;  // the curve's comb coherence below this: no rows
   // Where the straight model found rows, the curve is taken when its
-  // coherence beats the straight rows' by this much.
+  // coherence beats the straight rows' by this much plus this × the
+  // straight model's confidence (a confident straight fit, as on wide rows
+  // of a narrow bed, is not given up for a few hundredths).
   double min_curve_gain = 0.02;
+  double curve_gain_per_confidence = 0.1;
   // The free prior (parallel rows, spacing searched) as well as the straight
   // model's: 0 only where the straight model found no rows, 1 instead of it,
   // 2 both, the more coherent curve wins.
