@@ -68,6 +68,20 @@ nlohmann::json DetectionJson(const fs::path& file, const rows::RowDetection& det
     j["top_v"] = nullptr;
     j["reason"] = det.reason;
   }
+  // The rows as curves: c(v) (the central row, row "central_row" in the
+  // list) and d(v) at each knot; u_n(v) = c(v) + n·d(v) between them.
+  j["model"] = det.curve.empty() ? "straight" : "curved";
+  if (found && !det.curve.empty()) {
+    nlohmann::json knots = nlohmann::json::array();
+    for (const rows::CurveKnot& k : det.curve) {
+      knots.push_back({{"v", k.v_px}, {"u_central", k.centre_u_px}, {"spacing", k.spacing_px}});
+    }
+    j["curve"] = knots;
+    for (size_t i = 0; i < det.rows.size(); ++i) {
+      if (det.rows[i].n == 0) j["central_row"] = i;
+    }
+  }
+  j["curve_coherence"] = det.curve_coherence;
   j["coherence"] = det.coherence;
   j["alignment"] = det.alignment;
   j["contrast"] = det.contrast;
@@ -89,7 +103,7 @@ cv::Mat Overlay(const cv::Mat& image, const rows::RowDetection& det) {
   for (size_t i = 0; i < det.rows.size(); ++i) {
     const int n = det.rows[i].n;
     const cv::Scalar colour = n == 0 ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 0, 255);
-    const int steps = 16;
+    const int steps = std::max(16, static_cast<int>((bottom - top) / 4.0));  // the curve, 4 px a step
     for (int k = 0; k < steps; ++k) {
       const double v0 = bottom - (bottom - top) * k / steps;
       const double v1 = bottom - (bottom - top) * (k + 1) / steps;
@@ -97,7 +111,7 @@ cv::Mat Overlay(const cv::Mat& image, const rows::RowDetection& det) {
                kShift);
     }
   }
-  if (const auto vp = det.VanishingPoint(); vp && det.confidence > 0.0) {
+  if (const auto vp = det.VanishingPoint(); vp && det.confidence > 0.0 && det.curve.empty()) {
     cv::drawMarker(out, cv::Point(static_cast<int>(vp->x()), static_cast<int>(vp->y())),
                    cv::Scalar(0, 255, 255), cv::MARKER_CROSS, 6 * thickness, thickness);
   }
@@ -140,7 +154,9 @@ int DetectRowsCommand(const DetectRowsRequest& request) {
             << "/, rows found in " << r.with_rows;
   if (r.failed > 0) std::cout << ", " << r.failed << " failed";
   std::cout << '\n';
-  return r.failed > 0 ? 1 : 0;
+  // 0 when any image was processed (the failures are reported per file),
+  // 2 when none could be.
+  return r.images > 0 ? 0 : 2;
 }
 
 struct RowsEvalArgs {

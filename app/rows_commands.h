@@ -25,8 +25,9 @@ struct DetectRowsResult : ImageBatchResult {
 
 // For each NAME.ext: OUT/NAME_rows.csv (row,v,u), OUT/NAME_rows.png (the
 // photograph with the rows drawn), OUT/NAME_rows.json (vanishing point,
-// spacing at the bottom row, confidence). Unreadable files are errors of
-// their own; the others are still processed.
+// spacing at the bottom row, confidence, the rows' curve). Unreadable files
+// are errors of their own; the others are still processed. The command exits
+// 0 when any image was processed and 2 when none could be.
 DetectRowsResult DetectRows(const DetectRowsRequest& request, std::ostream& log);
 
 void AddRowsCommands(CommandRegistry& registry);

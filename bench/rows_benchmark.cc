@@ -1,7 +1,8 @@
 // Crop-row detection speed (issue 11): a photograph's whole detect-rows
 // pipeline after decoding (segmentation as `plantscale segment --method
-// auto`, then the row detector) on one core, at most 5 ms per 320×240 and
-// 15 ms per 640×480; and the detector alone on the plant mask.
+// auto`, then the row detector with its curves) on one core, at most 5 ms
+// per 320×240, 15 ms per 640×480 and 20 ms per 512×512 (issue 34); the
+// detector alone on the plant mask; the curve fit alone.
 // Run: build/bench/rows_benchmark
 #include <benchmark/benchmark.h>
 
@@ -55,6 +56,48 @@ void BM_DetectRowsInPhoto(benchmark::State& state) {
   state.counters["rows"] = rows;
 }
 BENCHMARK(BM_DetectRowsInPhoto)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond);
+
+// Issue 34: the whole pipeline on a square 512×512 photograph (as the
+// crop-row datasets store them), at most 20 ms, curves included.
+void BM_DetectRowsInSquarePhoto(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const int side = static_cast<int>(state.range(0));
+  cv::Mat photo;
+  cv::resize(Photo(640), photo, cv::Size(side, side), 0, 0, cv::INTER_AREA);
+  RowDetector detector{RowDetectorOptions{}};
+  double curved = 0;
+  for (auto _ : state) {
+    const RowDetection det = app::DetectRowsInPhoto(photo, detector);
+    curved = det.curve.empty() ? 0.0 : 1.0;
+    benchmark::DoNotOptimize(det.spacing_px);
+  }
+  state.counters["curved"] = curved;
+}
+BENCHMARK(BM_DetectRowsInSquarePhoto)->Arg(512)->Unit(benchmark::kMillisecond);
+
+// The curve fit alone (curve_fit.h) on the plant fraction of a 512×512
+// photograph's mask, with the straight model's geometry as prior.
+void BM_CurveFit(benchmark::State& state) {
+  cv::setNumThreads(1);
+  cv::Mat mask(512, 512, CV_8UC1, cv::Scalar(0));
+  for (int n = -3; n <= 3; ++n) {
+    for (int v = 0; v < 512; v += 6) {
+      const double t = (511.5 - v) / 512.0;
+      const double u = 256.0 + 40.0 * t * t + n * 90.0 * (1.0 - 0.5 * t);
+      cv::circle(mask, cv::Point(static_cast<int>(u), v), 5, cv::Scalar(255), cv::FILLED);
+    }
+  }
+  cv::Mat unit;
+  cv::resize(mask, unit, cv::Size(320, 320), 0, 0, cv::INTER_AREA);
+  unit.convertTo(unit, CV_32F, 1.0 / 255.0);
+  CurveFitter fitter{CurveFitOptions{}};
+  const CurvePrior prior{true, 256.0, 90.0, 0.5 / 512.0, 0.5 / 512.0 * 256.0};
+  for (auto _ : state) {
+    const CurveFit fit = fitter.Fit(unit, 1.6, 1.6, 512.0, 512.0, prior);
+    benchmark::DoNotOptimize(fit.coherence);
+  }
+}
+BENCHMARK(BM_CurveFit)->Unit(benchmark::kMillisecond);
 
 void BM_RowDetectorOnMask(benchmark::State& state) {
   cv::setNumThreads(1);

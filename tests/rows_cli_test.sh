@@ -11,11 +11,12 @@ rm -rf "$work"; mkdir -p "$work/in" "$work/empty"
 # A dependency-free RGB PNG writer for the Python snippets below.
 cat > "$work/pngw.py" <<'PY'
 import struct, zlib
-def png(path, w, h, pixel):
-    raw = b"".join(b"\0" + b"".join(bytes(pixel(x, y)) for x in range(w)) for y in range(h))
+def png(path, w, h, pixel, depth=8):
+    pack = (lambda p: bytes(p)) if depth == 8 else (lambda p: struct.pack(">HHH", *(257 * c for c in p)))
+    raw = b"".join(b"\0" + b"".join(pack(pixel(x, y)) for x in range(w)) for y in range(h))
     chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
     with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, depth, 2, 0, 0, 0))
                 + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 PY
 
@@ -42,11 +43,17 @@ def soil(x, y):
     return (max(0, min(255, 120 + g)), max(0, min(255, 90 + g)), max(0, min(255, 65 + g)))
 png(sys.argv[1] + "/soil.png", 320, 240, soil)
 png(sys.argv[1] + "/sky.png", 200, 150, lambda x, y: (110 + y // 3, 160 + y // 4, 235))
+# A tiny image and a 16-bit colour PNG of green stripes (issue 34): "no rows"
+# or rows, never a crash.
+png(sys.argv[1] + "/tiny.png", 16, 16, lambda x, y: (60, 150, 50) if x % 5 == 0 else (120, 90, 65))
+png(sys.argv[1] + "/deep.png", 160, 120, lambda x, y: (60, 150, 50) if (x // 8) % 4 == 0 else (120, 90, 65), 16)
 PY
+echo "notes" > "$work/in/readme.txt"  # not an image: left out of the folder's images
 
 # Bad input: empty, truncated, not an image, a missing file, an empty folder.
 : > "$work/in/zero.jpg"
 head -c 3000 "$work/in/low.png" > "$work/in/truncated.png"
+printf '\xff\xd8\xff\xe0\x00\x10JFIF\x00\x01\x01\x00' > "$work/in/cut.jpg"  # a JPEG cut short
 echo "not an image" > "$work/in/text.png"
 
 set +e
@@ -54,14 +61,15 @@ set +e
   >"$work/stdout" 2>"$work/stderr"
 rc=$?
 set -e
-[[ $rc -eq 1 ]] || fail "exit code $rc with bad images, want 1"
-for f in zero.jpg truncated.png text.png missing.png; do
+[[ $rc -eq 0 ]] || fail "exit code $rc with bad images among good ones, want 0"
+for f in zero.jpg truncated.png text.png missing.png cut.jpg; do
   grep -q "$f" "$work/stderr" || fail "no error naming $f"
 done
 grep -q "empty: no PNG or JPEG images" "$work/stderr" || fail "no error for the empty folder"
 grep -q "detect-rows.*100%" "$work/stderr" || fail "no progress on standard error"
-grep -q "4 image(s)" "$work/stdout" || fail "the batch did not go on past the bad files"
-for n in low colour soil sky; do
+grep -q "6 image(s)" "$work/stdout" || fail "the batch did not go on past the bad files"
+grep -q "readme.txt" "$work/stderr" && fail "a text file in a folder is not an image error"
+for n in low colour soil sky tiny deep; do
   for ext in csv png json; do
     [[ -s "$work/out/${n}_rows.$ext" ]] || fail "missing ${n}_rows.$ext"
   done
@@ -98,6 +106,15 @@ for n in ("soil", "sky"):
     assert open(out + "/" + n + "_rows.csv").read() == "row,v,u\n", n
 print("rows outputs: ok")
 PY
+
+# Only bad files: exit 2.
+set +e
+"$bin" detect-rows "$work/in/zero.jpg" "$work/in/truncated.png" "$work/empty" --out "$work/out3" \
+  --quiet >/dev/null 2>"$work/stderr3"
+rc=$?
+set -e
+[[ $rc -eq 2 ]] || fail "exit code $rc when no file could be processed, want 2"
+grep -q "truncated.png" "$work/stderr3" || fail "no error naming truncated.png"
 
 # Only good images: exit 0.
 "$bin" detect-rows "$work/in/low.png" --out "$work/out2" --quiet >/dev/null \

@@ -41,15 +41,42 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequirePositive(e, "min_visible_spacing_px", min_visible_spacing_px);
   RequireInRange(e, "orientation_floor", orientation_floor, 0.0, 1.0);
   if (orientation_candidates < 0) e.push_back({"orientation_candidates", "must be >= 0"});
+  for (const OptionError& c : curve.Validate()) e.push_back({"curve." + c.key, c.reason});
+  RequireInRange(e, "min_curve_coherence", min_curve_coherence, 0.0, 1.0);
+  RequireInRange(e, "min_curve_gain", min_curve_gain, -1.0, 1.0);
+  RequireInRange(e, "curve_gain_per_confidence", curve_gain_per_confidence, 0.0, 10.0);
   return e;
 }
 
+namespace {
+
+// c(v) and d(v) of a curve: linear between knots (bottom to top, v
+// decreasing), continued along the end segments.
+std::pair<double, double> CurveAt(const std::vector<CurveKnot>& knots, double v) {
+  size_t i = 0;
+  while (i + 2 < knots.size() && v < knots[i + 1].v_px) ++i;
+  const CurveKnot& a = knots[i];
+  const CurveKnot& b = knots[i + 1];
+  const double t = (v - a.v_px) / (b.v_px - a.v_px);
+  return {a.centre_u_px + t * (b.centre_u_px - a.centre_u_px),
+          a.spacing_px + t * (b.spacing_px - a.spacing_px)};
+}
+
+}  // namespace
+
 double RowDetection::U(int n, double v_px) const {
+  if (curve.size() >= 2) {
+    const auto [c, d] = CurveAt(curve, v_px);
+    return c + n * d;
+  }
   const double dv = bottom_v_px() - v_px;
   return (centre_u_px + n * spacing_px) * (1.0 - convergence * dv) + lean * dv;
 }
 
+double RowDetection::CentreAt(double v_px) const { return U(0, v_px); }
+
 double RowDetection::SpacingAt(double v_px) const {
+  if (curve.size() >= 2) return CurveAt(curve, v_px).second;
   return spacing_px * (1.0 - convergence * (bottom_v_px() - v_px));
 }
 
@@ -114,15 +141,178 @@ double RowCountFactor(const std::vector<DetectedRow>& rows) {
 
 }  // namespace
 
-RowDetector::RowDetector(const RowDetectorOptions& options) : options_(options) {
-  ThrowIfInvalid("row detector", options.Validate());
-}
+RowDetector::RowDetector(const RowDetectorOptions& options)
+    : options_((ThrowIfInvalid("row detector", options.Validate()), options)),
+      curve_fitter_(options.curve) {}
 
 RowDetection RowDetector::Detect(const cv::Mat& plant) {
   if (plant.empty()) throw DataError("row detector: empty image");
   if (plant.type() != CV_8UC1 && plant.type() != CV_32FC1) {
     throw DataError("row detector: plant image must be CV_8UC1 or CV_32FC1");
   }
+  RowDetection det = DetectStraight(plant);
+  if (!options_.curves || fit_.empty() || det.reason.rfind("no plant matter", 0) == 0) return det;
+  const double W = plant.cols, H = plant.rows;
+  CurvePrior prior;
+  if (det.spacing_px > 0.0) {
+    prior = {true, det.centre_u_px, det.spacing_px, det.convergence, det.lean};
+  }
+  CurveFit fit = curve_fitter_.Fit(fit_, W / fit_.cols, H / fit_.rows, W, H, prior);
+  if (options_.curve_free_prior == 1) {
+    fit = curve_fitter_.Fit(fit_, W / fit_.cols, H / fit_.rows, W, H, CurvePrior{});
+  } else if (prior.valid && (options_.curve_free_prior == 2 ||
+      (det.confidence <= 0.0 && (fit.knots.size() < 2 || fit.coherence < options_.min_curve_coherence)))) {
+    // The straight model's geometry may be wrong where it found no rows:
+    // the free prior (parallel rows, spacing searched) gets its turn.
+    CurveFit free = curve_fitter_.Fit(fit_, W / fit_.cols, H / fit_.rows, W, H, CurvePrior{});
+    if (free.knots.size() >= 2 && free.coherence > fit.coherence) fit = std::move(free);
+  }
+  if (fit.knots.size() < 2) return det;
+  // Where the straight model found rows, the curve replaces it only when it
+  // lines up clearly more plant matter than the straight rows do.
+  if (det.confidence > 0.0 && fit.prior.valid &&
+      fit.coherence < fit.prior_coherence + options_.min_curve_gain +
+                          options_.curve_gain_per_confidence * det.confidence) {
+    det.curve_coherence = fit.coherence;
+    return det;
+  }
+  RowDetection curved = det;
+  curved.curve = fit.knots;
+  curved.curve_coherence = fit.coherence;
+  curved.curve_prior_straight = fit.prior.valid && prior.valid;
+  if (!curved.curve_prior_straight) {
+    curved.centre_u_px = fit.prior.centre_u;
+    curved.spacing_px = fit.prior.spacing;
+    curved.convergence = 0.0;
+    curved.lean = 0.0;
+  }
+  // The central row: nearest the image's centre at the bottom.
+  const double v_bottom = H - 0.5;
+  const double shift = std::round((0.5 * W - curved.U(0, v_bottom)) / curved.SpacingAt(v_bottom));
+  for (CurveKnot& k : curved.curve) k.centre_u_px += shift * k.spacing_px;
+  curved.top_v_px = std::clamp(std::min(fit.top_v_px, det.confidence > 0.0 ? det.top_v_px : H),
+                               0.0, v_bottom);
+  if (fit.coherence < options_.min_curve_coherence && det.confidence <= 0.0) {
+    det.curve_coherence = fit.coherence;
+    if (det.reason.empty()) det.reason = "no rows";
+    det.reason += "; curved rows: coherence " + std::to_string(fit.coherence);
+    return det;
+  }
+  double contrast = 0.0;
+  curved.rows = CurveRows(curved, contrast);
+  curved.contrast = contrast;
+  if (curved.rows.size() >= 2 && contrast < options_.min_contrast) {
+    det.curve_coherence = fit.coherence;
+    if (det.confidence > 0.0) return det;
+    det.reason += "; curved rows: contrast " + std::to_string(contrast) + " between rows and gaps";
+    return det;
+  }
+  if (curved.rows.size() < 2) {
+    det.curve_coherence = fit.coherence;
+    if (det.confidence > 0.0) return det;
+    det.reason += "; curved rows: fewer than two rows with plant matter along them";
+    return det;
+  }
+  double occupancy = 0.0;
+  for (const DetectedRow& r : curved.rows) occupancy += r.occupancy;
+  occupancy /= static_cast<double>(curved.rows.size());
+  curved.confidence = std::clamp(fit.coherence * occupancy, 1e-3, 1.0);
+  curved.reason.clear();
+  return curved;
+}
+
+std::vector<DetectedRow> RowDetector::CurveRows(const RowDetection& det, double& contrast) const {
+  contrast = 0.0;
+  const double W = det.width_px, H = det.height_px;
+  const double v_bottom = H - 0.5;
+  const int fw = fit_.cols, fh = fit_.rows;
+  const double kfw = W / fw, kfh = H / fh;
+  const int n_bands = std::min(24, fh);
+  const double d0 = det.SpacingAt(v_bottom);
+  const double c0 = det.U(0, v_bottom);
+  if (!(d0 > 0.0)) return {};
+  const int n_lo = static_cast<int>(std::floor((-W - c0) / d0));
+  const int n_hi = static_cast<int>(std::ceil((2.0 * W - c0) / d0));
+  if (n_hi - n_lo > 200) return {};
+  const size_t n_rows = static_cast<size_t>(n_hi - n_lo + 1);
+  std::vector<int> in_image(n_rows, 0), occupied(n_rows, 0);
+  int visible_bands = 0;
+  double on_sum = 0.0, between_sum = 0.0;  // plant matter on the rows and half-way between
+  std::vector<double> profile(static_cast<size_t>(fw));
+  std::vector<double> cum(static_cast<size_t>(fw) + 1);
+  std::vector<double> density(n_rows);
+  const double hw = options_.row_halfwidth_fraction;
+  for (int k = 0; k < n_bands; ++k) {
+    const int r0 = fh - (k + 1) * fh / n_bands, r1 = fh - k * fh / n_bands;
+    const double v = 0.5 * (r0 + r1) * kfh;
+    if (v < det.top_v_px) break;
+    const double d = det.SpacingAt(v);
+    if (d < options_.min_visible_spacing_px) break;
+    ++visible_bands;
+    std::fill(profile.begin(), profile.end(), 0.0);
+    for (int r = r0; r < r1; ++r) {
+      const float* row = fit_.ptr<float>(r);
+      for (int x = 0; x < fw; ++x) profile[static_cast<size_t>(x)] += static_cast<double>(row[x]);
+    }
+    for (int x = 0; x < fw; ++x) cum[static_cast<size_t>(x) + 1] = cum[static_cast<size_t>(x)] + profile[static_cast<size_t>(x)];
+    const auto window = [&](double u, double half) {
+      const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kfw - 0.5)));
+      const int x1 = std::min(fw - 1, static_cast<int>(std::floor((u + half) / kfw - 0.5)));
+      if (x1 < x0) return -1.0;
+      return (cum[static_cast<size_t>(x1) + 1] - cum[static_cast<size_t>(x0)]) / ((x1 - x0 + 1) * (r1 - r0));
+    };
+    const double half = std::max(0.5 * kfw, hw * d);
+    double background = 0.0;
+    int n_background = 0;
+    for (size_t i = 0; i < n_rows; ++i) {
+      const int n = n_lo + static_cast<int>(i);
+      const double u = det.U(n, v);
+      density[i] = (u >= 0.0 && u <= W) ? window(u, half) : -1.0;
+      const double m = u + 0.5 * d;
+      if (m >= 0.0 && m <= W) {
+        const double between = window(m, half);
+        if (between >= 0.0) {
+          background += between;
+          ++n_background;
+        }
+      }
+    }
+    for (size_t i = 0; i < n_rows; ++i) {
+      if (density[i] >= 0.0) on_sum += density[i];
+    }
+    between_sum += background;
+    background = n_background > 0 ? background / n_background : 0.0;
+    const double level = std::max(0.02, 1.3 * background);
+    for (size_t i = 0; i < n_rows; ++i) {
+      if (density[i] < 0.0) continue;
+      ++in_image[i];
+      if (density[i] >= level) ++occupied[i];
+    }
+  }
+  std::vector<double> occupancy(n_rows, -1.0);
+  int first = -1, last = -1;
+  // A row is judged where it is in the image for a third of the visible
+  // height at least (rows fanning in at the top corners are not).
+  contrast = on_sum > 0.0 ? 1.0 - between_sum / on_sum : 0.0;
+  const int min_in_image = std::max(2, visible_bands / 3);
+  for (size_t i = 0; i < n_rows; ++i) {
+    if (in_image[i] < min_in_image) continue;
+    occupancy[i] = static_cast<double>(occupied[i]) / in_image[i];
+    if (occupancy[i] < options_.min_row_occupancy) continue;
+    if (first < 0) first = static_cast<int>(i);
+    last = static_cast<int>(i);
+  }
+  std::vector<DetectedRow> rows;
+  for (int i = std::max(first, 0); first >= 0 && i <= last; ++i) {
+    const double occ = occupancy[static_cast<size_t>(i)];
+    if (occ < options_.min_gap_row_occupancy) continue;
+    const int n = n_lo + i;
+    rows.push_back({n, det.U(n, v_bottom), occ});
+  }
+  return rows;
+}
+
+RowDetection RowDetector::DetectStraight(const cv::Mat& plant) {
   const RowDetectorOptions& o = options_;
   RowDetection out;
   out.width_px = plant.cols;

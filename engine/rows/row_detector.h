@@ -62,6 +62,7 @@
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/rows/curve_fit.h"
 #include "engine/rows/orientation.h"
 
 namespace plantscale::rows {
@@ -98,6 +99,21 @@ struct RowDetectorOptions {
   // streaks (seen from above, scattered plants) as they were. 0 disables.
   double orientation_floor = 0.02;
   int orientation_candidates = 2;  // best-supported Hough cells also taken on to the comb
+  // Rows as curves (curve_fit.h, issue 34), with the straight model above as
+  // their prior; when it found no rows (or none at all), the curve decides.
+  bool curves = true;
+  CurveFitOptions curve;
+  double min_curve_coherence = 0.4;  // the curve's comb coherence below this: no rows
+  // Where the straight model found rows, the curve is taken when its
+  // coherence beats the straight rows' by this much plus this × the
+  // straight model's confidence (a confident straight fit, as on wide rows
+  // of a narrow bed, is not given up for a few hundredths).
+  double min_curve_gain = 0.02;
+  double curve_gain_per_confidence = 0.1;
+  // The free prior (parallel rows, spacing searched) as well as the straight
+  // model's: 0 only where the straight model found no rows, 1 instead of it,
+  // 2 both, the more coherent curve wins.
+  int curve_free_prior = 0;
 
   OptionErrors Validate() const;
 };
@@ -122,13 +138,22 @@ struct RowDetection {
   double contrast = 0.0;       // 1 − (matter half-way between the rows) / (on the rows)
   double top_v_px = 0.0;       // rows are told apart from the bottom up to this v
   std::vector<DetectedRow> rows;  // left to right
+  // The rows as curves (bottom to top): c(v) and d(v) at each band's centre,
+  // interpolated linearly between them and continued beyond the end knots.
+  // Empty: the straight model above.
+  std::vector<CurveKnot> curve;
+  double curve_coherence = 0.0;
+  bool curve_prior_straight = false;  // the curve's prior was the straight model above
 
   double bottom_v_px() const { return height_px - 0.5; }
-  // u of comb row n at image height v (continuous; v = row index + 0.5).
+  // u of comb row n at image height v (continuous; v = row index + 0.5);
+  // beyond the image sides too.
   double U(int n, double v_px) const;
+  // The central row's u (c) and the spacing (d) at image height v.
+  double CentreAt(double v_px) const;
   // Row spacing at image height v.
   double SpacingAt(double v_px) const;
-  // (u, v) of the vanishing point; nullopt when the rows are parallel.
+  // (u, v) of the straight model's vanishing point; nullopt when the rows are parallel.
   std::optional<Eigen::Vector2d> VanishingPoint() const;
   // The central row's offset from the image's centre column at the bottom.
   double CentralOffsetPx() const { return centre_u_px - 0.5 * width_px; }
@@ -144,7 +169,15 @@ class RowDetector {
   const RowDetectorOptions& options() const { return options_; }
 
  private:
+  // The straight, one-vanishing-point model alone.
+  RowDetection DetectStraight(const cv::Mat& plant);
+  // The rows of `det`'s curve with plant matter along them (as the
+  // straight model keeps rows), with their occupancy.
+  // `contrast`: 1 − (plant matter half-way between the rows) / (on them).
+  std::vector<DetectedRow> CurveRows(const RowDetection& det, double& contrast) const;
+
   RowDetectorOptions options_;
+  CurveFitter curve_fitter_;
   cv::Mat work_;  // CV_32F plant fraction at the Hough resolution
   cv::Mat fit_;   // CV_32F at the refit resolution
   std::vector<float> profiles_;

@@ -1,0 +1,307 @@
+// crda_score: scores `plantscale detect-rows` output (NAME_rows.csv,
+// NAME_rows.json) against label images of crop-row centre lines (white
+// lines on black, any scale, JPEG or PNG: thresholded at 128), with the
+// CRDA measure of Vidović, Cupec and Hocenski (Pattern Recognition 2016)
+// as issue 34 states it: per labelled image row, each of the three central
+// true rows scores max(0, 1 − ((u − u_true)/(0.1·d))²), d the true spacing
+// there (half the distance between the outer two), and the image row scores
+// the mean of the three. An image scores the mean over its labelled image
+// rows (rows with fewer than three label lines are not scored); "no rows"
+// scores 0 on every labelled image row.
+//
+// Two matchings of detected to true rows, both printed:
+//   ordered  the detected row nearest the central true row is matched to
+//            it, its left and right neighbours to the true left and right
+//            rows (a missing neighbour scores 0);
+//   nearest  each true row is matched to the detected row nearest it.
+//
+// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]
+//   --shape: categories "curved" and "straight" from the labels themselves
+//   (the central label line departs from a straight line by more than 5 %
+//   of the spacing somewhere, or not).
+//   DIR of labels: NAME.{jpg,png}; DIR of rows: NAME_rows.csv, NAME_rows.json.
+//   --categories: lines "NAME,category"; otherwise the category is the
+//   file name up to its first digit ("" → "all").
+// Exit 0 when at least one image was scored, 2 otherwise.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double Crda(double u, double u_true, double d) {
+  const double e = (u - u_true) / (0.1 * d);
+  return std::max(0.0, 1.0 - e * e);
+}
+
+struct Detected {
+  int width = 0, height = 0;
+  bool found = false;
+  // per image row v: u of each detected row (indexed by row number; NaN where absent)
+  std::map<int, std::vector<double>> u;
+};
+
+// Reads one integer/float JSON field without a JSON library ("key": value).
+double JsonNumber(const std::string& text, const std::string& key, double fallback) {
+  const auto p = text.find("\"" + key + "\"");
+  if (p == std::string::npos) return fallback;
+  const auto colon = text.find(':', p);
+  if (colon == std::string::npos) return fallback;
+  try {
+    return std::stod(text.substr(colon + 1, 40));
+  } catch (...) {
+    return fallback;
+  }
+}
+
+bool ReadDetected(const fs::path& csv, const fs::path& json, Detected& d, std::string& error) {
+  std::ifstream j(json);
+  if (!j) {
+    error = "cannot read " + json.string();
+    return false;
+  }
+  std::stringstream ss;
+  ss << j.rdbuf();
+  const std::string text = ss.str();
+  d.width = static_cast<int>(JsonNumber(text, "width", 0));
+  d.height = static_cast<int>(JsonNumber(text, "height", 0));
+  d.found = JsonNumber(text, "confidence", 0.0) > 0.0;
+  std::ifstream c(csv);
+  if (!c) {
+    error = "cannot read " + csv.string();
+    return false;
+  }
+  std::string line;
+  std::getline(c, line);
+  if (line.rfind("row,v,u", 0) != 0) {
+    error = csv.string() + ": header is not row,v,u";
+    return false;
+  }
+  while (std::getline(c, line)) {
+    int row = 0, v = 0;
+    double u = 0;
+    char c1 = 0, c2 = 0;
+    std::istringstream ls(line);
+    if (!(ls >> row >> c1 >> v >> c2 >> u) || row < 0) continue;
+    auto& us = d.u[v];
+    if (static_cast<int>(us.size()) <= row) us.resize(static_cast<size_t>(row) + 1, std::nan(""));
+    us[static_cast<size_t>(row)] = u;
+  }
+  return true;
+}
+
+struct Score {
+  double ordered = 0.0, nearest = 0.0;
+  int rows = 0;
+};
+
+Score ScoreImage(const cv::Mat& label, const Detected& det) {
+  Score s;
+  const double sx = static_cast<double>(det.width) / label.cols;
+  const double sy = static_cast<double>(det.height) / label.rows;
+  for (int y = 0; y < label.rows; ++y) {
+    std::vector<double> centres;  // label lines crossing this row: centres of white runs
+    const uint8_t* p = label.ptr<uint8_t>(y);
+    for (int x = 0; x < label.cols;) {
+      if (p[x] < 128) {
+        ++x;
+        continue;
+      }
+      const int start = x;
+      while (x < label.cols && p[x] >= 128) ++x;
+      centres.push_back(0.5 * (start + x) * sx);
+    }
+    if (centres.size() < 3) continue;
+    size_t c = 1;  // the central line: nearest the image's centre column, with a neighbour each side
+    for (size_t i = 1; i + 1 < centres.size(); ++i) {
+      if (std::abs(centres[i] - 0.5 * det.width) < std::abs(centres[c] - 0.5 * det.width)) c = i;
+    }
+    const double d = 0.5 * (centres[c + 1] - centres[c - 1]);
+    const int v = std::clamp(static_cast<int>(std::floor((y + 0.5) * sy)), 0, det.height - 1);
+    std::vector<double> us;
+    if (const auto it = det.u.find(v); it != det.u.end()) {
+      for (const double u : it->second) {
+        if (!std::isnan(u)) us.push_back(u);
+      }
+    }
+    std::sort(us.begin(), us.end());
+    double ordered = 0.0, nearest = 0.0;
+    if (!us.empty()) {
+      size_t j = 0;
+      for (size_t i = 0; i < us.size(); ++i) {
+        if (std::abs(us[i] - centres[c]) < std::abs(us[j] - centres[c])) j = i;
+      }
+      ordered += Crda(us[j], centres[c], d);
+      if (j > 0) ordered += Crda(us[j - 1], centres[c - 1], d);
+      if (j + 1 < us.size()) ordered += Crda(us[j + 1], centres[c + 1], d);
+      for (size_t k = c - 1; k <= c + 1; ++k) {
+        double best = us[0];
+        for (const double u : us) {
+          if (std::abs(u - centres[k]) < std::abs(best - centres[k])) best = u;
+        }
+        nearest += Crda(best, centres[k], d);
+      }
+    }
+    s.ordered += ordered / 3.0;
+    s.nearest += nearest / 3.0;
+    ++s.rows;
+  }
+  if (s.rows > 0) {
+    s.ordered /= s.rows;
+    s.nearest /= s.rows;
+  }
+  return s;
+}
+
+// "curved" when the label's central line bends: the centres of the label
+// line nearest the image's centre column, followed from the bottom up, depart
+// from their least-squares straight line by more than `tolerance` × the
+// label spacing somewhere; else "straight".
+std::string LabelShape(const cv::Mat& label, double tolerance) {
+  std::vector<double> vs, us;
+  double spacing_sum = 0.0;
+  int spacing_n = 0;
+  double prev = 0.5 * label.cols;
+  for (int y = label.rows - 1; y >= 0; --y) {
+    std::vector<double> centres;
+    const uint8_t* p = label.ptr<uint8_t>(y);
+    for (int x = 0; x < label.cols;) {
+      if (p[x] < 128) {
+        ++x;
+        continue;
+      }
+      const int start = x;
+      while (x < label.cols && p[x] >= 128) ++x;
+      centres.push_back(0.5 * (start + x));
+    }
+    if (centres.size() < 2) continue;
+    size_t c = 0;
+    for (size_t i = 1; i < centres.size(); ++i) {
+      if (std::abs(centres[i] - prev) < std::abs(centres[c] - prev)) c = i;
+    }
+    if (!vs.empty() && std::abs(centres[c] - prev) > 8.0) break;  // lost the line
+    prev = centres[c];
+    vs.push_back(y);
+    us.push_back(centres[c]);
+    const double gap = c + 1 < centres.size() ? centres[c + 1] - centres[c] : centres[c] - centres[c - 1];
+    spacing_sum += gap;
+    ++spacing_n;
+  }
+  if (vs.size() < 10) return "unknown";
+  double sv = 0, su = 0, svv = 0, svu = 0;
+  const double n = static_cast<double>(vs.size());
+  for (size_t i = 0; i < vs.size(); ++i) {
+    sv += vs[i];
+    su += us[i];
+    svv += vs[i] * vs[i];
+    svu += vs[i] * us[i];
+  }
+  const double b = (n * svu - sv * su) / (n * svv - sv * sv);
+  const double a = (su - b * sv) / n;
+  double worst = 0.0;
+  for (size_t i = 0; i < vs.size(); ++i) worst = std::max(worst, std::abs(us[i] - a - b * vs[i]));
+  return worst > tolerance * spacing_sum / spacing_n ? "curved" : "straight";
+}
+
+struct Tally {
+  int images = 0, found = 0;
+  double ordered = 0.0, nearest = 0.0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  fs::path labels, rows, categories_file;
+  bool per_image = false, shape = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--labels" && i + 1 < argc) labels = argv[++i];
+    else if (a == "--rows" && i + 1 < argc) rows = argv[++i];
+    else if (a == "--categories" && i + 1 < argc) categories_file = argv[++i];
+    else if (a == "--per-image") per_image = true;
+    else if (a == "--shape") shape = true;
+    else {
+      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]\n";
+      return 2;
+    }
+  }
+  if (labels.empty() || rows.empty() || !fs::is_directory(labels) || !fs::is_directory(rows)) {
+    std::cerr << "crda_score: --labels and --rows must be folders\n";
+    return 2;
+  }
+  std::map<std::string, std::string> category_of;
+  if (!categories_file.empty()) {
+    std::ifstream in(categories_file);
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto comma = line.find(',');
+      if (comma != std::string::npos) category_of[line.substr(0, comma)] = line.substr(comma + 1);
+    }
+  }
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(labels)) {
+    const std::string ext = e.path().extension().string();
+    if (ext == ".jpg" || ext == ".png" || ext == ".jpeg" || ext == ".JPG" || ext == ".PNG") {
+      files.push_back(e.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  std::map<std::string, Tally> tallies;
+  Tally all;
+  int errors = 0;
+  std::cout << std::fixed << std::setprecision(3);
+  for (const fs::path& file : files) {
+    const std::string name = file.stem().string();
+    cv::Mat label = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+    Detected det;
+    std::string error;
+    if (label.empty()) error = "cannot read label " + file.string();
+    else ReadDetected(rows / (name + "_rows.csv"), rows / (name + "_rows.json"), det, error);
+    if (error.empty() && (det.width <= 0 || det.height <= 0)) error = name + ": no image size in JSON";
+    if (!error.empty()) {
+      std::cerr << "crda_score: error: " << error << '\n';
+      ++errors;
+      continue;
+    }
+    const Score s = ScoreImage(label, det);
+    if (s.rows == 0) continue;  // nothing labelled with three rows
+    std::string category;
+    if (const auto it = category_of.find(name); it != category_of.end()) category = it->second;
+    else category = name.substr(0, name.find_first_of("0123456789"));
+    if (category.empty()) category = "all";
+    if (shape) category = LabelShape(label, 0.05);
+    for (Tally* t : {&tallies[category], &all}) {
+      ++t->images;
+      t->found += det.found ? 1 : 0;
+      t->ordered += s.ordered;
+      t->nearest += s.nearest;
+    }
+    if (per_image) {
+      std::cout << "image " << name << " crda_ordered " << s.ordered << " crda_nearest " << s.nearest
+                << " found " << det.found << '\n';
+    }
+  }
+  const auto print = [](const std::string& label, const Tally& t) {
+    std::cout << std::left << std::setw(16) << label << std::right << " images " << std::setw(4)
+              << t.images << "  found " << std::setw(5) << (t.images ? 100.0 * t.found / t.images : 0.0)
+              << " %  crda_ordered " << (t.images ? t.ordered / t.images : 0.0) << "  crda_nearest "
+              << (t.images ? t.nearest / t.images : 0.0) << '\n';
+  };
+  if (tallies.size() > 1) {
+    for (const auto& [category, t] : tallies) print(category, t);
+  }
+  print("overall", all);
+  if (errors > 0) std::cout << errors << " error(s)\n";
+  return all.images > 0 ? 0 : 2;
+}
