@@ -13,6 +13,7 @@ namespace {
 TrackingEvaluation Evaluate(const char* preset, int seeds) {
   TrackingEvalOptions o;
   o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
+  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
   o.seeds = seeds;
   o.baseline_thesis = true;
   return EvaluateTracking(o);
