@@ -106,7 +106,7 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
 
 int Presets(const GlobalOptions& global) {
   const std::filesystem::path dir = global.ConfigDir();
-  for (const char* kind : {"presets", "cameras"}) {
+  for (const char* kind : {"presets", "cameras", "crops", "vehicles"}) {
     std::cout << kind << " (" << (dir / kind).string() << "):\n";
     for (const std::string& n : ListConfigNames(dir / kind)) std::cout << "  " << n << '\n';
   }
@@ -133,7 +133,7 @@ void AddSimulateCommands(CommandRegistry& registry) {
                        "with --publish: the vehicle pipeline's vehicle profile (config/vehicles "
                        "name or YAML file; default: the preset's vehicle by name)");
 
-  registry.Add("presets", "list the simulator presets and cameras",
+  registry.Add("presets", "list the simulator presets, cameras, crop profiles and vehicle profiles",
                [&global] { return Presets(global); });
 }
 

@@ -242,8 +242,10 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
     camera.emplace(EngineCamera(*profiles));
     pipeline.emplace(PipelineSetup{*camera, ProductPipelineOptions(*profiles)});
     if (!a.calibration.empty()) title += ", calibration " + a.calibration;
-    if (a.crop.empty() || a.vehicle.empty()) title += ", preset " + std::filesystem::path(a.preset).stem().string();
     title += ", crop " + profiles->crop.name + ", vehicle " + profiles->vehicle.name;
+    if (a.crop.empty() || a.vehicle.empty()) {
+      title += ", preset " + std::filesystem::path(a.preset).stem().string();
+    }
   }
   return RunVehicle(
       a.publish,
