@@ -40,4 +40,19 @@ void AddRunOptions(CLI::App* cmd, std::string& preset, int& seeds, std::optional
   }
 }
 
+void AddProfileOptions(CLI::App* cmd, ProfileArgs& a, bool calibration_error) {
+  cmd->add_option("--crop", a.crop,
+                  "crop profile the engine is configured from (config/crops name or YAML file, "
+                  "docs/profiles.md; default: the preset's nominal crop, by name)");
+  cmd->add_option("--vehicle", a.vehicle,
+                  "vehicle profile the engine is configured from (config/vehicles name or YAML "
+                  "file; default: the preset's vehicle, by name)");
+  if (calibration_error) {
+    cmd->add_option("--calibration-error", a.calibration_error,
+                    "the engine's camera is off from the simulator's by these amounts, each "
+                    "sign drawn per seed: height_m=H,tilt_deg=T,roll_deg=R,focal=F (focal: a "
+                    "fraction); e.g. height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01");
+  }
+}
+
 }  // namespace plantscale::app

@@ -60,4 +60,15 @@ void AddRunOptions(CLI::App* cmd, std::string& preset, int& seeds, std::optional
                    std::optional<double>* length_m = nullptr,
                    const std::string& seeds_help = "number of seeds");
 
+// The profiles an `evaluate` configures its engines from (issue 33):
+// --crop FILE, --vehicle FILE (default: those named for the preset's
+// nominal crop and vehicle) and, with `calibration_error`,
+// --calibration-error height_m=H,tilt_deg=T,roll_deg=R,focal=F.
+struct ProfileArgs {
+  std::string crop;
+  std::string vehicle;
+  std::string calibration_error;
+};
+void AddProfileOptions(CLI::App* cmd, ProfileArgs& args, bool calibration_error);
+
 }  // namespace plantscale::app

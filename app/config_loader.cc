@@ -276,6 +276,11 @@ fs::path DefaultConfigDir() {
   return PLANTSCALE_SOURCE_CONFIG_DIR;
 }
 
+fs::path ResolveConfigFile(const std::string& name_or_path, const fs::path& dir,
+                           const char* what) {
+  return Resolve(name_or_path, dir, what);
+}
+
 geometry::CameraOptions LoadCamera(const std::string& name_or_path, const fs::path& config_dir) {
   const fs::path file = Resolve(name_or_path, config_dir / "cameras", "camera");
   MapReader r(ParseFile(file), file.string(), "");

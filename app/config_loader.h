@@ -39,6 +39,10 @@ sim::SimulatorOptions LoadSimulatorPreset(const std::string& name_or_path,
 sim::SimulatorOptions LoadSimulatorPresetWithCalibration(const std::string& name_or_path,
                                                          const std::string& calibration,
                                                          const std::filesystem::path& config_dir);
+// The file of `name_or_path` in `dir` (a name: dir/<name>.yaml; a path as
+// given); throws ConfigError listing the known names for an unknown name.
+std::filesystem::path ResolveConfigFile(const std::string& name_or_path,
+                                        const std::filesystem::path& dir, const char* what);
 geometry::CameraOptions LoadCamera(const std::string& name_or_path,
                                    const std::filesystem::path& config_dir);
 

@@ -7,6 +7,7 @@
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 
 #include "app/config_loader.h"
+#include "app/profiles.h"
 #include "app/treatment_score.h"
 #include "engine/common/options.h"
 #include "engine/treatment/simulated_bar.h"
@@ -164,7 +165,11 @@ class PathDistance {
 
 TreatmentMetrics ScoreTreatment(const Collected& c, const sim::Simulator& simulator,
                                 LogEvaluation& result) {
-  const treatment::TreatmentOptions t = OurTreatmentOptions(simulator.options());
+  // The bar of the vehicle profile the run was published with (the
+  // preset's by name in logs from before profiles).
+  const Profiles profiles = LoadProfiles(result.run.crop, result.run.vehicle,
+                                         simulator.options().preset, result.config_dir);
+  const treatment::TreatmentOptions t = ProductTreatmentOptions(profiles);
   // The true valves open as scheduled (evaluate treatment without --true-latency-ms).
   treatment::SimulatedBar bar(t.scheduler.bar, t.scheduler.bar.valve_latency_s, t.scheduler.tick_s);
   CommandBar(c.shots, t.scheduler.bar.nozzles, bar, result);

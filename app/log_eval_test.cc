@@ -37,7 +37,8 @@ fs::path PublishRun(const sim::SimulatorOptions& options, const std::string& nam
   publish.lcm_url = "memq://";
   publish.log = Temp(name).string();
   EXPECT_EQ(
-      SimulateAndPublish(options, publish, SimRunConfigOf("field", DefaultConfigDir(), options)),
+      SimulateAndPublish(options, LoadProfiles("", "", "field", DefaultConfigDir()), publish,
+                         SimRunConfigOf("field", DefaultConfigDir(), options)),
       0);
   return publish.log;
 }
@@ -63,7 +64,8 @@ TEST(EvaluateLog, AgreesWithEvaluateTreatmentOnTheSameSeed) {
   TreatmentEvalOptions to;
   to.sim = options;
   to.seeds = 1;
-  to.treatment = OurTreatmentOptions(to.sim);
+  to.profiles = LoadProfiles("", "", to.sim.preset, DefaultConfigDir());
+  to.treatment = ProductTreatmentOptions(*to.profiles);
   const TreatmentEvaluation eval = EvaluateTreatment(to);
   ASSERT_GT(eval.ours.crop_hits, 100);
   ASSERT_GT(log.treatment.crop_hits, 100);

@@ -24,7 +24,9 @@ std::string RunConfigJson(const SimRunConfig& run) {
                             {"seed", run.seed},
                             {"length_m", run.length_m},
                             {"image", run.image},
-                            {"config_dir", run.config_dir}};
+                            {"config_dir", run.config_dir},
+                            {"crop", run.crop},
+                            {"vehicle", run.vehicle}};
   return j.dump();
 }
 
@@ -44,6 +46,8 @@ SimRunConfig ParseRunConfig(const std::string& json, const std::string& where) {
   field("length_m", r.length_m, &nlohmann::json::is_number);
   field("config_dir", r.config_dir, &nlohmann::json::is_string);
   if (j.contains("image")) field("image", r.image, &nlohmann::json::is_string);
+  if (j.contains("crop")) field("crop", r.crop, &nlohmann::json::is_string);
+  if (j.contains("vehicle")) field("vehicle", r.vehicle, &nlohmann::json::is_string);
   if (r.image != "nir" && r.image != "rgb") {
     throw ConfigError(where, key + ".image", "'" + r.image + "' is neither nir nor rgb");
   }

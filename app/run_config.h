@@ -21,13 +21,18 @@ struct SimRunConfig {
   double length_m = 40.0;
   std::string image = "nir";  // "nir" or "rgb"
   std::string config_dir;     // the folder presets were read from (absolute)
+  // The profiles the vehicle pipeline was configured from (files, absolute;
+  // empty in logs from before profiles: the preset's defaults).
+  std::string crop;
+  std::string vehicle;
 };
 
 // The run of `options`, loaded from `preset` in `config_dir`.
 SimRunConfig SimRunConfigOf(const std::string& preset, const std::filesystem::path& config_dir,
                             const sim::SimulatorOptions& options);
 
-// One JSON object: {"preset", "seed", "length_m", "image", "config_dir"}.
+// One JSON object: {"preset", "seed", "length_m", "image", "config_dir",
+// "crop", "vehicle"}.
 std::string RunConfigJson(const SimRunConfig& run);
 // Throws ConfigError naming `where` (the log) and the key when the text is
 // not such an object.

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/config_loader.h"
+#include "app/profiles.h"
 #include "app/photo_segmentation.h"
 #include "app/segmentation_eval.h"
 
@@ -13,6 +14,7 @@ namespace plantscale::app {
 namespace {
 
 struct EvaluateArgs {
+  ProfileArgs profiles;  // validated; segmentation uses no profile setting (no camera geometry)
   std::string preset = "C";
   int seeds = 3;
   int frames = 10;
@@ -118,6 +120,11 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
   if (a.image == "rgb") o.sim.render.kind = sim::ImageKind::kRgb;
   if (a.image == "nir") o.sim.render.kind = sim::ImageKind::kNir;
+  // The engine's profiles: the segmenter needs none of their settings, but
+  // they are read and checked as for every evaluate (bad profiles exit 2).
+  const Profiles profiles =
+      LoadProfiles(a.profiles.crop, a.profiles.vehicle, o.sim.preset, global.ConfigDir());
+  RequireImageSize(profiles.vehicle, o.sim.camera.image_width_px, o.sim.camera.image_height_px);
   o.seeds = a.seeds;
   o.frames_per_seed = a.frames;
   o.costs_ratio = a.costs_ratio;
@@ -142,7 +149,10 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
   if (a.json) {
-    std::cout << EvaluationJson(e).dump(2) << '\n';
+    nlohmann::json j = EvaluationJson(e);
+    j["crop"] = profiles.crop.name;
+    j["vehicle"] = profiles.vehicle.name;
+    std::cout << j.dump(2) << '\n';
   } else {
     PrintTable(e, std::cout);
     if (a.baseline == "thesis") PrintThesisFigures(e.preset, std::cout);
@@ -205,6 +215,7 @@ void AddSegmentCommands(CommandRegistry& registry) {
       [&ev, &global] { return EvaluateSegmentationCommand(ev, global); },
       EvaluateCommand(registry));
   AddRunOptions(cmd, ev.preset, ev.seeds, ev.seed);
+  AddProfileOptions(cmd, ev.profiles, false);
   cmd->add_option("--frames", ev.frames, "non-overlapping frames per seed")
       ->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--image", ev.image, "nir or rgb (default: the preset's)")

@@ -21,6 +21,7 @@ struct SimulateArgs {
   int every = 1;
   std::string image;
   bool quiet = false;
+  std::string crop, vehicle;  // profiles of the vehicle pipeline (--publish)
   PublishArgs publish;  // simulate only: --publish, --fast, --lcm-url, --log
 };
 
@@ -88,8 +89,15 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
   }
   const SimulateRequest request = MakeRequest(args, global);
   if (args.publish.publish) {
-    return SimulateAndPublish(request.options, args.publish,
-                              SimRunConfigOf(args.preset, global.ConfigDir(), request.options));
+    const Profiles profiles =
+        LoadProfiles(args.crop, args.vehicle, request.options.preset, global.ConfigDir());
+    SimRunConfig run = SimRunConfigOf(args.preset, global.ConfigDir(), request.options);
+    run.crop = std::filesystem::absolute(profiles.crop.file).lexically_normal().string();
+    run.vehicle = std::filesystem::absolute(profiles.vehicle.file).lexically_normal().string();
+    return SimulateAndPublish(request.options, profiles, args.publish, run);
+  }
+  if (!args.crop.empty() || !args.vehicle.empty()) {
+    throw ConfigError("command line", "--crop/--vehicle", "only with --publish");
   }
   const SimulateSummary summary = RunSimulation(request, std::cerr);
   PrintSummary(name, request, summary);
@@ -98,7 +106,7 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
 
 int Presets(const GlobalOptions& global) {
   const std::filesystem::path dir = global.ConfigDir();
-  for (const char* kind : {"presets", "cameras"}) {
+  for (const char* kind : {"presets", "cameras", "crops", "vehicles"}) {
     std::cout << kind << " (" << (dir / kind).string() << "):\n";
     for (const std::string& n : ListConfigNames(dir / kind)) std::cout << "  " << n << '\n';
   }
@@ -118,8 +126,14 @@ void AddSimulateCommands(CommandRegistry& registry) {
   CLI::Option* out = simulate->add_option("--out", sim.out, "output folder (unless --publish)");
   AddPublishOptions(simulate, sim.publish);
   out->excludes("--publish");
+  simulate->add_option("--crop", sim.crop,
+                       "with --publish: the vehicle pipeline's crop profile (config/crops name "
+                       "or YAML file; default: the preset's nominal crop by name)");
+  simulate->add_option("--vehicle", sim.vehicle,
+                       "with --publish: the vehicle pipeline's vehicle profile (config/vehicles "
+                       "name or YAML file; default: the preset's vehicle by name)");
 
-  registry.Add("presets", "list the simulator presets and cameras",
+  registry.Add("presets", "list the simulator presets, cameras, crop profiles and vehicle profiles",
                [&global] { return Presets(global); });
 }
 

@@ -95,9 +95,9 @@ SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
 namespace {
 
 // The CAN bar has as many nozzles as the treatment scheduler's bar.
-tm::can::SprayBarOptions BarOptionsOfTreatment() {
+tm::can::SprayBarOptions BarOptionsOfTreatment(int nozzles) {
   tm::can::SprayBarOptions o;
-  o.num_nozzles = treatment::TreatmentOptions{}.scheduler.bar.nozzles;
+  o.num_nozzles = nozzles;
   return o;
 }
 
@@ -164,26 +164,45 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
 struct RunArgs {
   PublishArgs publish;
   CameraSourceOptions camera;
-  std::string calibration;       // empty: segmentation alone
-  std::string preset = "field";  // the crop and vehicle settings, with a calibration
+  std::string calibration;       // the vehicle's camera instead of its own calibration
+  std::string preset = "field";  // the crop and vehicle profiles of this preset, by name
+  std::string crop;              // crop profile (config/crops or a file)
+  std::string vehicle;           // vehicle profile (config/vehicles or a file)
 };
 
 int Run(const RunArgs& a, const GlobalOptions& global) {
-  // With a calibration: the whole pipeline, with the crop and vehicle
-  // settings of a simulator preset until crop profiles hold them.
-  std::optional<sim::SimulatorOptions> settings;
-  if (!a.calibration.empty()) {
-    settings = LoadSimulatorPresetWithCalibration(a.preset, a.calibration, global.ConfigDir());
+  // With a vehicle profile or a calibration: the whole pipeline, configured
+  // from the crop and vehicle profiles (--crop, --vehicle; else those named
+  // for --preset's nominal crop and vehicle) and, when given, the
+  // calibration in place of the vehicle's own.
+  std::optional<Profiles> profiles;
+  if (!a.calibration.empty() || !a.vehicle.empty() || !a.crop.empty()) {
+    const std::filesystem::path dir = global.ConfigDir();
+    if (a.crop.empty() || a.vehicle.empty()) {
+      ResolveConfigFile(a.preset, dir / "presets", "preset");  // names an unknown preset
+    }
+    profiles = LoadProfiles(a.crop, a.vehicle, std::filesystem::path(a.preset).stem().string(), dir);
+    if (!a.calibration.empty()) {
+      profiles->vehicle.camera = LoadCamera(a.calibration, dir);
+      profiles->vehicle.calibration_file =
+          ResolveConfigFile(a.calibration, dir / "cameras", "camera").string();
+    }
   }
-  const SprayBarEndpoint bar =
-      OpenSprayBar(a.publish, false, BarOptionsOfTreatment());  // before the camera
+  const SprayBarEndpoint bar = OpenSprayBar(
+      a.publish, false,
+      BarOptionsOfTreatment(profiles ? profiles->vehicle.bar.nozzles
+                                     : treatment::SprayBarOptions{}.nozzles));  // before the camera
   std::string title = "plantscale run: camera " + a.camera.camera;
   std::optional<geometry::CameraModel> camera;
   std::optional<PipelineSetup> pipeline;
-  if (settings) {
-    camera.emplace(settings->camera);
-    pipeline.emplace(PipelineSetup{*camera, ProductPipelineOptions(*settings)});
-    title += ", calibration " + a.calibration + ", preset " + settings->preset;
+  if (profiles) {
+    camera.emplace(EngineCamera(*profiles));
+    pipeline.emplace(PipelineSetup{*camera, ProductPipelineOptions(*profiles)});
+    if (!a.calibration.empty()) title += ", calibration " + a.calibration;
+    title += ", crop " + profiles->crop.name + ", vehicle " + profiles->vehicle.name;
+    if (a.crop.empty() || a.vehicle.empty()) {
+      title += ", preset " + std::filesystem::path(a.preset).stem().string();
+    }
   }
   return RunVehicle(
       a.publish,
@@ -195,11 +214,13 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
 
 }  // namespace
 
-int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
-                       const SimRunConfig& run) {
-  const SprayBarEndpoint bar =
-      OpenSprayBar(args, true, BarOptionsOfTreatment());  // before anything else
+int SimulateAndPublish(const sim::SimulatorOptions& options, const Profiles& profiles,
+                       const PublishArgs& args, const SimRunConfig& run) {
+  RequireImageSize(profiles.vehicle, options.camera.image_width_px, options.camera.image_height_px);
+  const SprayBarEndpoint bar = OpenSprayBar(
+      args, true, BarOptionsOfTreatment(profiles.vehicle.bar.nozzles));  // before anything else
   sim::Simulator simulator(options);
+  const geometry::CameraModel engine_camera(EngineCamera(profiles));  // not the simulator's
   return RunVehicle(
       args,
       [&simulator](tm::Transport&, int64_t boot) {
@@ -207,8 +228,9 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       },
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
-          std::to_string(options.seed),
-      bar, PipelineSetup{simulator.camera(), ProductPipelineOptions(options)}, RunConfigJson(run));
+          std::to_string(options.seed) + ", crop " + profiles.crop.name + ", vehicle " +
+          profiles.vehicle.name,
+      bar, PipelineSetup{engine_camera, ProductPipelineOptions(profiles)}, RunConfigJson(run));
 }
 
 namespace {
@@ -283,15 +305,22 @@ void AddTelemetryCommands(CommandRegistry& registry) {
       [&run, &global] { return Run(run, global); });
   rc->add_option("--camera", run.camera.camera, "/dev/videoN, N, or a folder of images")
       ->required();
+  rc->add_option("--crop", run.crop,
+                 "crop profile (config/crops name or YAML file, docs/profiles.md); runs tracking, "
+                 "treatment and the bar (default: --preset's nominal crop)");
+  rc->add_option("--vehicle", run.vehicle,
+                 "vehicle profile (config/vehicles name or YAML file: track width, calibration, "
+                 "valve latency, nozzles, suspension); runs tracking, treatment and the bar "
+                 "(default: --preset's vehicle)");
   CLI::Option* calibration =
       rc->add_option("--calibration", run.calibration,
                      "the camera's calibration: a YAML file as config/cameras/*.yaml (or a "
-                     "camera name there); runs tracking, treatment and the bar");
+                     "camera name there) in place of the vehicle profile's; runs tracking, "
+                     "treatment and the bar");
   rc->add_option("--preset", run.preset,
-                 "with --calibration: the crop and vehicle settings (row and plant spacing, "
-                 "rows, track width, crop size, the crop's height for the virtual ground "
-                 "plane, ...) of this simulator preset (config/presets) or YAML file, for "
-                 "now, until crop profiles hold them; its camera is not used")
+                 "with --calibration: the crop and vehicle profiles named for this simulator "
+                 "preset's nominal crop and vehicle (field: cauliflower-6-week, silsoe), when "
+                 "--crop or --vehicle is not given; none of its parameters is used")
       ->capture_default_str()
       ->needs(calibration);
   rc->add_option("--frame-rate", run.camera.folder_frame_rate_hz,

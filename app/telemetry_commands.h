@@ -13,6 +13,7 @@
 
 #include "app/command_auth_commands.h"
 #include "app/command_registry.h"
+#include "app/profiles.h"
 #include "app/run_config.h"
 #include "app/vehicle/vehicle_process.h"
 #include "engine/sim/simulator.h"
@@ -47,8 +48,10 @@ SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
 // summary with the traffic per channel. Returns the exit code. `run` (what
 // `options` were made from) goes out as the run_config event, for scoring
 // the log later (evaluate log).
-int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
-                       const SimRunConfig& run);
+// The vehicle pipeline is configured from `profiles` only (its camera: the
+// vehicle's calibration), never from `options`.
+int SimulateAndPublish(const sim::SimulatorOptions& options, const Profiles& profiles,
+                       const PublishArgs& args, const SimRunConfig& run);
 
 void AddTelemetryCommands(CommandRegistry& registry);
 

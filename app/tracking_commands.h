@@ -13,5 +13,7 @@ void AddTrackingCommands(CommandRegistry& registry);
 // The JSON of one tracking chain's metrics: evaluate tracking's "ours" keys
 // (evaluate log writes the same).
 nlohmann::json MetricsJson(const TrackingMetrics& metrics);
+// {"height_m", "tilt_deg", "roll_deg", "focal"}: the amounts (signs per seed).
+nlohmann::json CalibrationErrorJson(const CalibrationError& error);
 
 }  // namespace plantscale::app

@@ -18,10 +18,35 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kNeesLow = 0.2158;
 constexpr double kNeesHigh = 9.3484;
 
-int RowsEachSide(const sim::SimulatorOptions& s) { return (s.field.rows - 1) / 2; }
+// Each plant line's planted y and the mean deviation across of its crops'
+// roots from their planted rows (what a rule laid across the line reads,
+// thesis fig. 8.1).
+struct PlantLineReference {
+  std::vector<double> y_m;
+  std::vector<double> mean_root_dev_m;  // NaN: no crop in the line
+};
+
+PlantLineReference PlantLines(const sim::Field& field) {
+  PlantLineReference r;
+  r.y_m = field.line_y_m();
+  std::vector<double> sum(r.y_m.size(), 0.0);
+  std::vector<int> n(r.y_m.size(), 0);
+  for (const sim::Plant& p : field.plants()) {
+    if (p.cls != sim::PlantClass::kCrop || p.line < 0 || p.line >= static_cast<int>(r.y_m.size()))
+      continue;
+    sum[p.line] += p.position_m.x() - field.RowX(p.row, r.y_m[p.line]);
+    ++n[p.line];
+  }
+  r.mean_root_dev_m.resize(r.y_m.size());
+  for (size_t i = 0; i < r.y_m.size(); ++i) {
+    r.mean_root_dev_m[i] = n[i] > 0 ? sum[i] / n[i] : std::nan("");
+  }
+  return r;
+}
 
 // One tracker under test on one run, with its error sums.
 struct Scorer {
+  geometry::CameraModel camera;  // the engine's (the vehicle's calibration), not the simulator's
   pipeline::Pipeline pipe;  // segmentation and tracking
   const tracking::GridTracker& tracker;
   const TrackingEvalOptions& options;
@@ -39,12 +64,20 @@ struct Scorer {
   int spacing_scored = 0;
   int tracking_frames = 0, updates = 0, losses = 0;
   double matched = 0.0;
+  // The thesis's field protocol (§8.1, fig. 8.1): the offset at each line of
+  // plants against the mean root position of that line's plants.
+  const PlantLineReference* lines = nullptr;
+  size_t next_line = 0;
+  double line_lat2 = 0.0, line_lat = 0.0;
+  int lines_scored = 0;
   std::vector<double> init_frames;
   int init_trials = 0, init_successes = 0;
 
-  Scorer(const sim::Simulator& sim, const tracking::TrackerOptions& tracker_options,
+  Scorer(const geometry::CameraOptions& camera_options,
+         const tracking::TrackerOptions& tracker_options,
          const vision::SegmenterOptions& segmenter_options, const TrackingEvalOptions& o)
-      : pipe(sim.camera(), Options(segmenter_options, tracker_options)),
+      : camera(camera_options),
+        pipe(camera, Options(segmenter_options, tracker_options)),
         tracker(pipe.tracker()),
         options(o) {}
 
@@ -83,6 +116,7 @@ struct Scorer {
     matched += r.matched;
     const double past = frame.truth.distance_m - init_distance_m;
     if (past < options.settle_m) return;
+    if (lines != nullptr) ScoreLines(frame, f.state);
     const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
     const GridErrors g = ScoreGrid(est, p, truth);
     const double e_lat = g.lateral_m, e_fwd = g.forward_m, e_bear = g.bearing_rad, n = g.nees;
@@ -112,6 +146,26 @@ struct Scorer {
     }
   }
 
+  // Lines the vehicle's ground point passed since the last frame scored:
+  // the estimate against the trail (the true position) read from the mean
+  // root position of the line's plants.
+  void ScoreLines(const sim::SimFrame& frame, const geometry::GridState& est) {
+    const sim::Pose2& p = frame.truth.pose;
+    const double c = std::cos(p.heading_rad);
+    while (next_line < lines->y_m.size() && lines->y_m[next_line] <= p.y_m) {
+      const size_t i = next_line++;
+      // Only lines passed since the previous frame (not those before the
+      // scoring started).
+      if (lines->y_m[i] <= p.y_m - 0.5 * options.sim.vehicle.speed_m_s) continue;
+      const double dev = lines->mean_root_dev_m[i];
+      if (!std::isfinite(dev)) continue;
+      const double e = est.offset_m - (-(p.x_m - dev) / c);
+      line_lat += e;
+      line_lat2 += e * e;
+      ++lines_scored;
+    }
+  }
+
   static bool InitCorrect(const geometry::GridState& est, const geometry::GridState& truth) {
     return InitialisedOnTruth(est, truth);
   }
@@ -120,13 +174,14 @@ struct Scorer {
 // Fresh initialisations at intervals along the run: frames to initialise
 // and whether the grid it started on was the right one.
 struct InitProbe {
+  geometry::CameraModel camera;
   tracking::GridTracker tracker;
   bool active = false;
   int start = 0;
   double next_at_m = 0.0;
 
-  InitProbe(const sim::Simulator& sim, const tracking::TrackerOptions& o)
-      : tracker(sim.camera(), o) {}
+  InitProbe(const geometry::CameraOptions& c, const tracking::TrackerOptions& o)
+      : camera(c), tracker(camera, o) {}
 };
 
 void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMetrics& m,
@@ -149,6 +204,11 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   m.plant_spacing_error_m += s.plant2;
   m.mean_matched += s.matched;
   m.run_lateral_rmse_m.push_back(s.scored > 0 ? std::sqrt(s.lat2 / s.scored) : std::nan(""));
+  m.plant_lines_scored += s.lines_scored;
+  m.plant_line_lateral_rmse_m += s.line_lat2;  // sums until Finish
+  m.plant_line_lateral_mean_m += s.line_lat;
+  m.run_plant_line_lateral_rmse_m.push_back(
+      s.lines_scored > 0 ? std::sqrt(s.line_lat2 / s.lines_scored) : std::nan(""));
   m.run_forward_drift_cm_per_m.push_back(driven_m > 0 ? 100.0 * (estimated_m - driven_m) / driven_m
                                                       : std::nan(""));
   init_frames.insert(init_frames.end(), s.init_frames.begin(), s.init_frames.end());
@@ -163,6 +223,9 @@ void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
                            int init_successes) {
   const double n = std::max(1, m.frames);
   m.lateral_rmse_m = std::sqrt(m.lateral_rmse_m / n);
+  const double lines = std::max(1, m.plant_lines_scored);
+  m.plant_line_lateral_rmse_m = std::sqrt(m.plant_line_lateral_rmse_m / lines);
+  m.plant_line_lateral_mean_m /= lines;
   m.lateral_mean_m /= n;
   m.forward_mean_m /= n;
   m.row_spacing_mean_error_m /= std::max(1, spacing_frames);
@@ -213,6 +276,7 @@ bool InitialisedOnTruth(const geometry::GridState& est, const geometry::GridStat
 
 OptionErrors TrackingEvalOptions::Validate() const {
   OptionErrors e = Prefixed("sim", sim.Validate());
+  if (!profiles) e.push_back({"profiles", "required (a crop and a vehicle profile)"});
   if (seeds < 1) e.push_back({"seeds", "must be >= 1"});
   RequireInRange(e, "spacing_offset_m", spacing_offset_m, -0.1, 0.1);
   RequireNonNegative(e, "settle_m", settle_m);
@@ -222,63 +286,18 @@ OptionErrors TrackingEvalOptions::Validate() const {
   return e;
 }
 
-tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& s, double offset) {
-  tracking::TrackerOptions o;
-  o.rows_each_side = RowsEachSide(s);
-  o.row_spacing_m = s.field.row_spacing_m + offset;
-  o.plant_spacing_m = s.field.plant_spacing_m + offset;
-  o.track_width_m = s.vehicle.track_width_m;
-  // The crop as a grower knows it: mean leaf-tip radius and height, how
-  // much plants vary in size (their centroid heights scale with them), and
-  // how precisely the planter places them (plus their lean).
-  o.crop_radius_m = s.field.crop_radius_m;
-  o.crop_height_m = s.field.crop_height_ratio * s.field.crop_radius_m;
-  o.plant_height_sd_m = std::max(0.002, s.field.crop_radius_sd_fraction * o.crop_height_m);
-  o.plant_offset_sd_m = std::max(0.002, std::hypot(s.field.planting_jitter_m, s.field.crop_lean_sd_m));
-  // A centroid's wander as the view changes is the parallax of the plant's
-  // leaves: it scales with the crop's height from where it was measured.
-  const double wander = o.crop_height_m / tracking::TrackerOptions::kOffsetWalkCropHeightM;
-  o.plant_offset_walk_across_sd_per_sqrt_m *= wander;
-  o.plant_offset_walk_along_sd_per_sqrt_m *= wander;
-  // The vehicle's camera bounce as its suspension was measured: size and
-  // how long it lasts.
-  o.camera_pitch_sd_rad = std::max(1e-4, s.vehicle.bump_pitch_sd_rad);
-  o.camera_roll_sd_rad = std::max(1e-4, s.vehicle.bump_roll_sd_rad);
-  o.camera_height_sd_m = std::max(1e-4, s.vehicle.bump_height_sd_m);
-  o.camera_bounce_correlation_s = s.vehicle.bump_correlation_s;
-  return o;
-}
-
-tracking::TrackerOptions ProductTrackerOptions(const sim::SimulatorOptions& s) {
-  tracking::TrackerOptions o = OurTrackerOptions(s, 0.0);
-  o.row_spacing_m = s.field.NominalRowSpacing();
-  o.plant_spacing_m = s.field.NominalPlantSpacing();
-  return o;
-}
-
-tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& s) {
-  tracking::TrackerOptions o;
-  o.estimate_spacing = false;
-  o.estimate_odometry_scale = false;
-  o.slip_guard.enabled = false;
-  o.plant_offsets = false;
-  o.model_bounce = false;
-  o.skip_merged_features = false;  // every feature in the gate (§6.2)
-  o.space = tracking::ObservationSpace::kImage;
-  o.rows_each_side = RowsEachSide(s);
-  o.row_spacing_m = s.field.NominalRowSpacing();
-  o.plant_spacing_m = s.field.NominalPlantSpacing();
-  o.track_width_m = s.vehicle.track_width_m;
-  o.feature_sd_m = 0.01;
-  o.pixel_sd_px = 0.0;
-  o.forward_sd_per_sqrt_m = 0.0;
-  o.lateral_sd_per_sqrt_m = 0.0;
-  o.bearing_sd_per_sqrt_m = 0.0;
-  o.frame_offset_sd_m = 0.002;
-  o.frame_forward_sd_m = 0.004;
-  o.frame_bearing_sd_rad = 0.002;
-  o.edge_margin_px = 0.0;
-  return o;
+TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t seed) {
+  if (!options.profiles) throw InvalidOptionsError("evaluate tracking", {{"profiles", "required"}});
+  const Profiles& p = *options.profiles;
+  TrackingEngine e;
+  e.camera = ApplyCalibrationError(EngineCamera(p),
+                                   SignedCalibrationError(options.calibration_error, seed));
+  e.ours = ProductTrackerOptions(p);
+  e.ours.row_spacing_m += options.spacing_offset_m;
+  e.ours.plant_spacing_m += options.spacing_offset_m;
+  if (options.centroids_on_virtual_plane) e.ours.crop_radius_m = e.ours.crop_height_m = 0.0;
+  e.thesis = ThesisTrackerOptions(p);
+  return e;
 }
 
 TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
@@ -297,9 +316,12 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     sim::SimulatorOptions so = options.sim;
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
     sim::Simulator simulator(so);
-    tracking::TrackerOptions ours_options = OurTrackerOptions(so, options.spacing_offset_m);
-    if (options.centroids_on_virtual_plane) ours_options.crop_radius_m = ours_options.crop_height_m = 0.0;
-    Scorer ours(simulator, ours_options, ours_seg, options);
+    RequireImageSize(options.profiles->vehicle, so.camera.image_width_px,
+                     so.camera.image_height_px);
+    const TrackingEngine engine = TrackingEngineOf(options, so.seed);
+    const PlantLineReference plant_lines = PlantLines(simulator.field());
+    Scorer ours(engine.camera, engine.ours, ours_seg, options);
+    ours.lines = &plant_lines;
     ours.trace = options.trace;
     ours.seed = so.seed;
     if (options.trace && k == 0) {
@@ -309,8 +331,11 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
                         "forward_distance_m,true_distance_m\n";
     }
     std::optional<Scorer> thesis;
-    if (options.baseline_thesis) thesis.emplace(simulator, ThesisTrackerOptions(so), thesis_seg, options);
-    InitProbe probe(simulator, ours_options);
+    if (options.baseline_thesis) {
+      thesis.emplace(engine.camera, engine.thesis, thesis_seg, options);
+      thesis->lines = &plant_lines;
+    }
+    InitProbe probe(engine.camera, engine.ours);
     probe.next_at_m = options.init_probe_interval_m;
 
     sim::SimFrame frame;

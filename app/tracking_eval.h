@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "app/profiles.h"
 #include "engine/sim/simulator.h"
 #include "engine/tracking/grid_tracker.h"
 #include "engine/vision/segmenter.h"
@@ -20,9 +21,13 @@
 namespace plantscale::app {
 
 struct TrackingEvalOptions {
-  sim::SimulatorOptions sim;
+  sim::SimulatorOptions sim;       // the simulated field and vehicle (the engine never reads it)
+  // What the engines are configured from (required): a crop and a vehicle
+  // profile, and the error of the engine's calibration (signs per seed).
+  std::optional<Profiles> profiles;
+  CalibrationError calibration_error;
   int seeds = 10;                  // sim.seed, sim.seed + 1, ...
-  double spacing_offset_m = 0.025; // ours starts with both spacings this far off the planted ones
+  double spacing_offset_m = 0.0;   // ours starts with both spacings this far off the crop profile's
   bool baseline_thesis = false;
   // Ours locates centroids on the virtual plane, not at the crop's
   // centroid heights (to measure what the height model is worth).
@@ -37,14 +42,16 @@ struct TrackingEvalOptions {
   OptionErrors Validate() const;
 };
 
-// The product's tracker options for a simulated vehicle and field.
-tracking::TrackerOptions OurTrackerOptions(const sim::SimulatorOptions& sim,
-                                           double spacing_offset_m);
-// What a run of the product uses: ours, started from the spacings the
-// grower set on the planter (nominal), not the planted ones.
-tracking::TrackerOptions ProductTrackerOptions(const sim::SimulatorOptions& sim);
-// The thesis's on-line tracker (§4.6, ch. 8) with its noise settings.
-tracking::TrackerOptions ThesisTrackerOptions(const sim::SimulatorOptions& sim);
+// The engines of one run (seed): the camera they use (the vehicle's
+// calibration with the crop's virtual plane, off by the calibration error
+// with the seed's signs), our tracker's options and the thesis tracker's.
+// Built from options.profiles and calibration_error only, never from
+// options.sim.
+struct TrackingEngine {
+  geometry::CameraOptions camera;
+  tracking::TrackerOptions ours, thesis;
+};
+TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t seed);
 
 struct TrackingMetrics {
   int frames = 0;           // frames scored (tracking, past settle_m)
@@ -71,6 +78,14 @@ struct TrackingMetrics {
   double mean_matched = 0.0;
   std::vector<double> run_lateral_rmse_m;
   std::vector<double> run_forward_drift_cm_per_m;
+  // The thesis's field protocol (§8.1, fig. 8.1; `--reference plant-lines`):
+  // the offset scored once at each line of plants the vehicle passes, against
+  // the trail read from the mean root position of that line's plants (so it
+  // holds the plants' irregularity as well as the tracker's error).
+  int plant_lines_scored = 0;
+  double plant_line_lateral_rmse_m = 0.0;
+  double plant_line_lateral_mean_m = 0.0;
+  std::vector<double> run_plant_line_lateral_rmse_m;
 };
 
 struct TrackingEvaluation {

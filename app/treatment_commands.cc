@@ -8,6 +8,7 @@
 
 #include "app/config_loader.h"
 #include "app/segment_commands.h"
+#include "app/tracking_commands.h"
 #include "app/treatment_eval.h"
 
 namespace plantscale::app {
@@ -64,6 +65,7 @@ struct TreatmentArgs {
   bool clipped_on_crop_votes_weed = false;
   double costs_ratio = 1.0;
   bool json = false;
+  ProfileArgs profiles;
 };
 
 }  // namespace
@@ -171,7 +173,9 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
   if (a.length_m) o.sim.length_m = *a.length_m;
   o.seeds = a.seeds;
-  o.treatment = OurTreatmentOptions(o.sim);
+  o.profiles = LoadProfiles(a.profiles.crop, a.profiles.vehicle, o.sim.preset, global.ConfigDir());
+  o.calibration_error = ParseCalibrationError(a.profiles.calibration_error, "--calibration-error");
+  o.treatment = ProductTreatmentOptions(*o.profiles);
   treatment::ParseSprayMode(a.mode, o.treatment.scheduler.mode);
   if (a.latency_ms) o.treatment.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
@@ -229,10 +233,17 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
     PrintTable(e, std::cout);
+    std::cout << "  engine: crop " << o.profiles->crop.name << ", vehicle "
+              << o.profiles->vehicle.name << ", calibration error "
+              << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error)
+              << '\n';
     return 0;
   }
   nlohmann::json j = MetricsJson(e.ours);
   j["preset"] = e.preset;
+  j["crop"] = o.profiles->crop.name;
+  j["vehicle"] = o.profiles->vehicle.name;
+  j["calibration_error"] = CalibrationErrorJson(o.calibration_error);
   j["seeds"] = e.seeds;
   j["mode"] = e.mode;
   j["distance_m"] = e.distance_m;
@@ -271,6 +282,7 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       [&args, &global] { return EvaluateTreatmentCommand(args, global); },
       EvaluateCommand(registry));
   AddRunOptions(cmd, args.preset, args.seeds, args.seed, &args.length_m);
+  AddProfileOptions(cmd, args.profiles, true);
   cmd->add_option("--mode", args.mode, "what is sprayed: crop or weed")
       ->check(CLI::IsMember({"crop", "weed"}))->capture_default_str();
   cmd->add_option("--latency-ms", args.latency_ms, "valve latency the scheduler leads by")

@@ -38,6 +38,7 @@ enum WeedReason : uint8_t {
 // simulated bar, with its scores.
 struct Chain {
   treatment::SimulatedBar bar;
+  geometry::CameraModel camera;  // the engine's (the vehicle's calibration), not the simulator's
   pipeline::Pipeline pipe;
   Confusion confusion{};
   std::array<double, kReasons> crop_as_weed_by{};
@@ -48,11 +49,12 @@ struct Chain {
   // Scratch.
   cv::Mat components, stats, centroids;
 
-  Chain(const sim::Simulator& sim, const vision::SegmenterOptions& seg,
+  Chain(const geometry::CameraOptions& engine_camera, const vision::SegmenterOptions& seg,
         const tracking::TrackerOptions& track, const treatment::TreatmentOptions& treat,
         double true_latency_s)
       : bar(treat.scheduler.bar, true_latency_s, treat.scheduler.tick_s),
-        pipe(sim.camera(), pipeline::PipelineOptions{seg, track, treat}) {
+        camera(engine_camera),
+        pipe(camera, pipeline::PipelineOptions{seg, track, treat}) {
     pipe.set_sink(bar.Sink());
   }
 
@@ -259,6 +261,7 @@ SprayScoreRegion TreatmentScoreRegion(const sim::Simulator& sim, double first_cl
 
 OptionErrors TreatmentEvalOptions::Validate() const {
   OptionErrors e = Prefixed("sim", sim.Validate());
+  if (!profiles) e.push_back({"profiles", "required (a crop and a vehicle profile)"});
   const OptionErrors t = Prefixed("treatment", treatment.Validate());
   e.insert(e.end(), t.begin(), t.end());
   const OptionErrors g = Prefixed("segmenter", segmenter.Validate());
@@ -270,19 +273,8 @@ OptionErrors TreatmentEvalOptions::Validate() const {
   return e;
 }
 
-treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions&) {
-  return treatment::TreatmentOptions{};
-}
-
-pipeline::PipelineOptions ProductPipelineOptions(const sim::SimulatorOptions& sim) {
-  pipeline::PipelineOptions o;
-  o.treatment = OurTreatmentOptions(sim);
-  o.segmenter = treatment::SegmenterOptionsFor(o.treatment.scheduler.mode);
-  o.tracker = ProductTrackerOptions(sim);
-  return o;
-}
-
-treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& s) {
+treatment::TreatmentOptions ThesisTreatmentOptions(const std::string& preset,
+                                                   const geometry::CameraOptions& camera_options) {
   treatment::TreatmentOptions o;
   o.crop_footprint_scale = 1.0;  // the whole projected bounding box (§8.2)
   o.crop_footprint_min_half_m = 0.0;  // however small
@@ -290,17 +282,18 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.abstain_merged = false;
   o.clipped_on_crop_votes_weed = true;  // every feature's box votes
   o.split_merged = false;  // whole blobs, labelled and mapped
-  o.weed_height_m = s.camera.virtual_plane_height_m;  // everything on the one plane (§2.3.8)
+  o.weed_height_m = camera_options.virtual_plane_height_m;  // everything on the one plane (§2.3.8)
   // Table 7.2's operating points: size ς in pixels and clustering radius r
   // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).
   double size_px = 80.0, radius_m = 0.1;
-  if (s.preset == "A") size_px = 100.0, radius_m = 0.45;
-  if (s.preset == "B" || s.preset == "D") size_px = 30.0;
+  if (preset == "A") size_px = 100.0, radius_m = 0.45;
+  if (preset == "B" || preset == "D") size_px = 30.0;
   // Pixels to ground area at the image centre's pixel footprint.
-  const geometry::CameraModel camera(s.camera);
-  const Eigen::Vector2d centre(s.camera.image_width_px / 2.0, s.camera.image_height_px / 2.0);
-  const double pixel_m2 =
-      std::abs(camera.ImageToPlaneJacobian(centre, s.camera.virtual_plane_height_m).determinant());
+  const geometry::CameraModel camera(camera_options);
+  const Eigen::Vector2d centre(camera_options.image_width_px / 2.0,
+                               camera_options.image_height_px / 2.0);
+  const double pixel_m2 = std::abs(
+      camera.ImageToPlaneJacobian(centre, camera_options.virtual_plane_height_m).determinant());
   o.classifier.min_crop_area_m2 = size_px * pixel_m2;
   o.classifier.crop_size_fraction = 0.0;  // ς fixed by hand per sequence
   // A Euclidean radius r: γ² ≤ 1 with σ = r (the tracker's H P Hᵀ is small).
@@ -313,6 +306,12 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& 
   o.classifier.camera_roll_sd_rad = 0.0;
   o.classifier.camera_height_sd_m = 0.0;
   return o;
+}
+
+geometry::CameraOptions TreatmentEngineCamera(const TreatmentEvalOptions& options, uint64_t seed) {
+  if (!options.profiles) throw InvalidOptionsError("evaluate treatment", {{"profiles", "required"}});
+  return ApplyCalibrationError(EngineCamera(*options.profiles),
+                               SignedCalibrationError(options.calibration_error, seed));
 }
 
 TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
@@ -332,21 +331,25 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     sim::SimulatorOptions so = options.sim;
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
     sim::Simulator simulator(so);
-    const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);
-    tracking::TrackerOptions our_tracker = ProductTrackerOptions(so);
+    const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);  // scoring
+    RequireImageSize(options.profiles->vehicle, so.camera.image_width_px,
+                     so.camera.image_height_px);
+    const geometry::CameraOptions engine_camera = TreatmentEngineCamera(options, so.seed);
+    tracking::TrackerOptions our_tracker = ProductTrackerOptions(*options.profiles);
     if (options.adjust_tracker) options.adjust_tracker(our_tracker);
-    Chain ours(simulator,
+    Chain ours(engine_camera,
                treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
                our_tracker, options.treatment, latency);
     ours.collect_samples = options.mrroc;
     std::optional<Chain> thesis;
-    treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so);
+    treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so.preset, engine_camera);
     thesis_options.scheduler = options.treatment.scheduler;
     // The thesis's chain commands its bar at the pose rate, as it did before
     // ours went to 200 Hz: the baseline stays where it was calibrated.
     thesis_options.scheduler.tick_s = thesis_options.scheduler.pose_period_s;
     if (options.baseline_thesis) {
-      thesis.emplace(simulator, thesis_seg, ThesisTrackerOptions(so), thesis_options, latency);
+      thesis.emplace(engine_camera, thesis_seg, ThesisTrackerOptions(*options.profiles),
+                     thesis_options, latency);
     }
     std::vector<treatment::FieldPose> track;
     // The odometry goes in in time order; each frame goes in once the

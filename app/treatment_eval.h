@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "app/profiles.h"
 #include "app/treatment_score.h"
 #include "engine/classify/mrroc.h"
 #include "engine/pipeline/pipeline.h"
@@ -24,7 +25,12 @@
 namespace plantscale::app {
 
 struct TreatmentEvalOptions {
-  sim::SimulatorOptions sim;
+  sim::SimulatorOptions sim;  // the simulated field and vehicle (the engine never reads it)
+  // What the engines are configured from (required): a crop and a vehicle
+  // profile (treatment: ProductTreatmentOptions of them, then any changes),
+  // and the error of the engine's calibration (signs per seed).
+  std::optional<Profiles> profiles;
+  CalibrationError calibration_error;
   int seeds = 5;
   vision::SegmenterOptions segmenter;  // ours (the thesis's chain: ThesisSegmenterOptions)
   treatment::TreatmentOptions treatment;
@@ -36,20 +42,20 @@ struct TreatmentEvalOptions {
   double frame_lag_s = 0.0;
   bool mrroc = false;
   double costs_ratio = 1.0;  // Φ for the MRROC operating point
-  // Changes to our tracker's options (ProductTrackerOptions of each run's
-  // simulator), for trying them; none: the product's.
+  // Changes to our tracker's options (ProductTrackerOptions of the
+  // profiles), for trying them; none: the product's.
   std::function<void(tracking::TrackerOptions&)> adjust_tracker;
 
   OptionErrors Validate() const;
 };
 
-// The product's treatment options for a simulated vehicle and field.
-treatment::TreatmentOptions OurTreatmentOptions(const sim::SimulatorOptions& sim);
-// The product's whole pipeline for a simulated vehicle and field: what
-// `simulate --publish` runs and `evaluate treatment` measures.
-pipeline::PipelineOptions ProductPipelineOptions(const sim::SimulatorOptions& sim);
-// The thesis's chain (§8.2): whole bounding boxes, 50-pixel size filter.
-treatment::TreatmentOptions ThesisTreatmentOptions(const sim::SimulatorOptions& sim);
+// The engines' camera of run `seed`: the vehicle's calibration with the
+// crop's virtual plane, off by the calibration error with the seed's signs.
+geometry::CameraOptions TreatmentEngineCamera(const TreatmentEvalOptions& options, uint64_t seed);
+// The thesis's chain (§8.2): whole bounding boxes, table 7.2's size filter
+// of the sequence named `preset` (in pixels of `camera`).
+treatment::TreatmentOptions ThesisTreatmentOptions(const std::string& preset,
+                                                   const geometry::CameraOptions& camera);
 
 struct TreatmentMetrics {
   int crop_plants = 0, crop_hits = 0;

@@ -18,7 +18,7 @@ pass="$work/pass"
 frames="$pass/frames" times="$pass/truth/frames.csv" odometry="$pass/truth/odometry.csv"
 run=(run --camera "$frames" --fast --lcm-url memq://)
 
-expect 0 "plantscale run: camera .*frames, calibration thesis, preset testbed" -- "$plantscale" "${run[@]}" \
+expect 0 "plantscale run: camera .*frames, calibration thesis, crop testbed-plants, vehicle silsoe-testbed, preset testbed" -- "$plantscale" "${run[@]}" \
   --calibration thesis --preset testbed --frame-times "$times" --odometry "$odometry" --log "$work/run.lcmlog"
 "$plantscale" telemetry-stats "$work/run.lcmlog" >"$work/run.txt"
 for channel in PLANTSCALE_GRID PLANTSCALE_NOZZLES PLANTSCALE_PLANTS PLANTSCALE_HEALTH; do

@@ -20,7 +20,8 @@ TreatmentEvaluation Evaluate(const char* preset, int seeds, double length_m, boo
   o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
   if (length_m > 0) o.sim.length_m = length_m;
   o.seeds = seeds;
-  o.treatment = OurTreatmentOptions(o.sim);
+  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
+  o.treatment = ProductTreatmentOptions(*o.profiles);
   o.baseline_thesis = thesis;
   return EvaluateTreatment(o);
 }
@@ -33,7 +34,8 @@ std::pair<TreatmentEvaluation, TreatmentEvaluation> OneSeedAndChangedEvaluation(
   TreatmentEvalOptions o;
   o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
   o.seeds = 1;
-  o.treatment = OurTreatmentOptions(o.sim);
+  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
+  o.treatment = ProductTreatmentOptions(*o.profiles);
   if (setup) setup(o);
   TreatmentEvaluation product = EvaluateTreatment(o);
   change(o);

@@ -1,0 +1,111 @@
+#pragma once
+// Crop and vehicle profiles (issue 33): what a grower and a machine builder
+// know, written in YAML (config/crops/*.yaml, config/vehicles/*.yaml), and
+// the only source of the vehicle pipeline's options. The simulator keeps its
+// own preset; nothing here reads a simulator parameter. docs/profiles.md
+// describes every key.
+//
+// Every problem with a profile is a ConfigError naming the file, the key and
+// the expected range (a missing key, a value out of range such as a spacing
+// of 450 written for 0.45 m, a negative latency, a calibration file for
+// another image size).
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "engine/geometry/camera_model.h"
+#include "engine/pipeline/pipeline.h"
+#include "engine/tracking/grid_tracker.h"
+#include "engine/treatment/treatment_system.h"
+
+namespace plantscale::app {
+
+// A crop at a growth stage, as planted.
+struct CropProfile {
+  std::string name;  // file stem
+  std::string file;
+  int rows = 3;                         // rows per bed (odd: a central row)
+  double row_spacing_m = 0.0;           // as the drill was set
+  double plant_spacing_m = 0.0;         // as the planter was set
+  double leaf_radius_m = 0.0;           // mean leaf-tip radius at the growth stage
+  double leaf_radius_sd_fraction = 0.0; // plant-to-plant size spread (sd / mean)
+  double leaf_height_m = 0.0;           // height of the leaf tips above the soil
+  double planter_sd_m = 0.0;            // each plant's position about its grid place (sd, with lean)
+  double virtual_plane_height_m = 0.0;  // the camera's virtual ground plane (thesis §2.3.8)
+};
+
+// A vehicle: its wheels, camera, bar and suspension.
+struct VehicleProfile {
+  std::string name;
+  std::string file;
+  double track_width_m = 0.0;
+  std::string calibration_file;        // resolved path of the camera calibration
+  geometry::CameraOptions camera;      // as calibrated (virtual plane from the crop)
+  double valve_latency_s = 0.0;
+  treatment::SprayBarOptions bar;      // nozzle layout and latency
+  // Camera bounce (suspension); an unknown vehicle's defaults when absent.
+  double pitch_sd_rad = 0.3 * 3.14159265358979323846 / 180.0;
+  double roll_sd_rad = 0.2 * 3.14159265358979323846 / 180.0;
+  double height_sd_m = 0.004;
+  double bounce_correlation_s = 0.25;
+  bool suspension_given = false;       // false: the defaults above
+};
+
+struct Profiles {
+  CropProfile crop;
+  VehicleProfile vehicle;
+};
+
+// `name_or_path`: a name in config/crops (config/vehicles) or a YAML file.
+CropProfile LoadCropProfile(const std::string& name_or_path,
+                            const std::filesystem::path& config_dir);
+VehicleProfile LoadVehicleProfile(const std::string& name_or_path,
+                                  const std::filesystem::path& config_dir);
+
+// The profiles a simulator preset's nominal crop and vehicle are written
+// in, chosen by the preset's name (a table, not its parameters): field ->
+// cauliflower-6-week on silsoe, ... Throws ConfigError for a preset without
+// one (give --crop and --vehicle).
+struct ProfileNames {
+  std::string crop, vehicle;
+};
+ProfileNames DefaultProfileNames(const std::string& preset_name);
+// --crop / --vehicle when given (non-empty), else the preset's defaults.
+Profiles LoadProfiles(const std::string& crop, const std::string& vehicle,
+                      const std::string& preset_name, const std::filesystem::path& config_dir);
+
+// A calibration a field calibration leaves: the engine's camera is off from
+// the true one by these amounts, each with a sign drawn per seed.
+struct CalibrationError {
+  double height_m = 0.0;
+  double tilt_deg = 0.0;
+  double roll_deg = 0.0;
+  double focal = 0.0;  // fraction of the focal length
+  bool any() const { return height_m != 0.0 || tilt_deg != 0.0 || roll_deg != 0.0 || focal != 0.0; }
+};
+// "height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01" (any subset; values
+// >= 0). Throws ConfigError naming `where` (the option) and the key.
+CalibrationError ParseCalibrationError(const std::string& text, const std::string& where);
+// The signed error of run `seed`: each amount with its own sign, drawn from
+// the seed (the same seed, the same signs).
+CalibrationError SignedCalibrationError(const CalibrationError& amounts, uint64_t seed);
+geometry::CameraOptions ApplyCalibrationError(geometry::CameraOptions camera,
+                                              const CalibrationError& signed_error);
+
+// The engine's camera: the vehicle's calibration with the crop's virtual
+// ground plane.
+geometry::CameraOptions EngineCamera(const Profiles& profiles);
+// Throws ConfigError naming the vehicle file when its calibration is for
+// another image size than the camera's images (width x height).
+void RequireImageSize(const VehicleProfile& vehicle, int width_px, int height_px);
+
+// The product's options, from the two profiles only.
+tracking::TrackerOptions ProductTrackerOptions(const Profiles& profiles);
+treatment::TreatmentOptions ProductTreatmentOptions(const Profiles& profiles);
+pipeline::PipelineOptions ProductPipelineOptions(const Profiles& profiles);
+// The thesis's tracker (§4.6, ch. 8) with its noise settings, on the same
+// profiles (rows, nominal spacings, track width).
+tracking::TrackerOptions ThesisTrackerOptions(const Profiles& profiles);
+
+}  // namespace plantscale::app
