@@ -117,7 +117,7 @@ struct PipelineSetup {
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
                const std::string& title, const SprayBarEndpoint& endpoint,
                const std::optional<PipelineSetup>& tracker = {},
-               const std::string& run_config = {}) {
+               const std::string& run_config = {}, VehicleHooks hooks = {}) {
   vehicle::CommandAuthOptions command_auth = VehicleCommandAuth(args.command_key);  // refuses a bad key file
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
@@ -144,6 +144,12 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   // treatment stage has commanded it.
   tm::can::SprayBar* bar = endpoint.bar.get();
   treatment::NozzleSink nozzle_sink = tracker ? tracker->nozzle_sink : treatment::NozzleSink{};
+  if (hooks.nozzle_sink) {
+    nozzle_sink = [hook = hooks.nozzle_sink, other = nozzle_sink](int64_t utime, uint64_t mask) {
+      if (other) other(utime, mask);
+      hook(utime, mask);
+    };
+  }
   if (bar != nullptr) {
     const bool scheduler_drives_bar = tracker.has_value();
     if (scheduler_drives_bar) {
@@ -177,6 +183,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
     runner.AddStage(std::make_unique<vehicle::SimulatedBarStage>(*endpoint.simulated));
   }
   if (sim_truth) runner.AddStage(std::make_unique<vehicle::SimTruthStage>());
+  for (std::unique_ptr<vehicle::Stage>& stage : hooks.stages) runner.AddStage(std::move(stage));
   g_stop = false;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
@@ -239,7 +246,7 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
 }  // namespace
 
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
-                       const SimRunConfig& run) {
+                       const SimRunConfig& run, VehicleHooks hooks) {
   const SprayBarEndpoint bar =
       OpenSprayBar(args, true, BarOptionsOfTreatment());  // before anything else
   sim::Simulator simulator(options);
@@ -251,7 +258,8 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& 
       true,
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed),
-      bar, PipelineSetup{simulator.camera(), ProductPipelineOptions(options)}, RunConfigJson(run));
+      bar, PipelineSetup{simulator.camera(), ProductPipelineOptions(options)}, RunConfigJson(run),
+      std::move(hooks));
 }
 
 namespace {

@@ -10,10 +10,12 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "app/command_auth_commands.h"
 #include "app/command_registry.h"
 #include "app/run_config.h"
+#include "app/vehicle/runner.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
@@ -45,12 +47,19 @@ inline constexpr char kSimulatedBar[] = "simulated";
 // A simulated bar has options.num_nozzles nozzles.
 SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
                               const telemetry::can::SprayBarOptions& options = {});
+// What a whole-system test adds to the vehicle of `simulate --publish`
+// (tests/soak_system_test.cc): stages run after the product's, and a sink
+// that sees every tick's open mask as the spray bar does.
+struct VehicleHooks {
+  std::vector<std::unique_ptr<vehicle::Stage>> stages;
+  treatment::NozzleSink nozzle_sink;
+};
 // Runs the simulator through the vehicle runner and publishes; prints a
 // summary with the traffic per channel. Returns the exit code. `run` (what
 // `options` were made from) goes out as the run_config event, for scoring
 // the log later (evaluate log).
 int SimulateAndPublish(const sim::SimulatorOptions& options, const PublishArgs& args,
-                       const SimRunConfig& run);
+                       const SimRunConfig& run, VehicleHooks hooks = {});
 
 void AddTelemetryCommands(CommandRegistry& registry);
 

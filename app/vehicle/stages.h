@@ -107,6 +107,9 @@ class PipelineStage : public Stage, public BlobView {
  private:
   void PublishGrid(const pipeline::FrameResult& r, Publisher& publisher);
   void ReportTicks(RunStatus& status);
+  // An event when the bar closes on the plants' uncertain position
+  // (treatment::kPositionUncertain) and when it is lifted.
+  void ReportUncertainty(int64_t utime, Publisher& publisher);
   // The tick's opened and closed nozzles into the shots.
   void RecordShots(const treatment::TickResult& tick);
   void PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
@@ -136,6 +139,7 @@ class PipelineStage : public Stage, public BlobView {
   std::vector<int> changed_plants_;  // record ids since the last plant list
   int64_t last_plants_utime_ = -1;
   int64_t last_frame_index_ = 0;     // of the last frame processed
+  bool uncertain_ = false;           // the bar is closed on kPositionUncertain
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on
