@@ -89,6 +89,11 @@ TEST(VehicleRunner, PipelineStageSchedulesNozzlesFromTheTrackedGrid) {
   po.tracker.row_spacing_m = so.field.row_spacing_m;
   po.tracker.plant_spacing_m = so.field.plant_spacing_m;
   po.tracker.track_width_m = so.vehicle.track_width_m;
+  // The fail-safe's margins for the simulated crop's footprint (the
+  // tracker is not told the crop's size here).
+  const Eigen::Vector2d margin = po.treatment.UncertaintyMargin(so.field.crop_radius_m);
+  po.treatment.uncertainty_margin_across_m = margin.x();
+  po.treatment.uncertainty_margin_along_m = margin.y();
   int ticks = 0, open_ticks = 0, open_while_lost = 0;
   const PipelineStage* stage_ptr = nullptr;
   auto stage_owned = std::make_unique<PipelineStage>(

@@ -39,13 +39,13 @@ namespace {
 // The fail-safe's margins derived for the crop the tracker is told of
 // (TreatmentOptions::UncertaintyMargin), unless set.
 PipelineOptions WithCropMargins(PipelineOptions o) {
-  ThrowIfInvalid("pipeline options", o.Validate());
   treatment::TreatmentOptions& t = o.treatment;
-  if (t.close_on_uncertainty) {
+  if (t.close_on_uncertainty && std::isfinite(o.tracker.crop_radius_m)) {
     const Eigen::Vector2d margin = t.UncertaintyMargin(o.tracker.crop_radius_m);
     t.uncertainty_margin_across_m = margin.x();
     t.uncertainty_margin_along_m = margin.y();
   }
+  ThrowIfInvalid("pipeline options", o.Validate());
   return o;
 }
 
