@@ -142,6 +142,10 @@ TEST(Soak, FiveKilometresInFlatMemorySprayingToTheEnd) {
   const SprayScore score = ScoreSpray(field_only.field(), w.bar->Shots(w.track), region);
   std::cout << "soak: last 100 m: " << score.crop_hits << " of " << score.crop_plants
             << " crops sprayed" << std::endl;
+  for (const MissedCrop& m : score.missed) {
+    std::cout << "soak: missed crop " << m.plant_id << " at (" << m.root_m.x() << ", " << m.root_m.y()
+              << ") m, spray " << 1000.0 * m.nearest_spray_m << " mm from its root" << std::endl;
+  }
   EXPECT_GT(score.crop_plants, 500);  // 3 rows × 100 m / 0.467 m
   EXPECT_EQ(score.crop_hits, score.crop_plants);
 }
