@@ -91,6 +91,7 @@ TEST(VehicleRunner, PipelineStageSchedulesNozzlesFromTheTrackedGrid) {
   po.tracker.track_width_m = so.vehicle.track_width_m;
   // The fail-safe's margins for the simulated crop's footprint (the
   // tracker is not told the crop's size here).
+  po.treatment.close_on_uncertainty = true;
   const Eigen::Vector2d margin = po.treatment.UncertaintyMargin(so.field.crop_radius_m);
   po.treatment.uncertainty_margin_across_m = margin.x();
   po.treatment.uncertainty_margin_along_m = margin.y();

@@ -33,6 +33,7 @@ PipelineOptions OptionsFor(const sim::SimulatorOptions& so) {
   o.tracker.track_width_m = so.vehicle.track_width_m;
   // The fail-safe's margins for the simulated crop's footprint (the
   // tracker is not told the crop's size here).
+  o.treatment.close_on_uncertainty = true;
   const Eigen::Vector2d margin = o.treatment.UncertaintyMargin(so.field.crop_radius_m);
   o.treatment.uncertainty_margin_across_m = margin.x();
   o.treatment.uncertainty_margin_along_m = margin.y();

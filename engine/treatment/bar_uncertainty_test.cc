@@ -212,6 +212,7 @@ TEST(NozzleScheduler, ReachMarginsArePositive) {
 
 TEST(TreatmentOptions, UncertaintyMarginIsDerivedFromTheFootprintUnlessSet) {
   TreatmentOptions o;
+  o.close_on_uncertainty = true;
   o.crop_footprint_min_half_m = 0.025;
   o.scheduler.bar.nozzle_spacing_m = 0.0225;
   // Across: the footprint's least half size and half a nozzle; along: the half size.
@@ -245,6 +246,7 @@ TEST(TreatmentOptions, UncertaintyMarginIsDerivedFromTheFootprintUnlessSet) {
 TEST(TreatmentSystem, SchedulerClosesOnTheDerivedMargins) {
   const geometry::CameraModel camera(geometry::testing::ThesisCamera());
   TreatmentOptions o;
+  o.close_on_uncertainty = true;
   const TreatmentSystem system(camera, o);
   EXPECT_NEAR(system.options().scheduler.fail_safe.max_reach_across_m, o.UncertaintyMargin().x(), 1e-12);
   EXPECT_NEAR(system.options().scheduler.fail_safe.max_reach_along_m, o.UncertaintyMargin().y(), 1e-12);

@@ -153,8 +153,12 @@ struct TreatmentOptions {
   // 95 % ellipse of where the plants reaching it stand reaches further from
   // them than the sprayed footprint does, across or along the rows
   // (kPositionUncertain). The margins (0: derived, UncertaintyMargin) set
-  // scheduler.fail_safe.max_reach_*.
-  bool close_on_uncertainty = true;
+  // scheduler.fail_safe.max_reach_*. Off by default for now: on presets B
+  // and D (small crops, 25 mm footprints) the reach in normal tracking
+  // exceeds the derived margin and the bar stayed closed (1 seed each: 0–1
+  // of 228 crops hit); on the field preset it changes nothing
+  // (docs/results/2026-11-27-failsafe.md).
+  bool close_on_uncertainty = false;
   double uncertainty_margin_across_m = 0.0;
   double uncertainty_margin_along_m = 0.0;
   // (across, along): the margins as set, or derived from the footprint a
