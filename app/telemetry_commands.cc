@@ -110,7 +110,7 @@ using vehicle::PipelineSetup;
 int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool sim_truth,
                const std::string& title, const SprayBarEndpoint& endpoint,
                const std::optional<PipelineSetup>& tracker = {},
-               const std::string& run_config = {}) {
+               const std::string& run_config = {}, VehicleHooks hooks = {}) {
   vehicle::CommandAuthOptions command_auth = VehicleCommandAuth(args.command_key);  // refuses a bad key file
   const int64_t boot = tm::WallUtime();
   tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
@@ -122,7 +122,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   vehicle::VehicleProcess process(lcm, options, boot);
   std::unique_ptr<vehicle::FrameSource> source = make_source(process.transport(), boot);
   process.ListenForCommands(std::move(command_auth));  // start, pause and mode from the station
-  process.AddStages(endpoint, tracker);
+  process.AddStages(endpoint, tracker, std::move(hooks));
   g_stop = false;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
@@ -215,7 +215,7 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
 }  // namespace
 
 int SimulateAndPublish(const sim::SimulatorOptions& options, const Profiles& profiles,
-                       const PublishArgs& args, const SimRunConfig& run) {
+                       const PublishArgs& args, const SimRunConfig& run, VehicleHooks hooks) {
   RequireImageSize(profiles.vehicle, options.camera.image_width_px, options.camera.image_height_px);
   const SprayBarEndpoint bar = OpenSprayBar(
       args, true, BarOptionsOfTreatment(profiles.vehicle.bar.nozzles));  // before anything else
@@ -230,7 +230,8 @@ int SimulateAndPublish(const sim::SimulatorOptions& options, const Profiles& pro
       "plantscale simulate --publish: preset " + options.preset + ", seed " +
           std::to_string(options.seed) + ", crop " + profiles.crop.name + ", vehicle " +
           profiles.vehicle.name,
-      bar, PipelineSetup{engine_camera, ProductPipelineOptions(profiles)}, RunConfigJson(run));
+      bar, PipelineSetup{engine_camera, ProductPipelineOptions(profiles)}, RunConfigJson(run),
+      std::move(hooks));
 }
 
 namespace {

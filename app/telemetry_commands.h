@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "app/command_auth_commands.h"
 #include "app/command_registry.h"
@@ -44,6 +45,7 @@ inline constexpr char kSimulatedBar[] = "simulated";
 // A simulated bar has options.num_nozzles nozzles.
 SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
                               const telemetry::can::SprayBarOptions& options = {});
+using vehicle::VehicleHooks;
 // Runs the simulator through the vehicle runner and publishes; prints a
 // summary with the traffic per channel. Returns the exit code. `run` (what
 // `options` were made from) goes out as the run_config event, for scoring
@@ -51,7 +53,8 @@ SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
 // The vehicle pipeline is configured from `profiles` only (its camera: the
 // vehicle's calibration), never from `options`.
 int SimulateAndPublish(const sim::SimulatorOptions& options, const Profiles& profiles,
-                       const PublishArgs& args, const SimRunConfig& run);
+                       const PublishArgs& args, const SimRunConfig& run,
+                       VehicleHooks hooks = {});
 
 void AddTelemetryCommands(CommandRegistry& registry);
 

@@ -282,6 +282,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const std::string& preset,
   o.abstain_merged = false;
   o.clipped_on_crop_votes_weed = true;  // every feature's box votes
   o.split_merged = false;  // whole blobs, labelled and mapped
+  o.close_on_uncertainty = false;  // the thesis's bar closed on a lost grid only
   o.weed_height_m = camera_options.virtual_plane_height_m;  // everything on the one plane (§2.3.8)
   // Table 7.2's operating points: size ς in pixels and clustering radius r
   // (A: 100 px, 450 mm; B, D: 30 px, 100 mm; C and the field: 80 px, 100 mm).

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "app/config_loader.h"
+#include "app/profiles.h"
 #include "app/treatment_eval.h"
 #include "app/vehicle/vehicle_process.h"
 #include "engine/sim/simulator.h"
@@ -263,6 +264,9 @@ const char* Describe(FaultKind kind) {
 FaultRunResult RunWithFault(const FaultRunOptions& options) {
   FaultRunResult result;
   sim::SimulatorOptions so = app::LoadSimulatorPreset("field", app::DefaultConfigDir());
+  // The engine as a grower configures it: the preset's crop and vehicle profiles.
+  const app::Profiles profiles = app::LoadProfiles("", "", "field", app::DefaultConfigDir());
+  const geometry::CameraModel engine_camera(app::EngineCamera(profiles));
   so.length_m = options.length_m;
   so.seed = options.seed;
   sim::Simulator simulator(so);
@@ -319,7 +323,7 @@ FaultRunResult RunWithFault(const FaultRunOptions& options) {
     };
     vehicle::SimFrameSource sim_source(simulator, boot);
     FaultyFrameSource source(sim_source, injector);
-    process.AddStages(endpoint, vehicle::PipelineSetup{simulator.camera(), app::ProductPipelineOptions(so), observe});
+    process.AddStages(endpoint, vehicle::PipelineSetup{engine_camera, app::ProductPipelineOptions(profiles), observe});
     process.runner().AddStage(std::make_unique<Observer>(process, bar, *endpoint.simulated, result));
     process.Run(source);
     result.log_status = process.logging()->status();

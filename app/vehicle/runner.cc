@@ -1,6 +1,7 @@
 #include "app/vehicle/runner.h"
 
 #include <chrono>
+#include <sstream>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <thread>
@@ -84,13 +85,45 @@ void VehicleRunner::RefusalFaults() {
   for (const Refusal& r : refusals_) status_.faults.push_back(r.line);
 }
 
+void VehicleRunner::ReportRefusal(const std::string& why) {
+  ReportHeldRefusals();
+  if (refusal_period_start_ < 0) refusal_period_start_ = now_utime_;
+  if (refusal_events_ < auth_.max_refusal_events) {
+    ++refusal_events_;
+    Event(plantscale_event_t::SEVERITY_WARNING, "command_refused", why);
+  } else {
+    ++refusals_held_;
+    last_held_ = why;
+  }
+}
+
+// Once the period is over (or the run), the refusals held back in one event.
+void VehicleRunner::ReportHeldRefusals(bool at_end) {
+  if (refusal_period_start_ < 0 || (!at_end && now_utime_ - refusal_period_start_ < auth_.refusal_period_us)) {
+    return;
+  }
+  if (refusals_held_ > 0) {
+    std::ostringstream text;
+    text.precision(1);
+    text << refusals_held_ << " more command" << (refusals_held_ == 1 ? "" : "s") << " refused in "
+         << std::fixed << 1e-6 * static_cast<double>(now_utime_ - refusal_period_start_)
+         << " s, not each reported (at most " << auth_.max_refusal_events << " per "
+         << 1e-6 * static_cast<double>(auth_.refusal_period_us) << " s); the last: " << last_held_;
+    Event(plantscale_event_t::SEVERITY_WARNING, "command_refused", text.str());
+  }
+  refusal_period_start_ = -1;
+  refusal_events_ = 0;
+  refusals_held_ = 0;
+  last_held_.clear();
+}
+
 void VehicleRunner::Apply(const ReceivedMessage& m) {
   std::string error;
   const auto c = telemetry::Decode<plantscale_command_t>(m.channel, m.data, m.size, &error);
   OperatorCommands& k = status_.commands;
   const auto refuse = [&](const std::string& why) {
     ++k.refused;
-    Event(plantscale_event_t::SEVERITY_WARNING, "command_refused", why);
+    ReportRefusal(why);
     // A fault line while it is recent; the same line again renews it, and
     // a flood keeps the newest few.
     const std::string line = "command refused: " + why;
@@ -163,11 +196,13 @@ RunSummary VehicleRunner::Run(FrameSource& source, const std::atomic<bool>* stop
     if (commands_ != nullptr) {
       while (commands_->Handle(0)) {
       }
+      ReportHeldRefusals();
       RefusalFaults();
     }
     for (const std::unique_ptr<Stage>& stage : stages_) stage->Process(frame, status_, publisher_);
     summary.seconds = 1e-6 * static_cast<double>(frame.utime - first_utime);
   }
+  ReportHeldRefusals(true);
   for (const std::unique_ptr<Stage>& stage : stages_) stage->Finish(now_utime_, publisher_);
   Event(plantscale_event_t::SEVERITY_INFO, "run_finished",
         "run finished after " + std::to_string(status_.frames) + " frames");

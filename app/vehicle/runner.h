@@ -111,6 +111,12 @@ struct CommandAuthOptions {
   // clock (now_utime()).
   std::function<int64_t()> clock;
   int64_t fault_hold_us = 5'000'000;
+  // A flood of refused commands (any laptop on the multicast group can send
+  // them) must not fill the log: at most this many command_refused events
+  // per period of message time; the rest are counted and reported in one
+  // summary event per period ("N more commands refused ...").
+  int max_refusal_events = 4;
+  int64_t refusal_period_us = 1'000'000;
 };
 
 struct RunnerOptions {
@@ -163,6 +169,13 @@ class VehicleRunner {
     std::string line;
   };
   std::deque<Refusal> refusals_;  // newest last, one per line
+  // The refusal events' rate limit (CommandAuthOptions::max_refusal_events).
+  void ReportRefusal(const std::string& why);
+  void ReportHeldRefusals(bool at_end = false);
+  int64_t refusal_period_start_ = -1;
+  int refusal_events_ = 0;       // sent this period
+  int64_t refusals_held_ = 0;    // counted, not sent, this period
+  std::string last_held_;
 };
 
 }  // namespace plantscale::vehicle

@@ -89,6 +89,12 @@ TEST(VehicleRunner, PipelineStageSchedulesNozzlesFromTheTrackedGrid) {
   po.tracker.row_spacing_m = so.field.row_spacing_m;
   po.tracker.plant_spacing_m = so.field.plant_spacing_m;
   po.tracker.track_width_m = so.vehicle.track_width_m;
+  // The fail-safe's margins for the simulated crop's footprint (the
+  // tracker is not told the crop's size here).
+  po.treatment.close_on_uncertainty = true;
+  const Eigen::Vector2d margin = po.treatment.UncertaintyMargin(so.field.crop_radius_m);
+  po.treatment.uncertainty_margin_across_m = margin.x();
+  po.treatment.uncertainty_margin_along_m = margin.y();
   int ticks = 0, open_ticks = 0, open_while_lost = 0;
   const PipelineStage* stage_ptr = nullptr;
   auto stage_owned = std::make_unique<PipelineStage>(
@@ -530,6 +536,48 @@ TEST(VehicleRunner, ObeysSignedCommandsAndRefusesForgedReplayedStaleAndUnsigned)
   EXPECT_TRUE(HasLine(run.faults[forged_at], "command refused: forged (bad signature) from test station"));
   EXPECT_FALSE(HasLine(run.faults[forged_at - 1], "command refused: forged"));
   EXPECT_FALSE(HasLine(run.faults.back(), "command refused"));
+  for (const auto& f : run.faults) EXPECT_LE(f.size(), 4u);
+}
+
+// A flood of forged commands cannot fill the log: at most
+// max_refusal_events command_refused events a period, the rest counted and
+// reported once the period is over; every one is still refused and counted.
+TEST(VehicleRunner, AFloodOfRefusedCommandsIsSummarisedOncePerPeriod) {
+  CommandKey key;
+  key.bytes.fill(0x11);
+  CommandAuthOptions auth;
+  auth.key = key;
+  using C = plantscale_command_t;
+  constexpr int kFlood = 1000;
+  const auto script = [&](Transport& t, const VehicleFrame& frame, int index) {
+    if (index != 3 && index != 30) return;
+    for (int i = 0; i < (index == 3 ? kFlood : 1); ++i) {
+      C c{};
+      c.utime = frame.utime, c.seq = 1000 + i, c.origin = "yard laptop", c.command = C::COMMAND_PAUSE;
+      Sign(c, key);
+      c.mac[0] ^= 1;
+      Send(t, c);
+    }
+  };
+  const CommandRun run = RunWithStation(auth, 2.5, script);  // ≈ 45 frames, 3.6 s
+  ASSERT_GE(run.seen.size(), 35u);
+  EXPECT_EQ(run.seen.back().refused, kFlood + 1);
+  for (const OperatorCommands& k : run.seen) EXPECT_FALSE(k.paused);
+  std::vector<std::string> refused;
+  for (const std::string& e : run.events) {
+    if (e.rfind("command_refused: ", 0) == 0) refused.push_back(e);
+  }
+  // 4 at once, the summary of the other 996 a second (13 frames) later, the
+  // lone one at frame 30 on its own.
+  ASSERT_EQ(refused.size(), 6u);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(refused[i], "command_refused: forged (bad signature) from yard laptop");
+  }
+  EXPECT_EQ(refused[4].rfind("command_refused: 996 more commands refused in 1.", 0), 0u) << refused[4];
+  EXPECT_NE(refused[4].find("(at most 4 per 1.0 s); the last: forged (bad signature) from yard laptop"),
+            std::string::npos)
+      << refused[4];
+  EXPECT_EQ(refused[5], "command_refused: forged (bad signature) from yard laptop");
   for (const auto& f : run.faults) EXPECT_LE(f.size(), 4u);
 }
 

@@ -1,6 +1,7 @@
 #include "app/vehicle/stages.h"
 
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -305,6 +306,23 @@ void PipelineStage::ReportTicks(RunStatus& status) {
   }
 }
 
+void PipelineStage::ReportUncertainty(int64_t utime, Publisher& publisher) {
+  const bool uncertain = ticked_ && (last_tick_.fail_reasons & treatment::kPositionUncertain) != 0;
+  if (uncertain == uncertain_) return;
+  uncertain_ = uncertain;
+  plantscale_event_t e{};
+  e.utime = utime;
+  e.severity = uncertain ? plantscale_event_t::SEVERITY_WARNING : plantscale_event_t::SEVERITY_INFO;
+  e.kind = "bar_uncertain";
+  std::string why = "plant position uncertain";
+  for (const std::string& m : last_tick_.messages) {
+    if (m.rfind("plant position", 0) == 0) why = m;
+  }
+  e.text = uncertain ? "bar closed: " + why
+                     : "plant position at the bar known again (95 % ellipse within the footprint's margin)";
+  publisher.Publish(channels::kEvents, e);
+}
+
 void PipelineStage::RecordShots(const treatment::TickResult& tick) {
   std::vector<Eigen::Vector2d> centre(open_since_.size(), Eigen::Vector2d::Zero());
   for (const treatment::NozzleTarget& t : tick.opened) {
@@ -347,6 +365,7 @@ void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
   if (r.accepted) PublishGrid(r, publisher);
   if (!pipeline_.treatment()) return;
   ReportTicks(status);
+  ReportUncertainty(frame.utime, publisher);
   if (r.treatment) {
     if (r.treatment->map_reset) next_tile_row_ = 0;
     last_frame_index_ = frame.frame_index;

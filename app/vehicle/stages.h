@@ -147,6 +147,9 @@ class PipelineStage : public Stage, public BlobView {
  private:
   void PublishGrid(const pipeline::FrameResult& r, Publisher& publisher);
   void ReportTicks(RunStatus& status);
+  // An event when the bar closes on the plants' uncertain position
+  // (treatment::kPositionUncertain) and when it is lifted.
+  void ReportUncertainty(int64_t utime, Publisher& publisher);
   // The tick's opened and closed nozzles into the shots.
   void RecordShots(const treatment::TickResult& tick);
   void PublishPlants(const VehicleFrame& frame, const treatment::FrameTreatment& t,
@@ -177,6 +180,7 @@ class PipelineStage : public Stage, public BlobView {
   int64_t last_plants_utime_ = -1;
   int64_t last_frame_index_ = 0;     // of the last frame processed
   int slip_bursts_ = 0;              // the slip guard's, as last reported
+  bool uncertain_ = false;           // the bar is closed on kPositionUncertain
 };
 
 // Simulator ground truth: grid state on PLANTSCALE_SIM_TRUTH and pose on

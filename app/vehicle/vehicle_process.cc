@@ -36,9 +36,15 @@ void VehicleProcess::ListenForCommands(CommandAuthOptions auth) {
 // goes before HealthStage, which reports its fail-safe state and faults;
 // the simulated bar steps after the treatment stage has commanded it.
 void VehicleProcess::AddStages(const SprayBarEndpoint& endpoint,
-                               const std::optional<PipelineSetup>& pipeline) {
+                               const std::optional<PipelineSetup>& pipeline, VehicleHooks hooks) {
   tm::can::SprayBar* bar = endpoint.bar.get();
   treatment::NozzleSink nozzle_sink = pipeline ? pipeline->nozzle_sink : treatment::NozzleSink{};
+  if (hooks.nozzle_sink) {
+    nozzle_sink = [hook = hooks.nozzle_sink, other = nozzle_sink](int64_t utime, uint64_t mask) {
+      if (other) other(utime, mask);
+      hook(utime, mask);
+    };
+  }
   if (bar != nullptr) {
     const bool scheduler_drives_bar = pipeline.has_value();
     if (scheduler_drives_bar) {
@@ -73,6 +79,7 @@ void VehicleProcess::AddStages(const SprayBarEndpoint& endpoint,
     runner_->AddStage(std::make_unique<SimulatedBarStage>(*endpoint.simulated));
   }
   if (sim_truth_) runner_->AddStage(std::make_unique<SimTruthStage>());
+  for (std::unique_ptr<Stage>& stage : hooks.stages) runner_->AddStage(std::move(stage));
 }
 
 RunSummary VehicleProcess::Run(FrameSource& source, const std::atomic<bool>* stop) {

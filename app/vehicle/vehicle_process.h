@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "app/vehicle/runner.h"
 #include "app/vehicle/stages.h"
@@ -37,6 +38,14 @@ struct PipelineSetup {
   treatment::NozzleSink nozzle_sink = {};  // besides the spray bar: every tick's open mask
 };
 
+// What a whole-system test adds to the vehicle (tests/soak_system_test.cc):
+// stages run after the product's, and a sink that sees every tick's open
+// mask as the spray bar does.
+struct VehicleHooks {
+  std::vector<std::unique_ptr<Stage>> stages;
+  treatment::NozzleSink nozzle_sink;
+};
+
 struct VehicleProcessOptions {
   bool real_time = true;   // false: --fast
   std::string log;         // LCM log file; empty: none
@@ -55,7 +64,8 @@ class VehicleProcess {
   // Station commands on transport(), authenticated by `auth`.
   void ListenForCommands(CommandAuthOptions auth);
   // Adds every stage (once). `bar` must outlive the process.
-  void AddStages(const SprayBarEndpoint& bar, const std::optional<PipelineSetup>& pipeline);
+  void AddStages(const SprayBarEndpoint& bar, const std::optional<PipelineSetup>& pipeline,
+                 VehicleHooks hooks = {});
   RunSummary Run(FrameSource& source, const std::atomic<bool>* stop = nullptr);
 
   VehicleRunner& runner() { return *runner_; }

@@ -34,10 +34,27 @@ OptionErrors PipelineOptions::Validate() const {
   return e;
 }
 
+namespace {
+
+// The fail-safe's margins derived for the crop the tracker is told of
+// (TreatmentOptions::UncertaintyMargin), unless set.
+PipelineOptions WithCropMargins(PipelineOptions o) {
+  treatment::TreatmentOptions& t = o.treatment;
+  if (t.close_on_uncertainty && std::isfinite(o.tracker.crop_radius_m)) {
+    const Eigen::Vector2d margin = t.UncertaintyMargin(o.tracker.crop_radius_m);
+    t.uncertainty_margin_across_m = margin.x();
+    t.uncertainty_margin_along_m = margin.y();
+  }
+  ThrowIfInvalid("pipeline options", o.Validate());
+  return o;
+}
+
+}  // namespace
+
 Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& options,
                    treatment::NozzleSink sink)
     : camera_(camera),
-      options_((ThrowIfInvalid("pipeline options", options.Validate()), options)),
+      options_(WithCropMargins(options)),
       segmenter_(options_.segmenter),
       tracker_(camera, options_.tracker) {
   if (options_.treat) {
@@ -62,6 +79,11 @@ treatment::SafetyInputs Pipeline::Safety(int64_t pose_utime, bool odometry_ok) c
   s.odometry_valid = odometry_ok;
   s.tracking = tracker_.mode() == tracking::TrackerMode::kTracking;
   s.held = held_;
+  if (system_ && s.tracking) {
+    const treatment::PlantReach reach = system_->ReachAtBar(tracker_);
+    s.reach_across_m = reach.across_m;
+    s.reach_along_m = reach.along_m;
+  }
   return s;
 }
 

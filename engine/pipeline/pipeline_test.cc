@@ -31,6 +31,12 @@ PipelineOptions OptionsFor(const sim::SimulatorOptions& so) {
   o.tracker.row_spacing_m = so.field.row_spacing_m;
   o.tracker.plant_spacing_m = so.field.plant_spacing_m;
   o.tracker.track_width_m = so.vehicle.track_width_m;
+  // The fail-safe's margins for the simulated crop's footprint (the
+  // tracker is not told the crop's size here).
+  o.treatment.close_on_uncertainty = true;
+  const Eigen::Vector2d margin = o.treatment.UncertaintyMargin(so.field.crop_radius_m);
+  o.treatment.uncertainty_margin_across_m = margin.x();
+  o.treatment.uncertainty_margin_along_m = margin.y();
   return o;
 }
 
@@ -267,6 +273,60 @@ TEST_F(PipelineFaults, PipelineFedAfterItLostTheGridKeepsTheBarClosed) {
       EXPECT_EQ(last_mask_, 0u);
     }
   }
+}
+
+// Frames that show no plant (a bare patch, a dirty lens) leave the tracker
+// coasting on the wheels: the grid's covariance grows with every metre, and
+// with it the ellipse of where the plants will stand at the bar. The bar
+// closes on that (kPositionUncertain, with the reason) before the tracker
+// gives the grid up, and opens again once frames update it.
+TEST_F(PipelineFaults, CoastingClosesTheBarOnUncertaintyAndFramesReopenIt) {
+  TrackFor(60);
+  ASSERT_TRUE(p_.last_tick().has_value());
+  EXPECT_EQ(Reasons() & treatment::kPositionUncertain, 0u) << "uncertain while tracking";
+  const treatment::TreatmentSystem& system = *p_.treatment();
+  const double margin_along = system.options().scheduler.fail_safe.max_reach_along_m;
+  const treatment::PlantReach tracked = system.ReachAtBar(p_.tracker());
+  EXPECT_LT(tracked.along_m, margin_along);
+  const cv::Mat blank(frame_.rendered.image.size(), frame_.rendered.image.type(), cv::Scalar(0));
+  int closed_at = -1;
+  double last_reach = tracked.along_m;
+  for (int i = 0; i < 40 && closed_at < 0; ++i) {
+    ASSERT_TRUE(simulator_.Next(frame_));
+    for (const sim::OdometrySample& o : frame_.odometry) p_.AddOdometry(Sample(o));
+    const FrameResult& r = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index, blank);
+    ASSERT_TRUE(r.accepted);
+    ASSERT_EQ(r.mode, tracking::TrackerMode::kTracking) << "lost before the bar closed, frame " << i;
+    const double reach = system.ReachAtBar(p_.tracker()).along_m;
+    EXPECT_GE(reach, last_reach - 1e-9) << "coasting: the reach only grows";
+    last_reach = reach;
+    if (Reasons() & treatment::kPositionUncertain) closed_at = i;
+  }
+  ASSERT_GE(closed_at, 0) << "reach " << last_reach << " m, margin " << margin_along << " m";
+  EXPECT_EQ(last_mask_, 0u);
+  EXPECT_EQ(p_.last_tick()->open_mask, 0u);
+  ASSERT_FALSE(p_.last_tick()->messages.empty());
+  EXPECT_NE(p_.last_tick()->messages.front().find("plant position uncertain at the bar"),
+            std::string::npos)
+      << p_.last_tick()->messages.front();
+  // The bar closed while coasting, before the tracker's 3 s: 12.5 Hz frames.
+  EXPECT_LT(closed_at * 0.08, p_.tracker().options().max_coast_s);
+  // Plants again: the updates shrink the ellipse, the reason clears and the
+  // bar sprays the crops it reaches.
+  int cleared_at = -1, opened_at = -1;
+  for (int i = 0; i < 60 && opened_at < 0; ++i) {
+    const FrameResult& r = Next();
+    ASSERT_TRUE(r.accepted);
+    if (cleared_at < 0 && (Reasons() & treatment::kPositionUncertain) == 0) cleared_at = i;
+    if (cleared_at >= 0 && last_mask_ != 0) opened_at = i;
+  }
+  ASSERT_GE(cleared_at, 0);
+  RecordProperty("closed_after_coasting_frames", closed_at + 1);
+  RecordProperty("cleared_after_frames", cleared_at + 1);
+  RecordProperty("opened_after_frames", opened_at + 1);
+  EXPECT_LT(cleared_at, 5) << "frames until the ellipse fits again";
+  EXPECT_GE(opened_at, 0) << "the bar never opened again";
+  EXPECT_EQ(p_.tracker().mode(), tracking::TrackerMode::kTracking);
 }
 
 TEST(PipelineOptionsTest, InvalidOptionsNameTheirKey) {

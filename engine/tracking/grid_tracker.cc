@@ -6,6 +6,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "engine/common/check.h"
 #include "engine/tracking/observation_model.h"
 
 namespace plantscale::tracking {
@@ -324,6 +325,45 @@ Prediction GridTracker::PredictPlant(const ObservationModel& h, const GridState&
   return pred;
 }
 
+GridTracker::Transition GridTracker::TransitionFrom(const GridState& s, double scale,
+                                                  const WheelIncrement& measured,
+                                                  double left_sd_m, double right_sd_m,
+                                                  double dt_s) const {
+  // Eq. 4.3 driven by the wheel increments corrected by the scale state:
+  // u = (1 + k)·u_measured, so ∂f/∂k = ∂f/∂u · u_measured.
+  const int c = core();
+  const int h = head();
+  const double distance = std::abs(0.5 * (measured.left_m + measured.right_m));
+  const WheelIncrement u{scale * measured.left_m, scale * measured.right_m};
+  Transition t{PredictGridMotion(s, u, options_.track_width_m), Eigen::MatrixXd::Identity(h, h),
+               Eigen::MatrixXd::Zero(h, h), 1.0};
+  t.a.topLeftCorner(c, c) = t.f.d_state.topLeftCorner(c, c);
+  const Eigen::MatrixXd g = t.f.d_wheels.topRows(c);
+  if (options_.estimate_odometry_scale) {
+    t.a.block(0, c, c, 1) = g * Eigen::Vector2d(measured.left_m, measured.right_m);
+  }
+  t.q.topLeftCorner(c, c) = g * Eigen::Vector2d(left_sd_m * left_sd_m, right_sd_m * right_sd_m)
+                                    .asDiagonal() * g.transpose() * (scale * scale);
+  t.q(GridState::kOffset, GridState::kOffset) +=
+      options_.lateral_sd_per_sqrt_m * options_.lateral_sd_per_sqrt_m * distance;
+  t.q(GridState::kForward, GridState::kForward) +=
+      options_.forward_sd_per_sqrt_m * options_.forward_sd_per_sqrt_m * distance;
+  t.q(GridState::kBearing, GridState::kBearing) +=
+      options_.bearing_sd_per_sqrt_m * options_.bearing_sd_per_sqrt_m * distance;
+  if (options_.estimate_odometry_scale) {
+    t.q(c, c) = options_.odometry_scale_step_sd_per_sqrt_m *
+                options_.odometry_scale_step_sd_per_sqrt_m * distance;
+  }
+  if (PersistentBounce()) {
+    // First-order Gauss–Markov: b ← a·b, stationary variance kept.
+    const int b = BounceIndex();
+    t.bounce_decay = std::exp(-std::max(0.0, dt_s) / options_.camera_bounce_correlation_s);
+    t.a.block<3, 3>(b, b) = t.bounce_decay * Eigen::Matrix3d::Identity();
+    t.q.block<3, 3>(b, b) = (1.0 - t.bounce_decay * t.bounce_decay) * BouncePrior().asDiagonal();
+  }
+  return t;
+}
+
 void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, double right_sd_m,
                           double dt_s) {
   since_frame_.left_m += measured.left_m;
@@ -333,49 +373,17 @@ void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, doub
     dr_since_loss_m_ += 0.5 * (measured.left_m + measured.right_m);
     return;
   }
-  // Eq. 4.3 driven by the wheel increments corrected by the scale state:
-  // u = (1 + k)·u_measured, so ∂f/∂k = ∂f/∂u · u_measured.
-  const int c = core();
   const int h = head();
-  const double scale = OdometryScale();
-  const WheelIncrement u{scale * measured.left_m, scale * measured.right_m};
-  const MotionPrediction f = PredictGridMotion(state(), u, options_.track_width_m);
-  Eigen::MatrixXd a = Eigen::MatrixXd::Identity(h, h);
-  a.topLeftCorner(c, c) = f.d_state.topLeftCorner(c, c);
-  const Eigen::MatrixXd g = f.d_wheels.topRows(c);
-  if (options_.estimate_odometry_scale) {
-    a.block(0, c, c, 1) = g * Eigen::Vector2d(measured.left_m, measured.right_m);
-  }
-  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(h, h);
-  q.topLeftCorner(c, c) = g * Eigen::Vector2d(left_sd_m * left_sd_m, right_sd_m * right_sd_m)
-                                  .asDiagonal() * g.transpose() * (scale * scale);
-  q(GridState::kOffset, GridState::kOffset) +=
-      options_.lateral_sd_per_sqrt_m * options_.lateral_sd_per_sqrt_m * distance;
-  q(GridState::kForward, GridState::kForward) +=
-      options_.forward_sd_per_sqrt_m * options_.forward_sd_per_sqrt_m * distance;
-  q(GridState::kBearing, GridState::kBearing) +=
-      options_.bearing_sd_per_sqrt_m * options_.bearing_sd_per_sqrt_m * distance;
-  if (options_.estimate_odometry_scale) {
-    q(c, c) = options_.odometry_scale_step_sd_per_sqrt_m *
-              options_.odometry_scale_step_sd_per_sqrt_m * distance;
-  }
-  if (PersistentBounce()) {
-    // First-order Gauss–Markov: b ← a·b, stationary variance kept.
-    const int b = BounceIndex();
-    const double decay = std::exp(-std::max(0.0, dt_s) / options_.camera_bounce_correlation_s);
-    a.block<3, 3>(b, b) = decay * Eigen::Matrix3d::Identity();
-    q.block<3, 3>(b, b) = (1.0 - decay * decay) * BouncePrior().asDiagonal();
-    x_.segment<3>(b) *= decay;
-  }
-
-  x_(GridState::kOffset) = f.state.offset_m;
-  x_(GridState::kForward) = f.state.forward_m;
-  x_(GridState::kBearing) = f.state.bearing_rad;
+  const Transition t = TransitionFrom(state(), OdometryScale(), measured, left_sd_m, right_sd_m, dt_s);
+  if (PersistentBounce()) x_.segment<3>(BounceIndex()) *= t.bounce_decay;
+  x_(GridState::kOffset) = t.f.state.offset_m;
+  x_(GridState::kForward) = t.f.state.forward_m;
+  x_(GridState::kBearing) = t.f.state.bearing_rad;
   const int n = static_cast<int>(x_.size());
   const Eigen::MatrixXd phh = p_.topLeftCorner(h, h);
-  p_.topLeftCorner(h, h) = a * phh * a.transpose() + q;
+  p_.topLeftCorner(h, h) = t.a * phh * t.a.transpose() + t.q;
   if (n > h) {
-    const Eigen::MatrixXd phl = a * p_.topRightCorner(h, n - h);
+    const Eigen::MatrixXd phl = t.a * p_.topRightCorner(h, n - h);
     p_.topRightCorner(h, n - h) = phl;
     p_.bottomLeftCorner(n - h, h) = phl.transpose();
   }
@@ -388,6 +396,36 @@ void GridTracker::Predict(const WheelIncrement& measured, double left_sd_m, doub
     p_(o.index, o.index) += across;
     p_(o.index + 1, o.index + 1) += along;
   }
+}
+
+GridAhead GridTracker::PredictAhead(double distance_m, double step_m) const {
+  PLANTSCALE_CHECK(distance_m >= 0.0 && step_m > 0.0, "a distance ahead and a positive step");
+  const int c = core();
+  const int h = head();
+  GridAhead ahead;
+  ahead.state = state();
+  Eigen::MatrixXd p = p_.topLeftCorner(h, h);
+  // The wheels' current ratio (straight ahead when stopped), driven forward.
+  const double speed = 0.5 * (left_m_s_ + right_m_s_);
+  const bool moving = have_speeds_ && speed > 1e-6;
+  const double left_share = moving ? left_m_s_ / speed : 1.0;
+  const double right_share = moving ? right_m_s_ / speed : 1.0;
+  const int steps = static_cast<int>(std::ceil(distance_m / step_m - 1e-9));
+  const double scale = OdometryScale();
+  for (int i = 0; i < steps; ++i) {
+    const double d = std::min(step_m, distance_m - i * step_m) / scale;  // measured
+    const WheelIncrement u{left_share * d, right_share * d};
+    const double dt = moving ? d / speed : 0.0;
+    const Transition t =
+        TransitionFrom(ahead.state, scale, u, options_.wheel_sd_fraction * std::abs(u.left_m),
+                       options_.wheel_sd_fraction * std::abs(u.right_m), dt);
+    ahead.state.offset_m = t.f.state.offset_m;
+    ahead.state.forward_m = t.f.state.forward_m;
+    ahead.state.bearing_rad = t.f.state.bearing_rad;
+    p = t.a * p * t.a.transpose() + t.q;
+  }
+  ahead.covariance.topLeftCorner(c, c) = p.topLeftCorner(c, c);
+  return ahead;
 }
 
 void GridTracker::MoveMean(const WheelIncrement& measured) {

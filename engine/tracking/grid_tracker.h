@@ -225,6 +225,12 @@ struct PseudoObservation {
   std::vector<int> support;  // the states L touches
 };
 
+// The grid predicted ahead by dead reckoning alone (GridTracker::PredictAhead).
+struct GridAhead {
+  geometry::GridState state;
+  geometry::Matrix5d covariance = geometry::Matrix5d::Zero();  // of (t_x, Y, Ψ, r̄, l̄)
+};
+
 class GridTracker {
  public:
   // Throws InvalidOptionsError.
@@ -263,6 +269,14 @@ class GridTracker {
   // every reference shift plus the change of Y (§4.1.3).
   double forward_distance_m() const { return passed_m_ + initial_forward_m_ - x_(1); }
   int lines_passed() const { return lines_passed_; }
+  // The grid once the vehicle has driven `distance_m` further at its
+  // current wheel speeds with no update: the dead reckoning's prediction
+  // (eq. 4.3) and its process noise, with the odometry scale's and the
+  // bounce's uncertainty, in increments of `step_m` (the wheels' noise is
+  // per increment, as the odometry's: one long step would overstate it).
+  // Where the plants now in view will stand when the spray bar reaches
+  // them, had no frame come since. The filter is not changed.
+  GridAhead PredictAhead(double distance_m, double step_m) const;
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
   // Where plant (m, n) of the current grid stands (vehicle frame, on its
   // axis): its grid position plus its own offset when it has one.
@@ -313,6 +327,15 @@ class GridTracker {
   Prediction PredictPlant(const ObservationModel& h, const geometry::GridState& s, int m,
                           int n) const;
   double OdometryScale() const { return options_.estimate_odometry_scale ? 1.0 + x_(core()) : 1.0; }
+  // One dead-reckoning step of the head state (core, k, bounce) from `s`:
+  // the motion, its transition A and process noise Q (eq. 4.3).
+  struct Transition {
+    MotionPrediction f;
+    Eigen::MatrixXd a, q;
+    double bounce_decay = 1.0;
+  };
+  Transition TransitionFrom(const geometry::GridState& s, double scale, const WheelIncrement& u,
+                            double left_sd_m, double right_sd_m, double dt_s) const;
   void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m, double dt_s);
   void ResetBounce();
   void PredictTo(int64_t utime);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 namespace plantscale::treatment {
 
@@ -34,6 +35,11 @@ OptionErrors FailSafeOptions::Validate() const {
   OptionErrors e;
   RequirePositive(e, "max_pose_age_s", max_pose_age_s);
   RequirePositive(e, "max_frame_age_s", max_frame_age_s);
+  // Positive; infinity (never) is allowed.
+  for (const auto& [key, value] : {std::pair{"max_reach_across_m", max_reach_across_m},
+                                   std::pair{"max_reach_along_m", max_reach_along_m}}) {
+    if (!(value > 0.0)) e.push_back({key, "must be > 0 (infinite: never close on uncertainty)"});
+  }
   return e;
 }
 
@@ -55,6 +61,12 @@ namespace {
 std::string Milliseconds(double s) {
   std::ostringstream out;
   out << std::lround(s * 1000.0) << " ms";
+  return out.str();
+}
+
+std::string Millimetres(double m) {
+  std::ostringstream out;
+  out << std::lround(m * 1000.0) << " mm";
   return out.str();
 }
 
@@ -85,6 +97,15 @@ uint32_t CheckFailSafe(int64_t now, const SafetyInputs& in, const FailSafeOption
   if (!in.odometry_valid) say(kOdometryInvalid, "odometry invalid (last sample refused)");
   if (!in.tracking) say(kTrackerLost, "tracker has lost the grid");
   if (in.held) say(kOperatorHold, "held by the operator (paused or spraying off)");
+  const bool across = in.reach_across_m > o.max_reach_across_m;
+  const bool along = in.reach_along_m > o.max_reach_along_m;
+  if (in.tracking && (across || along)) {
+    say(kPositionUncertain,
+        "plant position uncertain at the bar (95 % ellipse reaches " +
+            (across ? Millimetres(in.reach_across_m) + " across > " + Millimetres(o.max_reach_across_m)
+                    : Millimetres(in.reach_along_m) + " along > " + Millimetres(o.max_reach_along_m)) +
+            ")");
+  }
   return reasons;
 }
 
@@ -95,6 +116,7 @@ std::vector<std::string> FailReasonMessages(uint32_t reasons) {
   if (reasons & kOdometryInvalid) out.emplace_back("odometry invalid");
   if (reasons & kTrackerLost) out.emplace_back("tracker lost");
   if (reasons & kOperatorHold) out.emplace_back("held by the operator");
+  if (reasons & kPositionUncertain) out.emplace_back("plant position uncertain");
   return out;
 }
 

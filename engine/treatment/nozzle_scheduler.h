@@ -7,12 +7,14 @@
 // the command, so the strip is where the nozzle will be then, led by the
 // forward speed from the 50 Hz pose over the latency and the time since the
 // pose (ticks run at 200 Hz, four per pose). Fail-safe: every nozzle closed when the
-// pose is stale, the camera is lost, odometry is invalid or the tracker has
-// lost the grid; each reason is reported.
+// pose is stale, the camera is lost, odometry is invalid, the tracker has
+// lost the grid or holds it too loosely to hit a plant (bar_uncertainty.h);
+// each reason is reported.
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,13 @@ struct SprayBarOptions {
 struct FailSafeOptions {
   double max_pose_age_s = 0.1;   // issue: pose stale beyond 100 ms
   double max_frame_age_s = 0.5;  // no camera frame for this long: camera lost
+  // Fail-safe on uncertainty: the bar closes while the 95 % ellipse of where
+  // the plants reaching the bar stand (SafetyInputs::reach_*) reaches further
+  // than this from them, across or along the rows: the margin by which the
+  // sprayed footprint exceeds the plant's target. The treatment sets them
+  // from its footprint (TreatmentOptions::UncertaintyMargin); infinite: never.
+  double max_reach_across_m = std::numeric_limits<double>::infinity();
+  double max_reach_along_m = std::numeric_limits<double>::infinity();
 
   OptionErrors Validate() const;
 };
@@ -73,6 +82,10 @@ struct SafetyInputs {
   bool odometry_valid = true;     // the last odometry sample was accepted
   bool tracking = false;          // the tracker holds the grid
   bool held = false;              // the operator paused spraying or switched it off
+  // Half extents of the 95 % ellipse of the plants' position at the bar
+  // (bar_uncertainty.h: PlantReachAtBar); 0 when not known.
+  double reach_across_m = 0.0;
+  double reach_along_m = 0.0;
 };
 
 enum FailReason : uint32_t {
@@ -81,6 +94,7 @@ enum FailReason : uint32_t {
   kOdometryInvalid = 1u << 2,
   kTrackerLost = 1u << 3,
   kOperatorHold = 1u << 4,
+  kPositionUncertain = 1u << 5,
 };
 // "pose stale (130 ms > 100 ms)", ...: one message per reason set in `reasons`.
 std::vector<std::string> FailReasonMessages(uint32_t reasons);

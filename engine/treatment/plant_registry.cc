@@ -112,10 +112,17 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
 void PlantRegistry::TakeFinalCounts(const TreatmentMap& map, int before_row) {
   for (size_t i = final_from_; i < records_.size(); ++i) {
     PlantRecord& r = records_[i];
+    // A record off the map's columns (beyond its width) is final once its
+    // row is, with no counts: left waiting, it would hold every record after
+    // it for the rest of the run.
+    const double row_of_y =
+        std::floor((r.bed_m.y() - map.options().start_y_m) / map.options().cell_m);
+    if (r.counts_final || (std::isfinite(row_of_y) && row_of_y >= before_row)) continue;
     int column = 0, row = 0;
-    if (r.counts_final || !map.CellOf(r.bed_m, column, row) || row >= before_row) continue;
-    r.counts = map.Counts(column, row);
-    r.map_class = map.ClassOf(column, row);
+    if (map.CellOf(r.bed_m, column, row)) {
+      r.counts = map.Counts(column, row);
+      r.map_class = map.ClassOf(column, row);
+    }
     r.counts_final = true;
   }
   while (final_from_ < records_.size() && records_[final_from_].counts_final) ++final_from_;

@@ -20,8 +20,44 @@ OptionErrors TreatmentOptions::Validate() const {
   RequireInRange(e, "min_weed_part_m2", min_weed_part_m2, 0.0, 1.0);
   RequireInRange(e, "own_offset_fraction_across", own_offset_fraction_across, 0.0, 1.0);
   RequireInRange(e, "own_offset_fraction_along", own_offset_fraction_along, 0.0, 1.0);
+  RequireInRange(e, "uncertainty_margin_across_m", uncertainty_margin_across_m, 0.0, 1.0);
+  RequireInRange(e, "uncertainty_margin_along_m", uncertainty_margin_along_m, 0.0, 1.0);
+  if (close_on_uncertainty && !(UncertaintyMargin().minCoeff() > 0.0)) {
+    e.push_back({"uncertainty_margin_across_m",
+                 "derives no margin (crop_footprint_min_half_m is 0): set the margins"});
+  }
   return e;
 }
+
+Eigen::Vector2d TreatmentOptions::UncertaintyMargin(double crop_radius_m) const {
+  if (!close_on_uncertainty) return Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  const double half = std::max(crop_footprint_scale * std::max(0.0, crop_radius_m), crop_footprint_min_half_m);
+  const double across = half + 0.5 * scheduler.bar.nozzle_spacing_m;
+  return {uncertainty_margin_across_m > 0.0 ? uncertainty_margin_across_m : across,
+          uncertainty_margin_along_m > 0.0 ? uncertainty_margin_along_m : half};
+}
+
+namespace {
+
+SchedulerOptions WithMargins(const TreatmentOptions& o) {
+  SchedulerOptions s = o.scheduler;
+  const Eigen::Vector2d margin = o.UncertaintyMargin();
+  s.fail_safe.max_reach_across_m = margin.x();
+  s.fail_safe.max_reach_along_m = margin.y();
+  return s;
+}
+
+// The vehicle y of the image's bottom edge on the virtual plane (the view's nearest).
+double ViewNearY(const geometry::CameraModel& camera) {
+  const double w = camera.width(), h = camera.height();
+  const std::optional<Quad> view = FootprintOnPlane(camera, {0.5 * w, 0.5 * h}, 0.0, 0.0, w, h, 1.0);
+  if (!view) return 0.0;
+  double y = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& c : *view) y = std::min(y, c.y());
+  return y;
+}
+
+}  // namespace
 
 void FeatureBlobIndices(std::span<const vision::Blob> blobs, std::vector<int>& out) {
   out.clear();
@@ -57,8 +93,20 @@ TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
       options_(options),
       classifier_((ThrowIfInvalid("treatment", options.Validate()), options.classifier)),
       map_(options.map),
-      scheduler_(options.scheduler, std::move(sink)),
-      registry_(options.registry) {}
+      scheduler_(WithMargins(options), std::move(sink)),
+      registry_(options.registry),
+      view_near_y_m_(ViewNearY(camera)) {
+  options_.scheduler = scheduler_.options();
+}
+
+PlantReach TreatmentSystem::ReachAtBar(const tracking::GridTracker& tracker) const {
+  if (!options_.close_on_uncertainty) return {};
+  // Increments of the odometry's: the ground driven in a pose period.
+  const SchedulerOptions& s = scheduler_.options();
+  const double ahead = std::max(0.0, view_near_y_m_ + s.bar.bar_offset_m);
+  const double step = std::max(std::abs(tracker.ground_speed_m_s()) * s.pose_period_s, ahead / 100.0);
+  return PlantReachAtBar(tracker, view_near_y_m_, s.bar.bar_offset_m, std::max(step, 1e-3));
+}
 
 double TreatmentSystem::CropPlaneHeight(const Eigen::Vector2d& centroid_px) const {
   return heights_ ? heights_->HeightAt(centroid_px) : camera_.options().virtual_plane_height_m;
@@ -397,6 +445,9 @@ std::span<const TickResult> TreatmentSystem::OnPose(int64_t utime,
   safety.camera_ok = camera_ok;
   safety.odometry_valid = odometry_ok;
   safety.tracking = tracker.mode() == tracking::TrackerMode::kTracking;
+  const PlantReach reach = ReachAtBar(tracker);
+  safety.reach_across_m = reach.across_m;
+  safety.reach_along_m = reach.along_m;
   return TicksFrom(utime, TrackerPose(tracker, tracker.utime(), true), safety);
 }
 

@@ -16,6 +16,7 @@
 #include "engine/classify/crop_classifier.h"
 #include "engine/geometry/camera_model.h"
 #include "engine/tracking/grid_tracker.h"
+#include "engine/treatment/bar_uncertainty.h"
 #include "engine/treatment/nozzle_scheduler.h"
 #include "engine/treatment/plant_registry.h"
 #include "engine/treatment/treatment_map.h"
@@ -148,6 +149,27 @@ struct TreatmentOptions {
   // for 10.7 % of the bed, and blocks of weed cells beside the crops again.
   bool merged_weed_parts_only = true;
   double min_weed_part_m2 = 0.0003;  // a disk of 10 mm radius: the field's smallest weeds
+  // Fail-safe on uncertainty (bar_uncertainty.h): the bar closes while the
+  // 95 % ellipse of where the plants reaching it stand reaches further from
+  // them than the sprayed footprint does, across or along the rows
+  // (kPositionUncertain). The margins (0: derived, UncertaintyMargin) set
+  // scheduler.fail_safe.max_reach_*. Off by default for now: on presets B
+  // and D (small crops, 25 mm footprints) the reach in normal tracking
+  // exceeds the derived margin and the bar stayed closed (1 seed each: 0–1
+  // of 228 crops hit); on the field preset it changes nothing
+  // (docs/results/2026-11-27-failsafe.md).
+  bool close_on_uncertainty = false;
+  double uncertainty_margin_across_m = 0.0;
+  double uncertainty_margin_along_m = 0.0;
+  // (across, along): the margins as set, or derived from the footprint a
+  // crop's root is sprayed with: its box scaled by crop_footprint_scale,
+  // for a crop of `crop_radius_m` (TrackerOptions::crop_radius_m; 0:
+  // unknown) some crop_footprint_scale × crop_radius_m each way, and at
+  // least crop_footprint_min_half_m; across, the nozzles whose strips touch
+  // it spray on past its edge, by half a nozzle's width on average. Field
+  // (0.14 m crops): 42 mm along, 53 mm across. Infinite when
+  // close_on_uncertainty is off. The vehicle pipeline sets the margins so.
+  Eigen::Vector2d UncertaintyMargin(double crop_radius_m = 0.0) const;
 
   OptionErrors Validate() const;
 };
@@ -209,6 +231,12 @@ class TreatmentSystem {
   // One tick.
   TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
   int64_t last_frame_utime() const { return last_frame_utime_; }
+  // Vehicle y of the view's near edge on the ground: the plants leaving the
+  // view there are mapped for the last time, and the bar reaches them after
+  // the vehicle drives on by this plus the bar's offset.
+  double view_near_y_m() const { return view_near_y_m_; }
+  // The fail-safe's uncertainty at the bar now (bar_uncertainty.h).
+  PlantReach ReachAtBar(const tracking::GridTracker& tracker) const;
   // The bed behind `bed_y_m` is final (the bar has passed it): the map lets
   // its rows go, in steps of 256 rows (3.4 m), once the records standing
   // there have read their counters, and the registry lets those records go.
@@ -306,6 +334,7 @@ class TreatmentSystem {
   };
   std::map<std::pair<int, int>, FollowedPlant> followed_;
   int64_t frames_ = 0;
+  double view_near_y_m_ = 0.0;
 };
 
 // Indices of the blobs FeaturesFromBlobs keeps, in its order.

@@ -518,6 +518,27 @@ TEST(SimulatedBar, ShotsLandWhereTheNozzleWasAfterTheLatency) {
   EXPECT_NEAR(f.y(), 2.1, 1e-12);
 }
 
+// A record beyond the map's width (a weed at the view's edge) is final once
+// the bar has passed its row, like the others: waiting for a cell it will
+// never have, it held every later record for the rest of the run.
+TEST(PlantRegistry, RecordsOffTheMapAreLetGoWithTheirRows) {
+  PlantRegistry reg;
+  classify::BlobDecision weed;
+  weed.area_m2 = 0.001;
+  TreatmentMapOptions mo;  // 3.4 m wide: |x| < 1.7 m
+  TreatmentMap map(mo);
+  EXPECT_EQ(reg.Observe({2.5, 1.0}, weed), 0);  // off the map
+  EXPECT_EQ(reg.Observe({0.1, 1.2}, weed), 1);
+  EXPECT_EQ(reg.Observe({0.1, 9.0}, weed), 2);  // ahead
+  int column = 0, row = 0;
+  ASSERT_TRUE(map.CellOf({0.0, 5.0}, column, row));
+  reg.TakeFinalCounts(map, row);
+  reg.LetGoFinal();
+  ASSERT_EQ(reg.records().size(), 1u);
+  EXPECT_EQ(reg.records()[0].id, 2);
+  EXPECT_EQ(reg.first_id(), 2);
+}
+
 TEST(PlantRegistry, MergesObservationsAndExplains) {
   PlantRegistry reg;
   classify::ClassifierOptions c;
