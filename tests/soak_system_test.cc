@@ -3,7 +3,7 @@
 // over memq:// and the log writer) drives 5 km of the field preset's bed.
 // Its peak resident set (VmHWM) after 5 km is within 10 % of the peak after
 // 1 km, and every crop of the last 100 m the bar passed is sprayed. Label
-// `soak` (ctest -L soak); a few minutes. PLANTSCALE_SOAK_SEED and
+// `soak` (ctest -L soak); about 20 CPU minutes (`./plantscale.sh soak`). PLANTSCALE_SOAK_SEED and
 // PLANTSCALE_SOAK_LENGTH_M change the run (docs/results/2026-11-27-soak.md).
 #include <gtest/gtest.h>
 
