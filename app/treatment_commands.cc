@@ -281,6 +281,20 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
 
 }  // namespace
 
+namespace {
+
+// The defaults evaluate treatment keeps from TreatmentOptions (the crop and
+// vehicle profiles set the others), printed in --help from the code.
+const treatment::TreatmentOptions kDefaults{};
+
+std::string Default(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+}  // namespace
+
 void AddTreatmentCommands(CommandRegistry& registry) {
   const GlobalOptions& global = registry.global();
   TreatmentArgs& args = registry.Keep(TreatmentArgs{});
@@ -302,21 +316,23 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                   "odometry up to then (camera and segmentation latency)")
       ->check(CLI::Range(0.0, 150.0))->capture_default_str();
   cmd->add_option("--tick-ms", args.tick_ms,
-                  "spray bar command period, at most the 20 ms pose period (default 5: 200 Hz)")
+                  "spray bar command period, at most the 20 ms pose period (default " +
+                      Default(1e3 * kDefaults.scheduler.tick_s) + ")")
       ->check(CLI::Range(1.0, 20.0));
   cmd->add_option("--footprint-scale", args.footprint_scale,
                   "crop footprint: bounding box scaled about the centroid (1: thesis)")
       ->check(CLI::Range(0.05, 2.0));
   cmd->add_option("--weed-footprint-scale", args.weed_footprint_scale,
-                  "weed footprint: bounding box scaled about the centroid (default 1)")
+                  "weed footprint: bounding box scaled about the centroid (default " +
+                      Default(kDefaults.weed_footprint_scale) + ")")
       ->check(CLI::Range(0.05, 2.0));
   cmd->add_option("--footprint-min-half-mm", args.footprint_min_half_mm,
                   "crop footprint: stretched to at least this half size along and across")
       ->check(CLI::Range(0.0, 500.0));
   cmd->add_option("--weed-height-mm", args.weed_height_mm,
-                  "height at which weed blobs are located (default 5)")
+                  "height at which weed blobs are located (default " + Default(1e3 * kDefaults.weed_height_m) + ")")
       ->check(CLI::Range(0.0, 500.0));
-  cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default 13.33)")
+  cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default " + Default(1e3 * kDefaults.map.cell_m) + ")")
       ->check(CLI::Range(1.0, 500.0));
   cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
       ->check(CLI::Range(0.0, 1.0));
@@ -377,10 +393,11 @@ void AddTreatmentCommands(CommandRegistry& registry) {
   cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,
                 "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
   cmd->add_option("--own-offset-along", args.own_offset_along,
-                  "crop footprint: at the plant's grid node plus this fraction of its own offset along the rows (default 0.7)")
+                  "crop footprint: at the plant's grid node plus this fraction of its own offset along the rows (default " +
+                      Default(kDefaults.own_offset_fraction_along) + ")")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--own-offset-across", args.own_offset_across,
-                  "... and across the rows (default 1)")
+                  "... and across the rows (default " + Default(kDefaults.own_offset_fraction_across) + ")")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--footprints-stay", args.footprints_stay,
                 "a plant's footprints stay where each frame put them (not moved along with its latest position)");

@@ -351,8 +351,9 @@ void AddUiCommands(CommandRegistry& registry) {
   station->add_option("--lcm-url", s.options.lcm_url, "LCM URL to subscribe to (default LCM's)");
   station->add_option("--log", s.log, "replay this LCM log with a timeline instead of live")
       ->check(CLI::ExistingFile);
-  station->add_option("--speed", s.options.speed, "log replay speed (default 1)");
-  station->add_option("--confidence", s.options.ellipse_confidence, "ellipse confidence (default 0.95)");
+  station->add_option("--speed", s.options.speed, "log replay speed")->capture_default_str();
+  station->add_option("--confidence", s.options.ellipse_confidence, "ellipse confidence")
+      ->capture_default_str();
   station->add_option("--seconds", s.options.max_seconds, "close after this many seconds (0: never)");
   station->add_option("--close-when-quiet", s.options.close_when_quiet_s,
                       "close this many seconds after the last message (0: never)");
