@@ -8,6 +8,7 @@
 
 #include "app/photo_segmentation.h"
 #include "engine/common/stats.h"
+#include "engine/rows/label_lines.h"
 #include "engine/vision/segmenter.h"
 
 namespace plantscale::app {
@@ -250,17 +251,7 @@ PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path&
       const double sy = static_cast<double>(image.rows) / label.rows;
       for (int y = 0; y < label.rows; ++y) {
         // Label lines crossing this label row: centres of the white runs.
-        std::vector<double> centres;
-        const uint8_t* p = label.ptr<uint8_t>(y);
-        for (int x = 0; x < label.cols;) {
-          if (p[x] < 128) {
-            ++x;
-            continue;
-          }
-          const int start = x;
-          while (x < label.cols && p[x] >= 128) ++x;
-          centres.push_back(0.5 * (start + x) * sx);
-        }
+        const std::vector<double> centres = rows::LabelLineCentres(label.ptr<uint8_t>(y), label.cols, sx);
         if (centres.size() < 3) continue;
         size_t c = 1;
         for (size_t i = 1; i + 1 < centres.size(); ++i) {

@@ -36,6 +36,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/rows/label_lines.h"
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -111,17 +113,7 @@ Score ScoreImage(const cv::Mat& label, const Detected& det) {
   const double sx = static_cast<double>(det.width) / label.cols;
   const double sy = static_cast<double>(det.height) / label.rows;
   for (int y = 0; y < label.rows; ++y) {
-    std::vector<double> centres;  // label lines crossing this row: centres of white runs
-    const uint8_t* p = label.ptr<uint8_t>(y);
-    for (int x = 0; x < label.cols;) {
-      if (p[x] < 128) {
-        ++x;
-        continue;
-      }
-      const int start = x;
-      while (x < label.cols && p[x] >= 128) ++x;
-      centres.push_back(0.5 * (start + x) * sx);
-    }
+    const std::vector<double> centres = plantscale::rows::LabelLineCentres(label.ptr<uint8_t>(y), label.cols, sx);
     if (centres.size() < 3) continue;
     size_t c = 1;  // the central line: nearest the image's centre column, with a neighbour each side
     for (size_t i = 1; i + 1 < centres.size(); ++i) {
@@ -174,17 +166,7 @@ std::string LabelShape(const cv::Mat& label, double tolerance) {
   int spacing_n = 0;
   double prev = 0.5 * label.cols;
   for (int y = label.rows - 1; y >= 0; --y) {
-    std::vector<double> centres;
-    const uint8_t* p = label.ptr<uint8_t>(y);
-    for (int x = 0; x < label.cols;) {
-      if (p[x] < 128) {
-        ++x;
-        continue;
-      }
-      const int start = x;
-      while (x < label.cols && p[x] >= 128) ++x;
-      centres.push_back(0.5 * (start + x));
-    }
+    const std::vector<double> centres = plantscale::rows::LabelLineCentres(label.ptr<uint8_t>(y), label.cols);
     if (centres.size() < 2) continue;
     size_t c = 0;
     for (size_t i = 1; i < centres.size(); ++i) {

@@ -6,6 +6,8 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "engine/rows/label_lines.h"
+
 namespace plantscale::rows {
 namespace {
 
@@ -302,6 +304,16 @@ TEST(RowDetectorTest, InvalidOptionsAreNamed) {
   ASSERT_EQ(e.size(), 2U);
   EXPECT_EQ(e[0].key, "strips");
   EXPECT_EQ(e[1].key, "max_spacing_fraction");
+}
+
+TEST(LabelLines, CentresOfTheWhiteRunsScaled) {
+  const uint8_t row[10] = {0, 255, 255, 0, 127, 128, 0, 0, 200, 200};
+  const std::vector<double> c = LabelLineCentres(row, 10);
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_DOUBLE_EQ(c[0], 2.0);  // pixels 1..2: (1 + 3) / 2
+  EXPECT_DOUBLE_EQ(c[1], 5.5);  // 127 is black, 128 white
+  EXPECT_DOUBLE_EQ(c[2], 9.0);  // a run reaching the end
+  EXPECT_DOUBLE_EQ(LabelLineCentres(row, 10, 2.0)[1], 11.0);
 }
 
 }  // namespace
