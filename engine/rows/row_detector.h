@@ -56,6 +56,7 @@
 // too low: bare soil, sky, walls, scattered plants.
 
 #include <Eigen/Core>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -63,7 +64,6 @@
 
 #include "engine/common/options.h"
 #include "engine/rows/curve_fit.h"
-#include "engine/rows/orientation.h"
 
 namespace plantscale::rows {
 
@@ -159,9 +159,14 @@ struct RowDetection {
   double CentralOffsetPx() const { return centre_u_px - 0.5 * width_px; }
 };
 
+class StraightSearch;
+
 class RowDetector {
  public:
   explicit RowDetector(const RowDetectorOptions& options);
+  ~RowDetector();
+  RowDetector(RowDetector&&) noexcept;
+  RowDetector& operator=(RowDetector&&) noexcept;
 
   // `plant` is CV_8UC1, plant matter > 0 (a segmentation mask, 255 plant)
   // or CV_32FC1 in [0, 1]. Throws DataError for an empty image or another type.
@@ -169,8 +174,12 @@ class RowDetector {
   const RowDetectorOptions& options() const { return options_; }
 
  private:
-  // The straight, one-vanishing-point model alone.
-  RowDetection DetectStraight(const cv::Mat& plant);
+  // The curve fit on the plant image at the refit resolution, with the
+  // straight detection `det` as its prior (or the free prior).
+  CurveFit FitCurve(const cv::Mat& fit, const RowDetection& det, CurvePrior& prior);
+  // `curved`'s rows, contrast and confidence; `det` (with the reason) where
+  // the curve has too few rows or too little contrast.
+  RowDetection AcceptCurve(RowDetection det, RowDetection curved, const CurveFit& fit) const;
   // The rows of `det`'s curve with plant matter along them (as the
   // straight model keeps rows), with their occupancy.
   // `contrast`: 1 − (plant matter half-way between the rows) / (on them).
@@ -178,13 +187,7 @@ class RowDetector {
 
   RowDetectorOptions options_;
   CurveFitter curve_fitter_;
-  cv::Mat work_;  // CV_32F plant fraction at the Hough resolution
-  cv::Mat fit_;   // CV_32F at the refit resolution
-  std::vector<float> profiles_;
-  std::vector<double> cumulative_;  // running sums of profiles_, w + 1 per band
-  std::vector<float> fit_profiles_;
-  std::vector<double> histogram_;
-  OrientationField orientation_;
+  std::unique_ptr<StraightSearch> straight_;  // the straight model (straight_search.h)
 };
 
 }  // namespace plantscale::rows

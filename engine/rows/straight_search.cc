@@ -1,0 +1,826 @@
+#include "engine/rows/straight_search.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+
+#include "engine/rows/comb.h"
+
+namespace plantscale::rows {
+
+namespace {
+
+// Below this factor 1 − g·Δv the rows are too compressed to use.
+constexpr double kMinShrink = 0.25;
+
+double MeanOccupancy(const std::vector<DetectedRow>& rows) {
+  if (rows.empty()) return 0.0;
+  double sum = 0.0;
+  for (const DetectedRow& r : rows) sum += r.occupancy;
+  return sum / static_cast<double>(rows.size());
+}
+
+// Two rows fix a vanishing point whatever it is; every further row is a
+// test of the perspective constraint, so hypotheses with more rows found
+// are trusted more: n / (n + 1).
+double RowCountFactor(const std::vector<DetectedRow>& rows) {
+  const double n = static_cast<double>(rows.size());
+  return n / (n + 1.0);
+}
+
+// Two Hough cells (row-major, `nl` leans per convergence) next to each other.
+bool NearCells(int a, int b, int nl) {
+  return std::abs(a / nl - b / nl) <= 1 && std::abs(a % nl - b % nl) <= 1;
+}
+
+void AddOnce(std::vector<int>& cells, int index) {
+  if (std::find(cells.begin(), cells.end(), index) == cells.end()) cells.push_back(index);
+}
+
+// Σ w e^{iα} over one band's columns, α = a0 + x·da, and Σ w in `mass`. The
+// phasor advances by a fixed rotation per column (written out:
+// std::complex's product checks for NaN at every step), in four interleaved
+// chains (columns x, x + 1, x + 2, x + 3, each rotated by four columns'
+// angle) so that the steps do not wait on each other.
+std::complex<double> BandPhasor(const float* p, int w, double a0, double da, double& mass) {
+  constexpr int kChains = 4;
+  double pr[kChains], pi[kChains], zr[kChains] = {}, zi[kChains] = {}, mc[kChains] = {};
+  for (int q = 0; q < kChains; ++q) {
+    pr[q] = std::cos(a0 + q * da);
+    pi[q] = std::sin(a0 + q * da);
+  }
+  const double sr = std::cos(kChains * da), si = std::sin(kChains * da);
+  int x = 0;
+  for (; x + kChains <= w; x += kChains) {
+    for (int q = 0; q < kChains; ++q) {
+      const double wx = static_cast<double>(p[x + q]);
+      zr[q] += wx * pr[q];
+      zi[q] += wx * pi[q];
+      mc[q] += wx;
+      const double next_r = pr[q] * sr - pi[q] * si;
+      pi[q] = pr[q] * si + pi[q] * sr;
+      pr[q] = next_r;
+    }
+  }
+  for (int q = 0; x < w; ++x, ++q) {  // the last columns, fewer than four
+    const double wx = static_cast<double>(p[x]);
+    zr[q] += wx * pr[q];
+    zi[q] += wx * pi[q];
+    mc[q] += wx;
+  }
+  mass = mc[0] + mc[1] + mc[2] + mc[3];
+  return {zr[0] + zr[1] + zr[2] + zr[3], zi[0] + zi[1] + zi[2] + zi[3]};
+}
+
+// The lowest column of `p` in [x0, x1] (ties: the one nearest the middle),
+// or −1 when the range leaves [0, fw).
+int LowestColumn(const float* p, int fw, int x0, int x1) {
+  if (x0 < 0 || x1 >= fw) return -1;
+  int lowest = x0;
+  for (int x = x0 + 1; x <= x1; ++x) {
+    if (p[x] < p[lowest] ||
+        (p[x] == p[lowest] && std::abs(x - 0.5 * (x0 + x1)) < std::abs(lowest - 0.5 * (x0 + x1)))) {
+      lowest = x;
+    }
+  }
+  return lowest;
+}
+
+}  // namespace
+
+std::vector<StraightSearch::Band> StraightSearch::SplitIntoBands(const cv::Mat& image, int n_bands,
+                                                                 double scale, double v_bottom,
+                                                                 std::vector<float>& profiles) {
+  const int w = image.cols, h = image.rows;
+  std::vector<Band> bands(static_cast<size_t>(n_bands));
+  profiles.assign(static_cast<size_t>(n_bands) * static_cast<size_t>(w), 0.0F);
+  for (int k = 0; k < n_bands; ++k) {
+    const int r0 = k * h / n_bands;
+    const int r1 = (k + 1) * h / n_bands;
+    Band& b = bands[static_cast<size_t>(k)];
+    b.rows = r1 - r0;
+    b.v_top = r0 * scale;
+    b.dv = v_bottom - 0.5 * (r0 + r1) * scale;
+    float* p = &profiles[static_cast<size_t>(k) * static_cast<size_t>(w)];
+    for (int r = r0; r < r1; ++r) {
+      const float* row = image.ptr<float>(r);
+      for (int x = 0; x < w; ++x) p[x] += row[x];
+    }
+  }
+  return bands;
+}
+
+RowDetection StraightSearch::Detect(const cv::Mat& plant) {
+  RowDetection out;
+  out.width_px = plant.cols;
+  out.height_px = plant.rows;
+  if (!Prepare(plant, out)) return out;
+
+  // 1. Candidate geometries: the sharpest Hough cells, the streaks' best,
+  // and the sharpest leans of every convergence.
+  const std::vector<double> sharpness = HoughSharpness();
+  std::vector<int> order(sharpness.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return sharpness[static_cast<size_t>(a)] > sharpness[static_cast<size_t>(b)];
+  });
+  std::vector<int> chosen = DistinctCells(order, o_.candidates);
+  support_max_ = 0.0;
+  locked_ = false;
+  if (use_orientation_) AddStreakCandidates(order, chosen);
+  AddLeanPeaks(sharpness, chosen);
+
+  // 2.–3. The row comb on each candidate, refined.
+  const Hypothesis best = BestRefined(CombHypotheses(chosen));
+  if (best.score < 0.0) {
+    out.reason = "no rows: no comb of evenly spaced rows with plant matter along them";
+    return out;
+  }
+  const Geometry geo = GeometryAt(best.g, best.lean);
+  Fit searched{geo, best.d, best.sc, FindRows(geo, best.d, best.sc)};
+  if (!searched.found.adjacent) {
+    out.reason = "no rows: the refined comb has no two neighbouring rows with plant matter";
+    return out;
+  }
+  // 4.–5.
+  Finish(BestFit(searched), out);
+  return out;
+}
+
+bool StraightSearch::Prepare(const cv::Mat& plant, RowDetection& out) {
+  W_ = plant.cols;
+  H_ = plant.rows;
+  v_bottom_ = H_ - 0.5;
+  cv::Mat unit;
+  if (plant.type() == CV_8UC1) {
+    cv::Mat binary;
+    cv::compare(plant, 0, binary, cv::CMP_GT);
+    binary.convertTo(unit, CV_32F, 1.0 / 255.0);
+  } else {
+    unit = plant;
+  }
+  const double plant_fraction = cv::mean(unit)[0];
+  if (plant_fraction < o_.min_plant_fraction) {
+    out.reason = "no plant matter (" + std::to_string(plant_fraction * 100.0) + "% of the image)";
+    return false;
+  }
+  const auto resized = [&](int width, cv::Mat& dst) {
+    if (width >= plant.cols) {
+      unit.copyTo(dst);
+      return;
+    }
+    const int height = std::max(4, static_cast<int>(std::lround(H_ * width / W_)));
+    cv::resize(unit, dst, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  };
+  resized(o_.work_width_px, work_);
+  resized(o_.fit_width_px, fit_);
+  w_ = work_.cols;
+  h_ = work_.rows;
+  kw_ = W_ / w_;
+  kh_ = H_ / h_;
+  use_orientation_ = o_.orientation_floor > 0.0;
+  if (use_orientation_) orientation_.Build(work_, kw_, kh_, v_bottom_);
+
+  n_bands_ = std::min(o_.strips, h_);
+  bands_ = SplitIntoBands(work_, n_bands_, kh_, v_bottom_, profiles_);
+  total_mass_ = 0.0;
+  for (const float m : profiles_) total_mass_ += static_cast<double>(m);
+  // Running sums of the band profiles: the plant matter in a window of
+  // columns in constant time.
+  cumulative_.assign(static_cast<size_t>(n_bands_) * (w_ + 1), 0.0);
+  for (int k = 0; k < n_bands_; ++k) {
+    const float* p = &profiles_[static_cast<size_t>(k) * w_];
+    double* cum = &cumulative_[static_cast<size_t>(k) * (w_ + 1)];
+    for (int x = 0; x < w_; ++x) cum[x + 1] = cum[x] + static_cast<double>(p[x]);
+  }
+  n_bins_ = 3 * w_;
+  s0_ = -W_ + 0.5 * kw_;
+  d_min_ = o_.min_spacing_fraction * W_;
+  d_max_ = o_.max_spacing_fraction * W_;
+  min_spacing_ = std::max(o_.min_visible_spacing_px, 2.0 * kw_);
+  ng_ = o_.convergence_steps;
+  nl_ = o_.lean_steps;
+  g_step_ = o_.max_convergence / H_ / (ng_ - 1);
+  l_step_ = nl_ > 1 ? 2.0 * o_.max_lean / (nl_ - 1) : 0.0;
+  return true;
+}
+
+StraightSearch::Geometry StraightSearch::GeometryAt(double g, double lean_at_centre) const {
+  return Geometry{g, lean_at_centre + g * 0.5 * W_};
+}
+
+StraightSearch::Geometry StraightSearch::CellGeometry(int index) const {
+  return GeometryAt((index / nl_) * g_step_, -o_.max_lean + (index % nl_) * l_step_);
+}
+
+// The s histogram over [−W, 2W) for one geometry, from the bands with
+// Δv ≤ max_dv whose rows are not too compressed. Each column's mass is
+// spread over its stretched width so that stretching adds no holes.
+void StraightSearch::BuildHistogram(const Geometry& geo, double max_dv) {
+  histogram_.assign(static_cast<size_t>(n_bins_), 0.0);
+  for (int k = 0; k < n_bands_; ++k) {
+    const Band& b = bands_[static_cast<size_t>(k)];
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink < kMinShrink || b.dv > max_dv) continue;
+    const double m = 1.0 / shrink;
+    const int pieces = std::max(1, static_cast<int>(std::ceil(m - 1e-9)));
+    const float* p = &profiles_[static_cast<size_t>(k) * w_];
+    // Bin coordinate t = (s − s0)/kw of column position x (in columns):
+    // t = x·m + offset.
+    const double offset = (-geo.c * b.dv * m - s0_) / kw_;
+    const double last_t = n_bins_ - 1.0;
+    double* bins = histogram_.data();
+    for (int x = 0; x < w_; ++x) {
+      if (p[x] <= 0.0F) continue;
+      const double mass = static_cast<double>(p[x]) / pieces;
+      for (int q = 0; q < pieces; ++q) {
+        const double t = (x + (q + 0.5) / pieces) * m + offset;
+        if (!(t >= 0.0 && t < last_t)) continue;  // beyond [−W, 2W): dropped
+        const int i = static_cast<int>(t);
+        const double f = t - i;
+        bins[i] += mass * (1.0 - f);
+        bins[i + 1] += mass * f;
+      }
+    }
+  }
+}
+
+double StraightSearch::Window(const double* cum, double u, double half, int rows_in_band) const {
+  const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw_ - 0.5)));
+  const int x1 = std::min(w_ - 1, static_cast<int>(std::floor((u + half) / kw_ - 0.5)));
+  if (x1 < x0) return -1.0;
+  return (cum[x1 + 1] - cum[x0]) / ((x1 - x0 + 1) * rows_in_band);
+}
+
+// A row is occupied in a band when its window holds clearly more plant
+// matter than the windows half-way between the rows.
+StraightSearch::Rows StraightSearch::FindRows(const Geometry& geo, double d, double sc) const {
+  const int n_lo = static_cast<int>(std::ceil((-W_ - sc) / d));
+  const int n_hi = static_cast<int>(std::floor((2.0 * W_ - sc) / d));
+  if (n_hi < n_lo || n_hi - n_lo > 200) {
+    Rows none;
+    none.top_v = v_bottom_;
+    return none;
+  }
+  const size_t n_rows = static_cast<size_t>(n_hi - n_lo + 1);
+  const int k_first = FirstContrastBand(geo, d, sc, n_lo, n_rows);
+  return SelectRows(TallyBands(geo, d, sc, n_lo, n_rows, k_first), geo, d, sc, n_lo);
+}
+
+// Towards the vanishing point the rows merge into one canopy: the bands at
+// the top where the teeth hold no more plant matter than the gaps between
+// them are left out (of occupancy and contrast alike), as a geometry that
+// cannot use them at all leaves them out. The first band below them.
+int StraightSearch::FirstContrastBand(const Geometry& geo, double d, double sc, int n_lo,
+                                      size_t n_rows) const {
+  const double hw = o_.row_halfwidth_fraction;
+  int k_first = 0;
+  for (; k_first < n_bands_; ++k_first) {
+    const Band& b = bands_[static_cast<size_t>(k_first)];
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink < kMinShrink || d * shrink < min_spacing_) continue;
+    const double* p = &cumulative_[static_cast<size_t>(k_first) * (w_ + 1)];
+    const double half = std::max(0.5 * kw_, hw * d * shrink);
+    double on = 0.0, between = 0.0;
+    for (size_t r = 0; r < n_rows; ++r) {
+      const double u = (sc + (n_lo + static_cast<int>(r)) * d) * shrink + geo.c * b.dv;
+      const double m = u + 0.5 * d * shrink;
+      if (u >= 0.0 && u <= W_) on += std::max(0.0, Window(p, u, half, b.rows));
+      if (m >= 0.0 && m <= W_) between += std::max(0.0, Window(p, m, half, b.rows));
+    }
+    if (on > 0.0 && 1.0 - between / on >= o_.min_contrast) break;
+  }
+  return k_first;
+}
+
+StraightSearch::Tallies StraightSearch::TallyBands(const Geometry& geo, double d, double sc,
+                                                   int n_lo, size_t n_rows, int k_first) const {
+  const double hw = o_.row_halfwidth_fraction;
+  Tallies t{std::vector<int>(n_rows, 0),     std::vector<int>(n_rows, 0),
+            std::vector<int>(n_rows, -1),    std::vector<double>(n_rows, 0.0),
+            std::vector<double>(n_rows, 0.0), std::vector<int>(n_rows, 0),
+            std::vector<int>(n_rows, 0)};
+  std::vector<double> density(n_rows);
+  for (int k = k_first; k < n_bands_; ++k) {
+    const Band& b = bands_[static_cast<size_t>(k)];
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink < kMinShrink || d * shrink < min_spacing_) continue;
+    const double* p = &cumulative_[static_cast<size_t>(k) * (w_ + 1)];
+    const double half = std::max(0.5 * kw_, hw * d * shrink);
+    double background = 0.0;
+    int n_background = 0;
+    for (size_t r = 0; r < n_rows; ++r) {
+      const int n = n_lo + static_cast<int>(r);
+      const double u = (sc + n * d) * shrink + geo.c * b.dv;
+      density[r] = (u >= 0.0 && u <= W_) ? Window(p, u, half, b.rows) : -1.0;
+      const double between = Window(p, u + 0.5 * d * shrink, half, b.rows);
+      if (between >= 0.0 && u + 0.5 * d * shrink >= 0.0 && u + 0.5 * d * shrink <= W_) {
+        background += between;
+        ++n_background;
+        t.between_sum[r] += between;
+        ++t.between_count[r];
+      }
+    }
+    background = n_background > 0 ? background / n_background : 0.0;
+    const double level = std::max(0.02, 1.3 * background);
+    for (size_t r = 0; r < n_rows; ++r) {
+      if (density[r] < 0.0) continue;
+      ++t.in_image[r];
+      t.on_sum[r] += density[r];
+      ++t.on_count[r];
+      if (density[r] >= level) {
+        ++t.occupied[r];
+        t.highest[r] = t.highest[r] < 0 ? k : std::min(t.highest[r], k);
+      }
+    }
+  }
+  return t;
+}
+
+// Rows with plant matter along most of their length; between two of them,
+// a tooth with some (a row with many plants missing) is a row too. A comb
+// of half the rows' spacing keeps only every other tooth.
+StraightSearch::Rows StraightSearch::SelectRows(const Tallies& t, const Geometry& geo, double d,
+                                                double sc, int n_lo) const {
+  Rows result;
+  result.top_v = v_bottom_;
+  const size_t n_rows = t.in_image.size();
+  std::vector<double> occupancy(n_rows, -1.0);
+  int first = -1, last = -1;
+  for (size_t r = 0; r < n_rows; ++r) {
+    if (t.in_image[r] < 2) continue;
+    occupancy[r] = static_cast<double>(t.occupied[r]) / t.in_image[r];
+    if (occupancy[r] < o_.min_row_occupancy) continue;
+    if (first < 0) first = static_cast<int>(r);
+    last = static_cast<int>(r);
+  }
+  int top_band = n_bands_;
+  int previous = n_lo - 2;
+  for (int r = std::max(first, 0); first >= 0 && r <= last; ++r) {
+    const double occ = occupancy[static_cast<size_t>(r)];
+    if (occ < o_.min_row_occupancy && occ < o_.min_gap_row_occupancy) continue;
+    const int n = n_lo + r;
+    if (n == previous + 1) result.adjacent = true;
+    previous = n;
+    result.rows.push_back({n, sc + n * d, occ});
+    if (t.highest[static_cast<size_t>(r)] >= 0) {
+      top_band = std::min(top_band, t.highest[static_cast<size_t>(r)]);
+    }
+  }
+  if (result.rows.empty()) return result;
+  if (last > first) {
+    double on = 0.0, between = 0.0;
+    int n_on = 0, n_between = 0;
+    for (int r = first; r <= last; ++r) {
+      on += t.on_sum[static_cast<size_t>(r)];
+      n_on += t.on_count[static_cast<size_t>(r)];
+      if (r < last) {
+        between += t.between_sum[static_cast<size_t>(r)];
+        n_between += t.between_count[static_cast<size_t>(r)];
+      }
+    }
+    if (n_on > 0 && n_between > 0 && on > 0.0) {
+      result.contrast = std::max(0.0, 1.0 - (between / n_between) / (on / n_on));
+    }
+  }
+  double top = bands_[static_cast<size_t>(top_band)].v_top;
+  if (geo.g > 0.0) top = std::max(top, v_bottom_ - (1.0 - min_spacing_ / d) / geo.g);
+  result.top_v = std::clamp(top, 0.0, v_bottom_);
+  return result;
+}
+
+// 1. Hough over (g, lean): how sharply the plant matter piles up in s
+// (smoothed Σh²/(Σh)²), on the bands that every cell can use.
+std::vector<double> StraightSearch::HoughSharpness() {
+  std::vector<double> sharpness(static_cast<size_t>(ng_) * nl_, 0.0);
+  for (int i = 0; i < ng_; ++i) {
+    for (int j = 0; j < nl_; ++j) {
+      BuildHistogram(GeometryAt(i * g_step_, -o_.max_lean + j * l_step_), H_);
+      double sum = 0.0, sum2 = 0.0;
+      for (int b = 0; b < n_bins_; ++b) {
+        const double l = b > 0 ? histogram_[static_cast<size_t>(b - 1)] : 0.0;
+        const double r = b + 1 < n_bins_ ? histogram_[static_cast<size_t>(b + 1)] : 0.0;
+        const double v = 0.25 * l + 0.5 * histogram_[static_cast<size_t>(b)] + 0.25 * r;
+        sum += v;
+        sum2 += v * v;
+      }
+      sharpness[static_cast<size_t>(i) * nl_ + j] = sum > 0.0 ? sum2 / (sum * sum) : 0.0;
+    }
+  }
+  return sharpness;
+}
+
+// The first `count` cells of `order` that are not next to one taken before.
+std::vector<int> StraightSearch::DistinctCells(const std::vector<int>& order, int count) const {
+  std::vector<int> taken;
+  for (int index : order) {
+    if (static_cast<int>(taken.size()) >= count) break;
+    const bool near =
+        std::any_of(taken.begin(), taken.end(), [&](int c) { return NearCells(c, index, nl_); });
+    if (!near) taken.push_back(index);
+  }
+  return taken;
+}
+
+// The streaks' support over the same grid; its best cells are candidates
+// too (a near-field plant can make a wrong geometry the sharpest).
+void StraightSearch::AddStreakCandidates(const std::vector<int>& order, std::vector<int>& chosen) {
+  std::vector<double> support(order.size(), 0.0);
+  for (int i = 0; i < ng_; ++i) {
+    for (int j = 0; j < nl_; ++j) {
+      const Geometry geo = GeometryAt(i * g_step_, -o_.max_lean + j * l_step_);
+      support[static_cast<size_t>(i) * nl_ + j] = orientation_.Support(geo.g, geo.c);
+    }
+  }
+  std::vector<int> by_support(order);
+  std::sort(by_support.begin(), by_support.end(), [&](int a, int b) {
+    return support[static_cast<size_t>(a)] > support[static_cast<size_t>(b)];
+  });
+  support_max_ = support[static_cast<size_t>(by_support.front())];
+  for (int index : DistinctCells(by_support, o_.orientation_candidates)) AddOnce(chosen, index);
+  if (support_max_ > 0.0) LockStreaks(by_support.front());
+}
+
+// The streaks' own best geometry, refined off the grid by halving steps:
+// the vanishing point the refit may keep (step 4).
+void StraightSearch::LockStreaks(int best_support_index) {
+  locked_ = true;
+  lock_g_ = (best_support_index / nl_) * g_step_;
+  lock_lean_ = -o_.max_lean + (best_support_index % nl_) * l_step_;
+  double best_support = support_max_, sg = g_step_, sl = l_step_;
+  for (int level = 0; level < 6; ++level) {
+    sg *= 0.5;
+    sl *= 0.5;
+    double bg = lock_g_, bl = lock_lean_;
+    for (int i = -1; i <= 1; ++i) {
+      for (int j = -1; j <= 1; ++j) {
+        const double g = std::max(0.0, lock_g_ + i * sg), l = lock_lean_ + j * sl;
+        const Geometry geo = GeometryAt(g, l);
+        const double e = orientation_.Support(geo.g, geo.c);
+        if (e > best_support) best_support = e, bg = g, bl = l;
+      }
+    }
+    lock_g_ = bg;
+    lock_lean_ = bl;
+  }
+}
+
+// Sharpness alone favours little convergence when wide rows merge far
+// away; every convergence keeps its two sharpest leans that are local
+// maxima along the lean axis as candidates too.
+void StraightSearch::AddLeanPeaks(const std::vector<double>& sharpness,
+                                  std::vector<int>& chosen) const {
+  for (int i = 0; i < ng_; ++i) {
+    const double* row = &sharpness[static_cast<size_t>(i) * nl_];
+    int first = -1, second = -1;
+    for (int j = 0; j < nl_; ++j) {
+      const bool peak = (j == 0 || row[j] >= row[j - 1]) && (j + 1 == nl_ || row[j] > row[j + 1]);
+      if (!peak) continue;
+      if (first < 0 || row[j] > row[first]) {
+        second = first;
+        first = j;
+      } else if (second < 0 || row[j] > row[second]) {
+        second = j;
+      }
+    }
+    for (const int j : {first, second}) {
+      if (j >= 0) AddOnce(chosen, i * nl_ + j);
+    }
+  }
+}
+
+// Every score is scaled by the streaks' agreement with the geometry,
+// relative to the best (row_detector.h, orientation_floor).
+double StraightSearch::StreakFactor(const Geometry& geo) const {
+  if (!use_orientation_) return 1.0;
+  const double floor = o_.orientation_floor;
+  return std::min(1.0, (orientation_.Support(geo.g, geo.c) + floor) / (support_max_ + floor));
+}
+
+// Rows agree in phase from band to band whatever their width; a comb
+// forced onto scattered matter or onto the wrong geometry does not. The
+// score is the comb's coherence times that agreement.
+StraightSearch::BandComb StraightSearch::CombOnBands(const Geometry& geo, double d) const {
+  std::complex<double> z_sum(0.0, 0.0);
+  double z_abs = 0.0, mass = 0.0;
+  for (int k = 0; k < n_bands_; ++k) {
+    const Band& b = bands_[static_cast<size_t>(k)];
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink < kMinShrink || d * shrink < min_spacing_) continue;
+    const float* p = &profiles_[static_cast<size_t>(k) * w_];
+    const double s_first = (0.5 * kw_ - geo.c * b.dv) / shrink;
+    const double a0 = -2.0 * std::numbers::pi * s_first / d;
+    const double da = -2.0 * std::numbers::pi * kw_ / (shrink * d);
+    double m = 0.0;
+    const std::complex<double> z = BandPhasor(p, w_, a0, da, m);
+    if (m <= 0.0) continue;
+    z_sum += z;
+    z_abs += std::abs(z);
+    mass += m;
+  }
+  BandComb r;
+  if (mass <= 0.0 || z_abs <= 0.0) return r;
+  // Coherence over all the image's plant matter, not only the bands this
+  // geometry can use: a vanishing point placed low in the image (or a
+  // narrow comb) drops the upper bands, and must not be rewarded for
+  // explaining less of the image.
+  r.coherence = std::abs(z_sum) / std::max(mass, total_mass_);
+  r.alignment = std::abs(z_sum) / z_abs;
+  double phase = -std::arg(z_sum) * d / (2.0 * std::numbers::pi);
+  phase = std::fmod(phase, d);
+  if (phase < 0.0) phase += d;
+  r.phase = phase;
+  return r;
+}
+
+// A hypothesis's score: the comb's score × its rows' occupancy × their
+// contrast × n/(n + 1) × the streaks' agreement; false when the comb is at
+// or below `floor` or has no two neighbouring rows.
+bool StraightSearch::ScoreOf(const Geometry& geo, double period, double floor, Hypothesis& hyp,
+                             size_t& n_rows) const {
+  const BandComb bc = CombOnBands(geo, period);
+  if (bc.score() <= floor) return false;
+  const Rows rows = FindRows(geo, period, bc.phase);
+  if (!rows.adjacent) return false;
+  hyp.sc = bc.phase;
+  hyp.score = bc.score() * MeanOccupancy(rows.rows) * rows.contrast * RowCountFactor(rows.rows) *
+              StreakFactor(geo);
+  n_rows = rows.rows.size();
+  return true;
+}
+
+// 2. The row comb on each candidate: the best period whose rows are really
+// there (two neighbouring rows with plant matter along them). Hypotheses
+// are kept per row count: a comb of twice the spacing (two rows, every
+// other row sparse) and the true comb (more rows, but a coarse period grid
+// drifts in phase across them) are both refined before they are compared.
+std::vector<StraightSearch::Hypothesis> StraightSearch::CombHypotheses(
+    const std::vector<int>& chosen) {
+  std::vector<Hypothesis> by_count(12);
+  double best_start = -1.0;
+  for (int index : chosen) {
+    const double g = (index / nl_) * g_step_;
+    const double lean = -o_.max_lean + (index % nl_) * l_step_;
+    const Geometry geo = GeometryAt(g, lean);
+    BuildHistogram(geo, H_);
+    std::vector<double> periods;
+    for (const CombFit& fit :
+         BestCombs(histogram_, s0_, kw_, d_min_, d_max_, 2.0 * o_.spacing_step, 3)) {
+      // A comb of twice the rows' spacing can fit rows too (every other
+      // tooth empty, or two rows between teeth); its half is tried as well.
+      periods.push_back(fit.period);
+      if (fit.period / 2.0 >= d_min_) periods.push_back(fit.period / 2.0);
+    }
+    for (const double period : periods) {
+      Hypothesis hyp{g, lean, period, 0.0, -1.0};
+      size_t n_rows = 0;
+      // A comb far below the best so far will not win after refinement.
+      if (!ScoreOf(geo, period, o_.prune_fraction * best_start, hyp, n_rows)) continue;
+      best_start = std::max(best_start, hyp.score);
+      Hypothesis& slot = by_count[std::min(n_rows, by_count.size() - 1)];
+      if (hyp.score > slot.score) slot = hyp;
+    }
+  }
+  return by_count;
+}
+
+// 3. Local search on (g, lean, d) by the same score from one hypothesis:
+// the comb (cheap) on the 27 neighbours, the rows (dearer) only on the few
+// whose comb could still beat the current best; steps halve per level.
+StraightSearch::Hypothesis StraightSearch::Refine(const Hypothesis& start) const {
+  struct Neighbour {
+    Geometry geo;
+    double g, lean, d, comb;
+  };
+  Hypothesis local = start;
+  double step_g = g_step_, step_l = l_step_, step_d = 2.0 * o_.spacing_step;
+  for (int level = 0; level < 4; ++level) {
+    step_g *= 0.5;
+    step_l *= 0.5;
+    const Hypothesis centre = local;
+    std::vector<Neighbour> neighbours;
+    neighbours.reserve(27);
+    for (int i = -1; i <= 1; ++i) {
+      for (int j = -1; j <= 1; ++j) {
+        const double g = std::max(0.0, centre.g + i * step_g);
+        const double lean = centre.lean + j * step_l;
+        for (int k = -1; k <= 1; ++k) {
+          const double d = centre.d * (1.0 + k * step_d);
+          const Geometry geo_n = GeometryAt(g, lean);
+          const double comb = CombOnBands(geo_n, d).score();
+          if (comb > local.score) neighbours.push_back({geo_n, g, lean, d, comb});
+        }
+      }
+    }
+    const size_t keep = std::min(neighbours.size(), static_cast<size_t>(o_.refine_row_checks));
+    std::partial_sort(neighbours.begin(), neighbours.begin() + static_cast<std::ptrdiff_t>(keep),
+                      neighbours.end(),
+                      [](const Neighbour& a, const Neighbour& b) { return a.comb > b.comb; });
+    for (size_t q = 0; q < keep; ++q) {
+      const Neighbour& nb = neighbours[q];
+      Hypothesis hyp{nb.g, nb.lean, nb.d, 0.0, -1.0};
+      size_t n_rows = 0;
+      if (!ScoreOf(nb.geo, nb.d, local.score, hyp, n_rows)) continue;
+      if (hyp.score > local.score) local = hyp;
+    }
+    step_d *= 0.5;
+  }
+  return local;
+}
+
+// Each of the best row counts' best hypothesis refined; the best of them.
+StraightSearch::Hypothesis StraightSearch::BestRefined(std::vector<Hypothesis> by_count) const {
+  std::sort(by_count.begin(), by_count.end(),
+            [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+  by_count.resize(std::min(by_count.size(), static_cast<size_t>(o_.refined_hypotheses)));
+  Hypothesis best;
+  for (const Hypothesis& start : by_count) {
+    if (start.score < 0.0) continue;
+    const Hypothesis local = Refine(start);
+    if (local.score > best.score) best = local;
+  }
+  return best;
+}
+
+// 4. Weighted least squares on each row's centre in thin bands: the
+// centroid of its plant matter between the gaps on either side (the lowest
+// columns between it and its neighbours), so that rows whose plants nearly
+// touch are centred by their edges, narrow rows by their mass. Linear in
+// (s_c, d, c − g·s_c, g·d):
+//   u = s_c + n·d + Δv·(c − g·s_c) − n·Δv·(g·d).
+// With fix_vp the vanishing point stays and only (s_c, d) are fitted,
+// linear as well: u − c·Δv = s_c·(1 − g·Δv) + n·d·(1 − g·Δv).
+void StraightSearch::Refit(Fit& fit, bool fix_vp) const {
+  for (int iteration = 0; iteration < o_.fit_iterations; ++iteration) {
+    if (!RefitStep(fit, fix_vp)) break;
+  }
+}
+
+// One iteration of the refit; false when it stops (too few observations,
+// a degenerate or implausible solution, or one without two adjacent rows).
+bool StraightSearch::RefitStep(Fit& fit, bool fix_vp) const {
+  const int fw = fit_.cols;
+  const double kfw = W_ / fw;
+  const double kfh = H_ / fit_.rows;
+  Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
+  Eigen::Matrix2d a2 = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs2 = Eigen::Vector2d::Zero();
+  int observations = 0;
+  for (int k = 0; k < fit_bands_; ++k) {
+    const Band& b = fbands_[static_cast<size_t>(k)];
+    if (b.v_top + b.rows * kfh < fit.found.top_v) continue;
+    const double shrink = 1.0 - fit.geo.g * b.dv;
+    const double ds = fit.d * shrink;
+    if (shrink < kMinShrink || ds < min_spacing_) continue;
+    const float* p = &fit_profiles_[static_cast<size_t>(k) * fw];
+    const auto column = [&](double u) { return static_cast<int>(std::floor(u / kfw)); };
+    for (const DetectedRow& row : fit.found.rows) {
+      const int n = row.n;
+      const double u = (fit.sc + n * fit.d) * shrink + fit.geo.c * b.dv;
+      const double f = o_.gap_search_fraction;
+      const int left = LowestColumn(p, fw, column(u - (0.5 + f) * ds), column(u - (0.5 - f) * ds));
+      const int right = LowestColumn(p, fw, column(u + (0.5 - f) * ds), column(u + (0.5 + f) * ds));
+      if (left < 0 || right <= left + 1) continue;
+      double mass = 0.0, moment = 0.0;
+      for (int x = left + 1; x < right; ++x) {
+        mass += static_cast<double>(p[x]);
+        moment += static_cast<double>(p[x]) * (x + 0.5) * kfw;
+      }
+      // A band where the row has little plant matter says little.
+      if (mass < 0.1 * (right - left - 1) * b.rows) continue;
+      const double u_obs = moment / mass;
+      // Residuals measured in s (u / shrink): a band counts as much at the
+      // top of the rows as at the bottom.
+      const double ws = mass / (shrink * shrink);
+      if (fix_vp) {
+        const Eigen::Vector2d z(shrink, n * shrink);
+        a2.noalias() += ws * z * z.transpose();
+        rhs2.noalias() += ws * (u_obs - fit.geo.c * b.dv) * z;
+      } else {
+        const Eigen::Vector4d z(1.0, n, b.dv, -n * b.dv);
+        a.noalias() += ws * z * z.transpose();
+        rhs.noalias() += ws * u_obs * z;
+      }
+      ++observations;
+    }
+  }
+  if (observations < 6) return false;
+  Fit next = fit;
+  if (fix_vp) {
+    const Eigen::Vector2d q = a2.ldlt().solve(rhs2);
+    if (!q.allFinite() || q(1) <= 0.7 * fit.d || q(1) >= 1.3 * fit.d) return false;
+    next.d = q(1);
+    next.sc = q(0);
+  } else {
+    const Eigen::LDLT<Eigen::Matrix4d> ldlt(a);
+    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) return false;
+    const Eigen::Vector4d q = ldlt.solve(rhs);
+    if (!q.allFinite() || q(1) <= 0.7 * fit.d || q(1) >= 1.3 * fit.d) return false;
+    next.geo = Geometry{q(3) / q(1), q(2) + q(3) / q(1) * q(0)};
+    next.d = q(1);
+    next.sc = q(0);
+  }
+  next.found = FindRows(next.geo, next.d, next.sc);
+  if (!next.found.adjacent) return false;
+  fit = std::move(next);
+  return true;
+}
+
+// A fitted comb's score, as the search scored hypotheses.
+double StraightSearch::FitScore(const Fit& fit) const {
+  if (!fit.found.adjacent) return -1.0;
+  return CombOnBands(fit.geo, fit.d).score() * MeanOccupancy(fit.found.rows) * fit.found.contrast *
+         RowCountFactor(fit.found.rows) * StreakFactor(fit.geo);
+}
+
+// Two fits compete by the score the search used: the full refit from the
+// best hypothesis, and the refit of (s_c, d) on the streaks' own vanishing
+// point. On photographs of tall, leafy rows the row centres between gaps
+// pull the full fit's vanishing point away (the rows merge into a canopy
+// towards it) where the streaks still point true; on clean rows of
+// separate plants the full fit is the finer one.
+StraightSearch::Fit StraightSearch::BestFit(const Fit& searched) {
+  fit_bands_ = std::max(4, fit_.rows / 4);
+  fbands_ = SplitIntoBands(fit_, fit_bands_, H_ / fit_.rows, v_bottom_, fit_profiles_);
+  Fit chosen = searched;
+  Refit(chosen, false);
+  if (!locked_) return chosen;
+  Fit fixed;
+  fixed.geo = GeometryAt(lock_g_, lock_lean_);
+  fixed.d = searched.d;
+  fixed.sc = CombOnBands(fixed.geo, searched.d).phase;
+  fixed.found = FindRows(fixed.geo, fixed.d, fixed.sc);
+  if (!fixed.found.adjacent) return chosen;
+  Refit(fixed, true);
+  return FitScore(fixed) > FitScore(chosen) ? fixed : chosen;
+}
+
+// Rows are reported up to where they can no longer be told apart: the
+// spacing is still min_spacing and a reported row still has plant matter in
+// the band (above the bands the fit used, towards the vanishing point).
+double StraightSearch::TopOfRows(const Geometry& geo, double d, double sc, const Rows& found) const {
+  const double hw = o_.row_halfwidth_fraction;
+  double top_v = found.top_v;
+  for (int k = n_bands_ - 1; k >= 0; --k) {
+    const Band& b = bands_[static_cast<size_t>(k)];
+    if (b.v_top >= top_v) continue;
+    const double shrink = 1.0 - geo.g * b.dv;
+    if (shrink <= 0.0 || d * shrink < min_spacing_) break;
+    const float* p = &profiles_[static_cast<size_t>(k) * w_];
+    const double half = std::max(0.5 * kw_, hw * d * shrink);
+    bool any = false;
+    for (const DetectedRow& r : found.rows) {
+      const double u = (sc + r.n * d) * shrink + geo.c * b.dv;
+      const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw_ - 0.5)));
+      const int x1 = std::min(w_ - 1, static_cast<int>(std::floor((u + half) / kw_ - 0.5)));
+      double sum = 0.0;
+      for (int x = x0; x <= x1; ++x) sum += static_cast<double>(p[x]);
+      if (x1 >= x0 && sum / ((x1 - x0 + 1) * b.rows) >= 0.05) any = true;
+    }
+    if (!any) break;
+    top_v = b.v_top;
+  }
+  if (geo.g > 0.0) top_v = std::max(top_v, v_bottom_ - (1.0 - min_spacing_ / d) / geo.g);
+  return std::clamp(top_v, 0.0, v_bottom_);
+}
+
+// 5. The central row (nearest the image's centre at the bottom), the comb's
+// coherence over every usable band, the confidence.
+void StraightSearch::Finish(Fit fit, RowDetection& out) {
+  const DetectedRow* central = &fit.found.rows.front();
+  for (const DetectedRow& r : fit.found.rows) {
+    if (std::abs(r.bottom_u_px - 0.5 * W_) < std::abs(central->bottom_u_px - 0.5 * W_)) central = &r;
+  }
+  const int n_central = central->n;
+  const Geometry geo = fit.geo;
+  const double d = fit.d;
+  const double sc = fit.sc + n_central * d;
+  for (DetectedRow& r : fit.found.rows) r.n -= n_central;
+  BuildHistogram(geo, H_);
+  const CombFit final_fit = CombAt(histogram_, s0_, kw_, d);
+  const double alignment = CombOnBands(geo, d).alignment;
+  const double occupancy = MeanOccupancy(fit.found.rows);
+
+  out.centre_u_px = sc;
+  out.spacing_px = d;
+  out.convergence = geo.g;
+  out.lean = geo.c;
+  out.coherence = final_fit.coherence;
+  out.alignment = alignment;
+  out.top_v_px = TopOfRows(geo, d, sc, fit.found);
+  out.contrast = fit.found.contrast;
+  if (final_fit.coherence < o_.min_coherence || alignment < o_.min_alignment ||
+      fit.found.contrast < o_.min_contrast) {
+    out.reason = "no rows: plant matter does not follow evenly spaced rows (coherence " +
+                 std::to_string(final_fit.coherence) + ", band agreement " +
+                 std::to_string(alignment) + ", contrast " + std::to_string(fit.found.contrast) + ")";
+    return;
+  }
+  out.rows = std::move(fit.found.rows);
+  out.confidence = std::clamp(final_fit.coherence * occupancy, 1e-3, 1.0);
+}
+
+}  // namespace plantscale::rows
