@@ -29,6 +29,7 @@
 // vertical rows whose spacing is the best comb of the lower bands, and the
 // spacing may then range further.
 
+#include <complex>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -89,8 +90,52 @@ class CurveFitter {
   const CurveFitOptions& options() const { return options_; }
 
  private:
+  struct Band {
+    int r0 = 0, r1 = 0;   // rows [r0, r1) of the plant image
+    double v = 0.0;       // image v of the centre
+    double v_top = 0.0;   // image v of the top edge
+    double shrink = 1.0;  // 1 − g·Δv at the centre
+    double mass = 0.0;    // plant matter in the band's rectified profile
+    bool usable = false;
+    bool has_data() const { return usable && mass > 0.0; }
+  };
+  // One fit's state: the image, its bands, the prior, the rectified
+  // profiles' bins and the programme's grid of spacings × phases.
+  struct Problem {
+    double W = 0.0, H = 0.0, v_bottom = 0.0, kfw = 1.0, kfh = 1.0;
+    std::vector<Band> bands;
+    CurvePrior prior;
+    bool free = false;
+    double s_lo = 0.0, ds = 1.0;  // profile bins from s_lo, ds wide
+    int rw = 0;                   // bins per band
+    double mean_mass = 0.0;       // plant matter per band with data
+    int j_lo = 0, J = 0, M = 0;   // spacings e^{(j_lo + j)·scale_step}, j < J; M phases
+    std::vector<std::complex<double>> z;  // the comb's DFT per (band, spacing) / mean_mass
+    std::vector<double> half;             // |the half-spacing comb's DFT| / mean_mass
+    std::vector<double> cos_m, sin_m;     // of the M phases
+    double s_first() const { return s_lo + 0.5 * ds; }
+    int n_bands() const { return static_cast<int>(bands.size()); }
+  };
+
+  // Each band's profile in s, the prior's rows made vertical.
+  void Rectify(const cv::Mat& plant, Problem& p, const CurvePrior& pr, double bins_per_period);
+  // The free prior's spacing (0: none found).
+  double FreeSpacing(const cv::Mat& plant, Problem& p);
+  void SubtractRunningMean(Problem& p);
+  void ComputeCombs(Problem& p) const;
+  double Unary(const Problem& p, int k, int j, int m) const;
+  // The programme's forward pass (cost_, back_m_, back_j_) and its best path.
+  void ForwardPass(const Problem& p);
+  void ProgrammeStep(const Problem& p, int k, const std::vector<double>& phase_cost,
+                     double scale_cost);
+  void Backtrack(const Problem& p, std::vector<int>& js, std::vector<int>& ms) const;
+  void SmoothInV(const Problem& p, std::vector<double>& phi, std::vector<double>& sigma) const;
+  double Coherence(const Problem& p, const std::vector<double>& phi,
+                   const std::vector<double>& sigma) const;
+  void MakeKnots(const Problem& p, const std::vector<double>& phi,
+                 const std::vector<double>& sigma, CurveFit& out) const;
+
   CurveFitOptions options_;
-  cv::Mat map_x_, map_y_, rectified_;
   std::vector<float> profiles_;
   std::vector<double> cost_, next_, tmp_;
   std::vector<int> back_m_, back_j_;
