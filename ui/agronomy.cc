@@ -87,6 +87,111 @@ SizeStats SizeStatsOf(std::vector<double> radii_m, double bin_m, int bins) {
   return s;
 }
 
+namespace {
+
+using RowsOfCrops = std::map<int, std::vector<const PlantRecord*>>;
+
+// Crop records by row, each row sorted along it. A "row" with a handful of
+// crop records is a stray (a weed taken for a crop between rows): rows
+// holding < 10 % of the fullest row are dropped.
+RowsOfCrops CropsByRow(const std::vector<const PlantRecord*>& crops, double rs) {
+  RowsOfCrops by_row;
+  for (const PlantRecord* r : crops) {
+    by_row[static_cast<int>(std::lround(r->plant.position_m.x() / rs))].push_back(r);
+  }
+  size_t fullest = 0;
+  for (const auto& [n, v] : by_row) fullest = std::max(fullest, v.size());
+  for (auto it = by_row.begin(); it != by_row.end();) {
+    it = it->second.size() * 10 < fullest ? by_row.erase(it) : std::next(it);
+  }
+  for (auto& [n, v] : by_row) {
+    std::sort(v.begin(), v.end(), [](const PlantRecord* p, const PlantRecord* q) {
+      return p->plant.position_m.y() < q->plant.position_m.y();
+    });
+  }
+  return by_row;
+}
+
+// One row's stand, gaps and crop sizes (leaf-tip radii appended to `radii`).
+RowAgronomy RowStats(int n, const std::vector<const PlantRecord*>& v, const AgronomyOptions& o,
+                     std::vector<double>& radii) {
+  RowAgronomy r;
+  r.row = n;
+  r.crop = static_cast<int>(v.size());
+  r.stand_length_m = v.back()->plant.position_m.y() - v.front()->plant.position_m.y();
+  std::vector<double> steps, row_radii;
+  for (size_t i = 1; i < v.size(); ++i) steps.push_back(v[i]->plant.position_m.y() - v[i - 1]->plant.position_m.y());
+  r.plant_spacing_m = Median(steps);
+  for (size_t i = 1; i < v.size() && r.plant_spacing_m > 0.0; ++i) {
+    const int missing = static_cast<int>(std::lround(steps[i - 1] / r.plant_spacing_m)) - 1;
+    if (missing <= 0) continue;
+    ++r.gaps;
+    r.missing += missing;
+    if (missing > r.longest_gap) r.longest_gap = missing, r.longest_gap_at_m = v[i - 1]->plant.position_m.y();
+  }
+  // Plants per metre of row: the plants that would stand at one spacing
+  // each over the stand, so a run of n plants covers n·l̄.
+  const double row_m = r.stand_length_m + r.plant_spacing_m;
+  r.plants_per_m = row_m > 0.0 ? r.crop / row_m : 0.0;
+  for (const PlantRecord* p : v) row_radii.push_back(LeafTipRadius(p->plant.size_m2, o.outline_area_fraction));
+  radii.insert(radii.end(), row_radii.begin(), row_radii.end());
+  r.crop_size = SizeStatsOf(row_radii, o.histogram_bin_m, o.histogram_bins);
+  return r;
+}
+
+// The heat map: rows × cells along, the crops counted in.
+void FillCropCells(const RowsOfCrops& by_row, const AgronomyOptions& o, AgronomySummary& a) {
+  a.cells.resize(a.rows.size() * static_cast<size_t>(a.cells_along));
+  for (size_t i = 0; i < a.rows.size(); ++i) {
+    for (int c = 0; c < a.cells_along; ++c) {
+      HeatCell& h = a.cells[i * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
+      h.row = a.rows[i].row;
+      h.index = c;
+    }
+  }
+  size_t i = 0;
+  for (const auto& [n, v] : by_row) {
+    for (const PlantRecord* p : v) {
+      const int c = std::clamp(static_cast<int>((p->plant.position_m.y() - a.y0_m) / o.cell_length_m), 0,
+                               a.cells_along - 1);
+      ++a.cells[i * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)].crop;
+    }
+    ++i;
+  }
+}
+
+// Weeds within the surveyed band [x_lo, x_hi] × the stand: their count,
+// sizes, density, and their rows' and cells' shares.
+void CountWeeds(const std::vector<const PlantRecord*>& weeds, double x_lo, double x_hi,
+                const AgronomyOptions& o, AgronomySummary& a) {
+  const double rs = a.row_spacing_m;
+  std::map<int, size_t> row_index;
+  for (size_t i = 0; i < a.rows.size(); ++i) row_index[a.rows[i].row] = i;
+  std::vector<double> weed_radii;
+  for (const PlantRecord* w : weeds) {
+    const Eigen::Vector2d& p = w->plant.position_m;
+    if (p.x() < x_lo || p.x() > x_hi || p.y() < a.y0_m || p.y() > a.y1_m) continue;
+    ++a.weeds;
+    weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));
+    const auto it = row_index.find(static_cast<int>(std::lround(p.x() / rs)));
+    if (it == row_index.end()) continue;
+    const int c = std::clamp(static_cast<int>((p.y() - a.y0_m) / o.cell_length_m), 0, a.cells_along - 1);
+    HeatCell& h = a.cells[it->second * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
+    ++h.weeds;
+    h.weed_area_m2 += w->plant.size_m2;
+    ++a.rows[it->second].weeds;
+  }
+  a.weeds_per_m2 = a.surveyed_area_m2 > 0.0 ? a.weeds / a.surveyed_area_m2 : 0.0;
+  const double length = std::max(0.0, a.y1_m - a.y0_m);
+  for (RowAgronomy& r : a.rows) {
+    const double area = rs * (r.stand_length_m > 0.0 ? length : 0.0);
+    r.weeds_per_m2 = area > 0.0 ? r.weeds / area : 0.0;
+  }
+  a.weed_size = SizeStatsOf(weed_radii, o.histogram_bin_m, o.histogram_bins);
+}
+
+}  // namespace
+
 AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const AgronomyOptions& o) {
   ThrowIfInvalid("agronomy options", o.Validate());
   AgronomySummary a;
@@ -106,26 +211,11 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   }
   a.row_spacing_m = RowSpacing(model, crops, a.row_spacing_source);
   const double rs = a.row_spacing_m;
-  const auto row_of = [rs](double x) { return static_cast<int>(std::lround(x / rs)); };
-
-  // Crops by row, sorted along it.
-  std::map<int, std::vector<const PlantRecord*>> by_row;
-  for (const PlantRecord* r : crops) by_row[row_of(r->plant.position_m.x())].push_back(r);
-  // A "row" with a handful of crop records is a stray (a weed taken for a
-  // crop between rows): keep rows holding ≥ 10 % of the fullest row.
-  size_t fullest = 0;
-  for (const auto& [n, v] : by_row) fullest = std::max(fullest, v.size());
-  for (auto it = by_row.begin(); it != by_row.end();) {
-    it = it->second.size() * 10 < fullest ? by_row.erase(it) : std::next(it);
-  }
+  const RowsOfCrops by_row = CropsByRow(crops, rs);
   if (by_row.empty()) return a;
   a.y0_m = 1e300;
   a.y1_m = -1e300;
-  std::vector<double> all_radii;
-  for (auto& [n, v] : by_row) {
-    std::sort(v.begin(), v.end(), [](const PlantRecord* p, const PlantRecord* q) {
-      return p->plant.position_m.y() < q->plant.position_m.y();
-    });
+  for (const auto& [n, v] : by_row) {
     a.y0_m = std::min(a.y0_m, v.front()->plant.position_m.y());
     a.y1_m = std::max(a.y1_m, v.back()->plant.position_m.y());
   }
@@ -133,80 +223,21 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   const double length = std::max(0.0, a.y1_m - a.y0_m);
   a.surveyed_area_m2 = (x_hi - x_lo) * length;
   a.cells_along = std::max(1, static_cast<int>(std::ceil(length / o.cell_length_m)));
-  const auto cell_of = [&](double y) {
-    return std::clamp(static_cast<int>((y - a.y0_m) / o.cell_length_m), 0, a.cells_along - 1);
-  };
-  std::map<int, size_t> row_index;
+  std::vector<double> all_radii;
   double row_metres = 0.0;
-  for (auto& [n, v] : by_row) {
-    RowAgronomy r;
-    r.row = n;
-    r.crop = static_cast<int>(v.size());
-    r.stand_length_m = v.back()->plant.position_m.y() - v.front()->plant.position_m.y();
-    std::vector<double> steps, radii;
-    for (size_t i = 1; i < v.size(); ++i) steps.push_back(v[i]->plant.position_m.y() - v[i - 1]->plant.position_m.y());
-    r.plant_spacing_m = Median(steps);
-    for (size_t i = 1; i < v.size() && r.plant_spacing_m > 0.0; ++i) {
-      const int missing = static_cast<int>(std::lround(steps[i - 1] / r.plant_spacing_m)) - 1;
-      if (missing <= 0) continue;
-      ++r.gaps;
-      r.missing += missing;
-      if (missing > r.longest_gap) r.longest_gap = missing, r.longest_gap_at_m = v[i - 1]->plant.position_m.y();
-    }
-    // Plants per metre of row: the plants that would stand at one spacing
-    // each over the stand, so a run of n plants covers n·l̄.
-    const double row_m = r.stand_length_m + r.plant_spacing_m;
-    r.plants_per_m = row_m > 0.0 ? r.crop / row_m : 0.0;
-    row_metres += row_m;
-    for (const PlantRecord* p : v) radii.push_back(LeafTipRadius(p->plant.size_m2, o.outline_area_fraction));
-    all_radii.insert(all_radii.end(), radii.begin(), radii.end());
-    r.crop_size = SizeStatsOf(radii, o.histogram_bin_m, o.histogram_bins);
+  for (const auto& [n, v] : by_row) {
+    RowAgronomy r = RowStats(n, v, o, all_radii);
+    row_metres += r.stand_length_m + r.plant_spacing_m;
     a.crop += r.crop;
     a.gaps += r.gaps;
     a.missing += r.missing;
     a.longest_gap = std::max(a.longest_gap, r.longest_gap);
-    row_index[n] = a.rows.size();
-    a.rows.push_back(r);
+    a.rows.push_back(std::move(r));
   }
   a.plants_per_m = row_metres > 0.0 ? a.crop / row_metres : 0.0;
   a.crop_size = SizeStatsOf(all_radii, o.histogram_bin_m, o.histogram_bins);
-
-  a.cells.resize(a.rows.size() * static_cast<size_t>(a.cells_along));
-  for (size_t i = 0; i < a.rows.size(); ++i) {
-    for (int c = 0; c < a.cells_along; ++c) {
-      HeatCell& h = a.cells[i * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
-      h.row = a.rows[i].row;
-      h.index = c;
-    }
-  }
-  const auto cell = [&](int row, double y) -> HeatCell* {
-    const auto it = row_index.find(row);
-    if (it == row_index.end()) return nullptr;
-    return &a.cells[it->second * static_cast<size_t>(a.cells_along) + static_cast<size_t>(cell_of(y))];
-  };
-  for (const auto& [n, v] : by_row) {
-    for (const PlantRecord* p : v) {
-      if (HeatCell* h = cell(n, p->plant.position_m.y())) ++h->crop;
-    }
-  }
-  std::vector<double> weed_radii;
-  for (const PlantRecord* w : weeds) {
-    const Eigen::Vector2d& p = w->plant.position_m;
-    if (p.x() < x_lo || p.x() > x_hi || p.y() < a.y0_m || p.y() > a.y1_m) continue;
-    ++a.weeds;
-    weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));
-    if (HeatCell* h = cell(row_of(p.x()), p.y())) {
-      ++h->weeds;
-      h->weed_area_m2 += w->plant.size_m2;
-      ++a.rows[row_index[h->row]].weeds;
-    }
-  }
-  a.weeds_per_m2 = a.surveyed_area_m2 > 0.0 ? a.weeds / a.surveyed_area_m2 : 0.0;
-  for (RowAgronomy& r : a.rows) {
-    const double area = rs * (r.stand_length_m > 0.0 ? length : 0.0);
-    r.weeds_per_m2 = area > 0.0 ? r.weeds / area : 0.0;
-  }
-  a.weed_size = SizeStatsOf(weed_radii, o.histogram_bin_m, o.histogram_bins);
+  FillCropCells(by_row, o, a);
+  CountWeeds(weeds, x_lo, x_hi, o, a);
   return a;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <map>
 #include <set>
@@ -211,23 +212,23 @@ OptionErrors ReportOptions::Validate() const {
   return e;
 }
 
-ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem::path& out_dir,
-                         const ReportOptions& o) {
-  ThrowIfInvalid("report options", o.Validate());
-  std::filesystem::create_directories(out_dir);
+namespace {
+
+// Replays the log into `model`, `picker` choosing the close-ups on the way;
+// the log's problems, the run's summary and agronomy into `result`. The
+// run's configuration event, when the log has one.
+std::optional<std::string> ReadRun(const std::filesystem::path& log, const ReportOptions& o, RunModel& model,
+                                   CloseupPicker& picker, ReportResult& result) {
   tm::LogReader reader(log);
   tm::Subscriber subscriber;
-  RunModel model;
   model.Follow(subscriber);
-  ReportResult result;
-  CloseupPicker picker(o, 0.5 * o.pictures.closeup_length_m + 0.3);
   int64_t clock = 0;
-  std::optional<std::string> run_config;
   while (const std::optional<tm::LogEvent> e = reader.Next()) {
     clock = e->utime;
     model.Feed(subscriber, e->channel, e->data.data(), e->data.size(), e->utime);
     picker.After(model);
   }
+  std::optional<std::string> run_config;
   for (const plantscale_event_t& e : model.events()) {
     if (e.kind == "run_config" && !run_config) run_config = e.text;
   }
@@ -236,53 +237,73 @@ ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem
   for (const std::string& p : model.Problems(clock)) result.problems.push_back(p);
   result.summary = model.Summary();
   result.agronomy = Agronomy(model, result.summary, o.agronomy);
-  const AgronomySummary& a = result.agronomy;
-  if (a.crop == 0 && reader.events_read() > 0) {
+  if (result.agronomy.crop == 0 && reader.events_read() > 0) {
     result.problems.push_back("no crop plant records in the log: no agronomic figures per row");
   }
-  if (o.truth && run_config && !a.rows.empty()) {
-    StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m, {}};
-    for (const auto& [id, r] : model.plants()) {
-      if (r.plant.kind == tm::PlantKind::kCrop) stand.crops_m.emplace_back(r.plant.position_m.x(), r.plant.position_m.y());
-    }
-    try {
-      result.truth = o.truth(*run_config, stand);
-    } catch (const std::exception& e) {
-      result.problems.push_back(std::string("simulator truth not rebuilt: ") + e.what());
-    }
-  }
+  return run_config;
+}
 
+// The simulator's truth over the stand, when the log came from it.
+void AddTruth(const RunModel& model, const std::string& run_config, const ReportOptions& o, ReportResult& result) {
+  const AgronomySummary& a = result.agronomy;
+  StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m, {}};
+  for (const auto& [id, r] : model.plants()) {
+    if (r.plant.kind == tm::PlantKind::kCrop) stand.crops_m.emplace_back(r.plant.position_m.x(), r.plant.position_m.y());
+  }
+  try {
+    result.truth = o.truth(run_config, stand);
+  } catch (const std::exception& e) {
+    result.problems.push_back(std::string("simulator truth not rebuilt: ") + e.what());
+  }
+}
+
+using SavePicture = std::function<std::string(const cv::Mat&, const std::string&)>;
+
+// The bed as strips of strip_length_m, strips_per_picture to a picture, at
+// most max_strip_pictures pictures (PickStrips chooses which strips).
+void DrawBedStrips(const RunModel& model, const AgronomySummary& a, const std::vector<CloseupSnapshot>& closeups,
+                   std::pair<double, double> across, const ReportOptions& o, const SavePicture& save,
+                   ReportPictures& pictures) {
+  const auto along = BedAlong(model, a);
+  if (!along) return;
+  const double L = o.pictures.strip_length_m;
+  const double y0 = std::floor(along->first);
+  const int total = std::max(1, static_cast<int>(std::ceil((along->second - y0) / L - 1e-9)));
+  std::vector<double> wanted;
+  for (const CloseupSnapshot& c : closeups) wanted.push_back(c.y_m);
+  const std::vector<int> strips = PickStrips(total, o.pictures.max_strip_pictures * o.pictures.strips_per_picture,
+                                             wanted, y0, L, a, pictures.strips_why);
+  pictures.strips_total = total;
+  const size_t per_picture = static_cast<size_t>(o.pictures.strips_per_picture);
+  for (size_t i = 0; i < strips.size(); i += per_picture) {
+    std::vector<double> starts;
+    std::string caption;
+    for (size_t k = i; k < strips.size() && k < i + per_picture; ++k) {
+      starts.push_back(y0 + strips[k] * L);
+      caption += (caption.empty() ? "" : ", ") + Fixed(starts.back(), 0) + "–" + Fixed(starts.back() + L, 0) + " m";
+    }
+    const std::string name = "bed_" + std::to_string(pictures.strips.size() + 1) + ".png";
+    pictures.strips.emplace_back(save(DrawStrips(model, a, starts, across.first, across.second, o.pictures), name),
+                                 caption);
+    pictures.strips_shown += static_cast<int>(starts.size());
+  }
+}
+
+// Every picture of the report into `out_dir`.
+ReportPictures DrawPictures(const RunModel& model, const CloseupPicker& picker, const std::filesystem::path& out_dir,
+                            const ReportOptions& o, ReportResult& result) {
+  const AgronomySummary& a = result.agronomy;
   ReportPictures pictures;
   pictures.ellipse_confidence = o.pictures.ellipse_confidence;
   pictures.magnification = o.pictures.ellipse_magnification;
-  const auto save = [&](const cv::Mat& img, const std::string& name) {
+  const SavePicture save = [&](const cv::Mat& img, const std::string& name) {
     WritePng(img, out_dir / name);
     return name;
   };
   const auto [x_lo, x_hi] = BedAcross(model, a);
   if (a.cells_along > 0 && !a.rows.empty()) pictures.overview = save(DrawOverview(a, o.pictures), "overview.png");
-  std::vector<CloseupSnapshot> closeups = picker.All();
-  if (const auto along = BedAlong(model, a)) {
-    const double L = o.pictures.strip_length_m;
-    const double y0 = std::floor(along->first);
-    const int total = std::max(1, static_cast<int>(std::ceil((along->second - y0) / L - 1e-9)));
-    std::vector<double> wanted;
-    for (const CloseupSnapshot& c : closeups) wanted.push_back(c.y_m);
-    const std::vector<int> strips = PickStrips(total, o.pictures.max_strip_pictures * o.pictures.strips_per_picture,
-                                               wanted, y0, L, a, pictures.strips_why);
-    pictures.strips_total = total;
-    for (size_t i = 0; i < strips.size(); i += static_cast<size_t>(o.pictures.strips_per_picture)) {
-      std::vector<double> starts;
-      std::string caption;
-      for (size_t k = i; k < strips.size() && k < i + static_cast<size_t>(o.pictures.strips_per_picture); ++k) {
-        starts.push_back(y0 + strips[k] * L);
-        caption += (caption.empty() ? "" : ", ") + Fixed(starts.back(), 0) + "–" + Fixed(starts.back() + L, 0) + " m";
-      }
-      const std::string name = "bed_" + std::to_string(pictures.strips.size() + 1) + ".png";
-      pictures.strips.emplace_back(save(DrawStrips(model, a, starts, x_lo, x_hi, o.pictures), name), caption);
-      pictures.strips_shown += static_cast<int>(starts.size());
-    }
-  }
+  const std::vector<CloseupSnapshot> closeups = picker.All();
+  DrawBedStrips(model, a, closeups, {x_lo, x_hi}, o, save, pictures);
   for (size_t i = 0; i < closeups.size(); ++i) {
     pictures.closeups.emplace_back(
         save(DrawCloseup(closeups[i], x_lo, x_hi, o.pictures), "closeup_" + std::to_string(i + 1) + ".png"),
@@ -290,32 +311,43 @@ ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem
   }
   pictures.trace = save(DrawOffsetTrace(model, o.pictures), "offset_trace.png");
   if (a.crop_size.count + a.weed_size.count > 0) pictures.histogram = save(DrawSizeHistograms(a), "plant_size.png");
-  if (!model.event_snapshots().empty()) {
-    if (DisplayAvailable()) {
-      for (size_t i = 0; i < model.event_snapshots().size(); ++i) {
-        pictures.cameras.push_back({CameraPicture(out_dir, o, model.event_snapshots()[i], static_cast<int>(i)),
-                                    model.event_snapshots()[i].event.text});
-      }
-    } else {
-      result.problems.push_back("camera views at the events not drawn: no X display (plantscale report starts "
-                                "xvfb-run itself when it is installed)");
-    }
+  if (model.event_snapshots().empty()) return pictures;
+  if (!DisplayAvailable()) {
+    result.problems.push_back("camera views at the events not drawn: no X display (plantscale report starts "
+                              "xvfb-run itself when it is installed)");
+    return pictures;
   }
-  {
-    std::ofstream csv(out_dir / "summary.csv", std::ios::binary);
-    csv << AgronomyCsv(a);
-    if (!csv) throw std::runtime_error((out_dir / "summary.csv").string() + ": cannot write");
+  for (size_t i = 0; i < model.event_snapshots().size(); ++i) {
+    pictures.cameras.push_back({CameraPicture(out_dir, o, model.event_snapshots()[i], static_cast<int>(i)),
+                                model.event_snapshots()[i].event.text});
   }
-  {
-    std::ofstream json(out_dir / "summary.json", std::ios::binary);
-    json << ReportJson(log.filename().string(), result.summary, a, result.truth, result.problems);
-    if (!json) throw std::runtime_error((out_dir / "summary.json").string() + ": cannot write");
-  }
+  return pictures;
+}
+
+void WriteText(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error(file.string() + ": cannot write");
+}
+
+}  // namespace
+
+ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem::path& out_dir,
+                         const ReportOptions& o) {
+  ThrowIfInvalid("report options", o.Validate());
+  std::filesystem::create_directories(out_dir);
+  RunModel model;
+  ReportResult result;
+  CloseupPicker picker(o, 0.5 * o.pictures.closeup_length_m + 0.3);
+  const std::optional<std::string> run_config = ReadRun(log, o, model, picker, result);
+  const AgronomySummary& a = result.agronomy;
+  if (o.truth && run_config && !a.rows.empty()) AddTruth(model, *run_config, o, result);
+  const ReportPictures pictures = DrawPictures(model, picker, out_dir, o, result);
+  const std::string name = log.filename().string();
+  WriteText(out_dir / "summary.csv", AgronomyCsv(a));
+  WriteText(out_dir / "summary.json", ReportJson(name, result.summary, a, result.truth, result.problems));
   result.index = out_dir / "index.html";
-  std::ofstream html(result.index, std::ios::binary);
-  html << ReportHtml(log.filename().string(), result.summary, a, result.truth, result.problems, model.events(),
-                     pictures);
-  if (!html) throw std::runtime_error(result.index.string() + ": cannot write");
+  WriteText(result.index, ReportHtml(name, result.summary, a, result.truth, result.problems, model.events(), pictures));
   result.pictures = pictures.AllFiles();
   return result;
 }
