@@ -39,17 +39,17 @@ struct ClassifierOptions {
   // blobs (associated, not clipped), once `crop_size_min_samples` were seen;
   // 0: ς alone. The thesis set ς by hand per sequence (table 7.2: 30 px on
   // the 3-week crops of B and D, 80–100 px on A and C); a fixed 0.004 m²
-  // left a 3-week crop (r ≈ 0.06 m) below the filter in 8 % of plants
-  // (presets B, D: 92 % of crops hit). Crops large beside ς (A, C, field)
+  // leaves a 3-week crop (r ≈ 0.06 m) below the filter in some plants
+  // (docs/results/2026-11-27-option-choices.md). Crops large beside ς (A, C, field)
   // keep ς.
   double crop_size_fraction = 0.3;
   int crop_size_window = 101;
   int crop_size_min_samples = 20;
   double assoc_chi2 = 9.21;         // association region (99 % for 2 dof)
   // This big: crop without association. Off (∞) by default: it lifts the
-  // crop pixels of merged plants (preset A: 48 → 92 %) but such blobs mark
-  // no map cells, and without their weed votes the crop cells spread
-  // (field: treated area 16 → 19 %, placement RMS along 21 → 31 mm).
+  // crop pixels of merged plants but such blobs mark no map cells, and
+  // without their weed votes the crop cells spread (more of the bed
+  // treated, placement along worse: docs/results/2026-11-27-option-choices.md).
   double sure_crop_area_m2 = std::numeric_limits<double>::infinity();
   double feature_sd_m = 0.008;      // R_w per axis
   double plant_sd_m = 0.02;         // a plant's spread about its grid position, per axis
@@ -66,9 +66,8 @@ struct ClassifierOptions {
   // SplitMerged: a part (of at least the size filter) with plant matter this
   // close to its prediction is that crop whatever its centroid: the cut
   // takes a big plant's leaves from one side and gives it a neighbour's, so
-  // its centroid strays by more than a plant's spread (preset A, 2 seeds:
-  // crop pixels labelled C 87.6 → 91.2 %). 0: the gate alone. About one
-  // plant_sd_m.
+  // its centroid strays by more than a plant's spread. 0: the gate alone.
+  // About one plant_sd_m.
   double split_cover_m = 0.02;
   // SplitMerged, a blob cut by the image border: its part is that crop when
   // it has plant matter within this many of the crops' typical radius
@@ -83,21 +82,17 @@ struct ClassifierOptions {
   // prediction that a crop blob of the same frame associated with is that
   // crop's leaf, cut off by segmentation (shaded leaf between it and the
   // plant). It marks no map cells (it is not associated) and casts no weed
-  // votes. 0: off (the thesis: under the size filter is weed). 5 seeds:
-  // crop pixels labelled C on B and D +0.6 and +0.7 points, weed pixels
-  // labelled C +0.05 points; 2.0 gains another 0.3–0.4 for 3.4 points of
-  // weed pixels.
+  // votes. 0: off (the thesis: under the size filter is weed). Larger
+  // reaches take weeds beside crops for leaves.
   double fragment_reach = 1.0;
   // Lone small crops: a blob under the size filter but at least this
   // fraction of it, not cut by the border, inside the association region
   // of a prediction that no crop blob of the same frame took, is that crop
   // (a stunted plant, or one whose shaded leaves segmentation lost). 0: off
   // (the thesis: under the size filter is weed). A weed standing where a
-  // crop is missing is taken for it. 5 seeds, crops hit B 98.3 -> 99.5 %,
-  // D 97.4 -> 98.4 % (most crops missed there had been voted weed in the
-  // frames that saw them small), crop pixels labelled C +0.9 and +1.0
-  // points, weed pixels labelled C +0.03 and +0.1; field, A and C within
-  // 0.1 point. 0.1 gave the same.
+  // crop is missing is taken for it. It matters on small crops (B, D), whose
+  // missed crops had mostly been voted weed in the frames that saw them
+  // small.
   double lone_crop_fraction = 0.25;
 
   OptionErrors Validate() const;

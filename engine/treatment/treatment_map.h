@@ -33,8 +33,8 @@ struct TreatmentMapOptions {
   // weed cells, and a weed missed costs more than a drop of herbicide;
   // weed votes come from weed-sized blobs and from merged blobs' plant
   // matter beyond every crop (TreatmentOptions::merged_weed_parts_only).
-  // Field, 5 seeds, weeds clear of crop hit / bed treated: 1 vote 71.8 /
-  // 4.2 %, 2 votes 62.5 / 2.2 %, 3 votes 57.7 / 1.7 %. Spray-crop mode is
+  // One vote hits the most weeds for a little more bed treated
+  // (docs/results/2026-11-27-option-choices.md). Spray-crop mode is
   // untouched: a crop cell still needs majority_threshold and to tie or
   // outvote the weed and doubt counters together.
   int weed_majority_threshold = 1;

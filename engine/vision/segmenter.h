@@ -48,27 +48,21 @@ struct SegmenterOptions {
   // up to this fraction of the image are filled; 0: none. At 640×480,
   // 0.005 is 1536 pixels, a disc 44 px across. The largest holes are
   // mostly soil ringed by touching plants (preset A), and filling them
-  // moves the merged blobs' centroids: 5 seeds, crops hit on A 93.4 %
-  // without filling, 92.1 % up to 0.01, 95.0 % up to 0.005, 96.2 % up to
-  // 0.003; the field's along placement RMS 16.2 mm up to 0.005 or 0.01,
-  // 16.6 mm up to 0.003 (big plants' shaded leaves left unfilled).
+  // moves the merged blobs' centroids; too small a bound leaves big
+  // plants' shaded leaves unfilled (docs/results/2026-11-27-option-choices.md).
   double fill_holes_max_fraction = 0.005;
   // Notches a shaded leaf cuts into a blob's edge narrower than a disk of
   // this radius (pixels) are closed where that joins no two blobs
-  // (holes.h, NotchCloser); 0: none. Presets A–D, 3 seeds, after hole
-  // filling: plant pixel recall B 0.866 → 0.887, C 0.930 → 0.944, D 0.901
-  // → 0.916, A 0.953 → 0.957, precision within 0.001 (it also fills soil
-  // between a plant's lobes, which the doubt band mostly covers). A 6-px
-  // disk added under 0.01 more.
+  // (holes.h, NotchCloser); 0: none. It raises plant pixel recall at no
+  // cost in precision (it also fills soil between a plant's lobes, which
+  // the doubt band mostly covers).
   int close_notches_px = 4;
   // Local method only, after notches and holes: inside the convex hull of
   // every blob of at least hull_min_area_px pixels, plant where
   // I >= hull_gain·B (holes.h, HullGrower), for shaded leaf at a plant's
-  // edge wider than a notch. 0: off; at most local.gain. Presets, 3 seeds,
-  // plant pixel recall / precision at 1.8: B 0.887 → 0.923 / 0.980 → 0.969,
-  // D 0.916 → 0.945 / 0.869 → 0.851, A 0.957 → 0.972 / 0.999 → 0.994
-  // (1.6 added under 0.004 recall for 0.004–0.012 precision). The tracker
-  // measures the blobs before it (Segmentation::track_blobs).
+  // edge wider than a notch. 0: off; at most local.gain. It trades a little
+  // precision for recall. The tracker measures the blobs before it
+  // (Segmentation::track_blobs).
   double hull_gain = 1.8;
   int hull_min_area_px = 30;
   // Local method only, last: blobs grow into the shaded rim that stands
@@ -89,10 +83,9 @@ struct Segmentation {
   std::span<const Blob> blobs;
   // The blobs before hull and soil growth (SegmenterOptions::hull_gain,
   // soil_growth; the same as `blobs` without them): what the grid tracker
-  // measures. On preset A
-  // (touching plants) the tracker fed grown blobs lost the grid 14 times in
-  // 5 seeds instead of 9 and hit 84 % of crops instead of 95 %; the
-  // classifier and the pixel labels take the grown ones.
+  // measures: grown blobs of touching plants (preset A) pull the tracker's
+  // measurements apart and lose the grid more often. The classifier and
+  // the pixel labels take the grown ones.
   std::span<const Blob> track_blobs;
 };
 
