@@ -201,6 +201,46 @@ struct Tally {
   double ordered = 0.0, nearest = 0.0;
 };
 
+// "NAME,category" lines; empty without a file.
+std::map<std::string, std::string> ReadCategories(const fs::path& file) {
+  std::map<std::string, std::string> category_of;
+  if (file.empty()) return category_of;
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto comma = line.find(',');
+    if (comma != std::string::npos) category_of[line.substr(0, comma)] = line.substr(comma + 1);
+  }
+  return category_of;
+}
+
+// The category file's, else the name up to its first digit, else "all".
+std::string CategoryOf(const std::string& name, const std::map<std::string, std::string>& category_of) {
+  if (const auto it = category_of.find(name); it != category_of.end()) return it->second;
+  const std::string category = name.substr(0, name.find_first_of("0123456789"));
+  return category.empty() ? "all" : category;
+}
+
+// The label images of a folder (JPEG, PNG), sorted.
+std::vector<fs::path> LabelFiles(const fs::path& folder) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(folder)) {
+    const std::string ext = e.path().extension().string();
+    if (ext == ".jpg" || ext == ".png" || ext == ".jpeg" || ext == ".JPG" || ext == ".PNG") {
+      files.push_back(e.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void PrintTally(const std::string& label, const Tally& t) {
+  std::cout << std::left << std::setw(16) << label << std::right << " images " << std::setw(4)
+            << t.images << "  found " << std::setw(5) << (t.images ? 100.0 * t.found / t.images : 0.0)
+            << " %  crda_ordered " << (t.images ? t.ordered / t.images : 0.0) << "  crda_nearest "
+            << (t.images ? t.nearest / t.images : 0.0) << '\n';
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -222,23 +262,8 @@ int main(int argc, char** argv) {
     std::cerr << "crda_score: --labels and --rows must be folders\n";
     return 2;
   }
-  std::map<std::string, std::string> category_of;
-  if (!categories_file.empty()) {
-    std::ifstream in(categories_file);
-    std::string line;
-    while (std::getline(in, line)) {
-      const auto comma = line.find(',');
-      if (comma != std::string::npos) category_of[line.substr(0, comma)] = line.substr(comma + 1);
-    }
-  }
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(labels)) {
-    const std::string ext = e.path().extension().string();
-    if (ext == ".jpg" || ext == ".png" || ext == ".jpeg" || ext == ".JPG" || ext == ".PNG") {
-      files.push_back(e.path());
-    }
-  }
-  std::sort(files.begin(), files.end());
+  const std::map<std::string, std::string> category_of = ReadCategories(categories_file);
+  const std::vector<fs::path> files = LabelFiles(labels);
   std::map<std::string, Tally> tallies;
   Tally all;
   int errors = 0;
@@ -258,11 +283,7 @@ int main(int argc, char** argv) {
     }
     const Score s = ScoreImage(label, det);
     if (s.rows == 0) continue;  // nothing labelled with three rows
-    std::string category;
-    if (const auto it = category_of.find(name); it != category_of.end()) category = it->second;
-    else category = name.substr(0, name.find_first_of("0123456789"));
-    if (category.empty()) category = "all";
-    if (shape) category = LabelShape(label, 0.05);
+    const std::string category = shape ? LabelShape(label, 0.05) : CategoryOf(name, category_of);
     for (Tally* t : {&tallies[category], &all}) {
       ++t->images;
       t->found += det.found ? 1 : 0;
@@ -274,16 +295,10 @@ int main(int argc, char** argv) {
                 << " found " << det.found << '\n';
     }
   }
-  const auto print = [](const std::string& label, const Tally& t) {
-    std::cout << std::left << std::setw(16) << label << std::right << " images " << std::setw(4)
-              << t.images << "  found " << std::setw(5) << (t.images ? 100.0 * t.found / t.images : 0.0)
-              << " %  crda_ordered " << (t.images ? t.ordered / t.images : 0.0) << "  crda_nearest "
-              << (t.images ? t.nearest / t.images : 0.0) << '\n';
-  };
   if (tallies.size() > 1) {
-    for (const auto& [category, t] : tallies) print(category, t);
+    for (const auto& [category, t] : tallies) PrintTally(category, t);
   }
-  print("overall", all);
+  PrintTally("overall", all);
   if (errors > 0) std::cout << errors << " error(s)\n";
   return all.images > 0 ? 0 : 2;
 }

@@ -19,6 +19,80 @@
 namespace fs = std::filesystem;
 using namespace plantscale;
 
+namespace {
+
+// Tuning: --set key=value on the detector's options.
+void SetOption(rows::RowDetectorOptions& options, const std::string& kv) {
+  const auto eq = kv.find('=');
+  const std::string key = kv.substr(0, eq);
+  const double value = std::stod(kv.substr(eq + 1));
+  if (key == "min_row_occupancy") options.min_row_occupancy = value;
+  else if (key == "min_gap_row_occupancy") options.min_gap_row_occupancy = value;
+  else if (key == "min_curve_coherence") options.min_curve_coherence = value;
+  else if (key == "phase_smoothness") options.curve.phase_smoothness = value;
+  else if (key == "scale_smoothness") options.curve.scale_smoothness = value;
+  else if (key == "scale_prior") options.curve.scale_prior = value;
+  else if (key == "half_comb_weight") options.curve.half_comb_weight = value;
+  else if (key == "curve_degree") options.curve.curve_degree = static_cast<int>(value);
+  else if (key == "min_curve_gain") options.min_curve_gain = value;
+  else if (key == "curve_gain_per_confidence") options.curve_gain_per_confidence = value;
+  else if (key == "curve_free_prior") options.curve_free_prior = static_cast<int>(value);
+  else if (key == "min_free_spacing_fraction") options.curve.min_free_spacing_fraction = value;
+  else if (key == "free_max_scale") options.curve.free_max_scale = value;
+  else if (key == "bands") options.curve.bands = static_cast<int>(value);
+  else if (key == "max_scale") options.curve.max_scale = value;
+  else if (key == "max_phase_jump") options.curve.max_phase_jump = static_cast<int>(value);
+  else throw std::runtime_error("unknown key " + key);
+}
+
+int TopRow(const rows::RowDetection& det) {
+  return std::clamp(static_cast<int>(std::ceil(det.top_v_px - 0.5)), 0, det.height_px - 1);
+}
+
+// NAME_rows.csv and NAME_rows.json as detect-rows writes them.
+void WriteRows(const rows::RowDetection& det, const std::string& out) {
+  std::ofstream csv(out + "_rows.csv");
+  csv << "row,v,u\n" << std::fixed << std::setprecision(2);
+  const int top = TopRow(det);
+  if (!det.rows.empty()) {
+    for (int v = det.height_px - 1; v >= top; --v) {
+      for (size_t i = 0; i < det.rows.size(); ++i) {
+        csv << i << ',' << v << ',' << det.U(det.rows[i].n, v + 0.5) << '\n';
+      }
+    }
+  }
+  std::ofstream json(out + "_rows.json");
+  json << "{\"width\": " << det.width_px << ", \"height\": " << det.height_px
+       << ", \"confidence\": " << det.confidence << ", \"curve_coherence\": " << det.curve_coherence
+       << ", \"reason\": \"" << det.reason << "\"}\n";
+}
+
+// NAME_rows.png: the photograph, its label lines in green, the rows found
+// (the central one red).
+void WriteOverlay(const cv::Mat& image, const fs::path& label_file, const rows::RowDetection& det,
+                  const std::string& out) {
+  cv::Mat o = image.clone();
+  if (o.channels() == 1) cv::cvtColor(o, o, cv::COLOR_GRAY2BGR);
+  if (!label_file.empty()) {
+    cv::Mat label = cv::imread(label_file.string(), cv::IMREAD_GRAYSCALE);
+    if (!label.empty()) {
+      cv::resize(label, label, o.size(), 0, 0, cv::INTER_NEAREST);
+      o.setTo(cv::Scalar(0, 255, 0), label > 128);
+    }
+  }
+  const int top = TopRow(det);
+  for (const rows::DetectedRow& r : det.rows) {
+    for (int v = det.height_px - 1; v > top; v -= 4) {
+      cv::line(o, cv::Point(static_cast<int>(det.U(r.n, v + 0.5)), v),
+               cv::Point(static_cast<int>(det.U(r.n, v - 3.5)), v - 4),
+               r.n == 0 ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 0, 255), 2);
+    }
+  }
+  cv::imwrite(out + "_rows.png", o);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   if (argc < 3) {
     std::cerr << "usage: rows_dev IMAGES OUT [--overlays [--labels DIR]] [--straight]\n";
@@ -32,29 +106,7 @@ int main(int argc, char** argv) {
     if (a == "--overlays") overlays = true;
     if (a == "--straight") options.curves = false;
     if (a == "--labels" && i + 1 < argc) labels = argv[++i];
-    if (a == "--set" && i + 1 < argc) {  // tuning: --set key=value
-      const std::string kv = argv[++i];
-      const auto eq = kv.find('=');
-      const std::string key = kv.substr(0, eq);
-      const double value = std::stod(kv.substr(eq + 1));
-      if (key == "min_row_occupancy") options.min_row_occupancy = value;
-      else if (key == "min_gap_row_occupancy") options.min_gap_row_occupancy = value;
-      else if (key == "min_curve_coherence") options.min_curve_coherence = value;
-      else if (key == "phase_smoothness") options.curve.phase_smoothness = value;
-      else if (key == "scale_smoothness") options.curve.scale_smoothness = value;
-      else if (key == "scale_prior") options.curve.scale_prior = value;
-      else if (key == "half_comb_weight") options.curve.half_comb_weight = value;
-      else if (key == "curve_degree") options.curve.curve_degree = static_cast<int>(value);
-      else if (key == "min_curve_gain") options.min_curve_gain = value;
-      else if (key == "curve_gain_per_confidence") options.curve_gain_per_confidence = value;
-      else if (key == "curve_free_prior") options.curve_free_prior = static_cast<int>(value);
-      else if (key == "min_free_spacing_fraction") options.curve.min_free_spacing_fraction = value;
-      else if (key == "free_max_scale") options.curve.free_max_scale = value;
-      else if (key == "bands") options.curve.bands = static_cast<int>(value);
-      else if (key == "max_scale") options.curve.max_scale = value;
-      else if (key == "max_phase_jump") options.curve.max_phase_jump = static_cast<int>(value);
-      else throw std::runtime_error("unknown key " + key);
-    }
+    if (a == "--set" && i + 1 < argc) SetOption(options, argv[++i]);
   }
   fs::create_directories(argv[2]);
   std::vector<std::string> errors;
@@ -71,41 +123,10 @@ int main(int argc, char** argv) {
       const rows::RowDetection det = detector.Detect(segmenter.Process(input).mask);
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ++n;
-      const fs::path out = fs::path(argv[2]) / file.stem();
-      std::ofstream csv(out.string() + "_rows.csv");
-      csv << "row,v,u\n" << std::fixed << std::setprecision(2);
-      const int top = std::clamp(static_cast<int>(std::ceil(det.top_v_px - 0.5)), 0, det.height_px - 1);
-      if (!det.rows.empty()) {
-        for (int v = det.height_px - 1; v >= top; --v) {
-          for (size_t i = 0; i < det.rows.size(); ++i) {
-            csv << i << ',' << v << ',' << det.U(det.rows[i].n, v + 0.5) << '\n';
-          }
-        }
-      }
-      std::ofstream json(out.string() + "_rows.json");
-      json << "{\"width\": " << det.width_px << ", \"height\": " << det.height_px
-           << ", \"confidence\": " << det.confidence << ", \"curve_coherence\": " << det.curve_coherence
-           << ", \"reason\": \"" << det.reason << "\"}\n";
+      const std::string out = (fs::path(argv[2]) / file.stem()).string();
+      WriteRows(det, out);
       if (det.confidence > 0.0) ++found;
-      if (overlays) {
-        cv::Mat o = image.clone();
-        if (o.channels() == 1) cv::cvtColor(o, o, cv::COLOR_GRAY2BGR);
-        if (!labels.empty()) {  // label lines in green
-          cv::Mat label = cv::imread((labels / file.filename()).string(), cv::IMREAD_GRAYSCALE);
-          if (!label.empty()) {
-            cv::resize(label, label, o.size(), 0, 0, cv::INTER_NEAREST);
-            o.setTo(cv::Scalar(0, 255, 0), label > 128);
-          }
-        }
-        for (const rows::DetectedRow& r : det.rows) {
-          for (int v = det.height_px - 1; v > top; v -= 4) {
-            cv::line(o, cv::Point(static_cast<int>(det.U(r.n, v + 0.5)), v),
-                     cv::Point(static_cast<int>(det.U(r.n, v - 3.5)), v - 4),
-                     r.n == 0 ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 0, 255), 2);
-          }
-        }
-        cv::imwrite(out.string() + "_rows.png", o);
-      }
+      if (overlays) WriteOverlay(image, labels.empty() ? fs::path() : labels / file.filename(), det, out);
     } catch (const std::exception& e) {
       std::cerr << file << ": " << e.what() << '\n';
     }
