@@ -88,6 +88,16 @@ int LowestColumn(const float* p, int fw, int x0, int x1) {
   return lowest;
 }
 
+// Mean plant matter per cell of the columns (kw image pixels each, w of
+// them) within ± half of u in one band (running sums `cum`, `rows_in_band`
+// rows); −1 when the window leaves the image.
+inline double Window(const double* cum, double u, double half, int rows_in_band, double kw, int w) {
+  const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw - 0.5)));
+  const int x1 = std::min(w - 1, static_cast<int>(std::floor((u + half) / kw - 0.5)));
+  if (x1 < x0) return -1.0;
+  return (cum[x1 + 1] - cum[x0]) / ((x1 - x0 + 1) * rows_in_band);
+}
+
 }  // namespace
 
 std::vector<StraightSearch::Band> StraightSearch::SplitIntoBands(const cv::Mat& image, int n_bands,
@@ -247,12 +257,6 @@ void StraightSearch::BuildHistogram(const Geometry& geo, double max_dv) {
   }
 }
 
-double StraightSearch::Window(const double* cum, double u, double half, int rows_in_band) const {
-  const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kw_ - 0.5)));
-  const int x1 = std::min(w_ - 1, static_cast<int>(std::floor((u + half) / kw_ - 0.5)));
-  if (x1 < x0) return -1.0;
-  return (cum[x1 + 1] - cum[x0]) / ((x1 - x0 + 1) * rows_in_band);
-}
 
 // A row is occupied in a band when its window holds clearly more plant
 // matter than the windows half-way between the rows.
@@ -287,8 +291,8 @@ int StraightSearch::FirstContrastBand(const Geometry& geo, double d, double sc, 
     for (size_t r = 0; r < n_rows; ++r) {
       const double u = (sc + (n_lo + static_cast<int>(r)) * d) * shrink + geo.c * b.dv;
       const double m = u + 0.5 * d * shrink;
-      if (u >= 0.0 && u <= W_) on += std::max(0.0, Window(p, u, half, b.rows));
-      if (m >= 0.0 && m <= W_) between += std::max(0.0, Window(p, m, half, b.rows));
+      if (u >= 0.0 && u <= W_) on += std::max(0.0, Window(p, u, half, b.rows, kw_, w_));
+      if (m >= 0.0 && m <= W_) between += std::max(0.0, Window(p, m, half, b.rows, kw_, w_));
     }
     if (on > 0.0 && 1.0 - between / on >= o_.min_contrast) break;
   }
@@ -314,8 +318,8 @@ StraightSearch::Tallies StraightSearch::TallyBands(const Geometry& geo, double d
     for (size_t r = 0; r < n_rows; ++r) {
       const int n = n_lo + static_cast<int>(r);
       const double u = (sc + n * d) * shrink + geo.c * b.dv;
-      density[r] = (u >= 0.0 && u <= W_) ? Window(p, u, half, b.rows) : -1.0;
-      const double between = Window(p, u + 0.5 * d * shrink, half, b.rows);
+      density[r] = (u >= 0.0 && u <= W_) ? Window(p, u, half, b.rows, kw_, w_) : -1.0;
+      const double between = Window(p, u + 0.5 * d * shrink, half, b.rows, kw_, w_);
       if (between >= 0.0 && u + 0.5 * d * shrink >= 0.0 && u + 0.5 * d * shrink <= W_) {
         background += between;
         ++n_background;

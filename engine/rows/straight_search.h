@@ -76,9 +76,6 @@ class StraightSearch {
   Geometry GeometryAt(double g, double lean_at_centre) const;
   Geometry CellGeometry(int index) const;
   void BuildHistogram(const Geometry& geo, double max_dv);
-  // Mean plant matter per cell of the columns within ± half of u in one
-  // band (running sums `cum`); −1 when the window leaves the image.
-  double Window(const double* cum, double u, double half, int rows_in_band) const;
 
   Rows FindRows(const Geometry& geo, double d, double sc) const;
   int FirstContrastBand(const Geometry& geo, double d, double sc, int n_lo, size_t n_rows) const;
