@@ -58,63 +58,70 @@ geometry::CameraModel FrameCamera(const sim::SimulatorOptions& s, const sim::Cam
   return geometry::CameraModel(o);
 }
 
+// Row n's line (at height z) projected into the frame, sampled every 2 cm
+// ahead of the vehicle, written into column k of `rows` per image row.
+void ProjectRowLine(const sim::Simulator& sim, const sim::FrameTruth& truth,
+                    const geometry::CameraModel& camera, double z, double max_range, int k,
+                    TrueRows& rows) {
+  const int H = camera.height();
+  std::vector<Eigen::Vector2d> points;  // (u, v), v decreasing with range
+  for (double ahead = 0.0; ahead <= max_range; ahead += 0.02) {
+    const double y_field = truth.pose.y_m + ahead;  // rows run along field y
+    const Eigen::Vector2d g = sim::FieldToVehicle(truth.pose, {sim.field().RowX(k - 1, y_field), y_field});
+    if (g.y() <= 0.0 || std::hypot(g.x(), g.y()) > max_range) continue;
+    const auto uv = camera.Project({g.x(), g.y(), z});
+    if (uv) points.push_back(*uv);
+  }
+  for (size_t i = 1; i < points.size(); ++i) {
+    const Eigen::Vector2d& a = points[i - 1];
+    const Eigen::Vector2d& b = points[i];
+    if (!(b.y() < a.y())) continue;
+    for (int vi = static_cast<int>(std::ceil(b.y() - 0.5)); vi <= static_cast<int>(std::floor(a.y() - 0.5)); ++vi) {
+      if (vi < 0 || vi >= H) continue;
+      const double v = vi + 0.5;
+      rows.u[static_cast<size_t>(vi)][static_cast<size_t>(k)] = a.x() + (v - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+    }
+  }
+}
+
+// A human labels the centre of the plants as seen, not a line on the soil:
+// where the frame shows enough of row k's crop plants, its true line is the
+// least-squares line u = a + b·v through their visible centroids.
+void FitVisibleCentroids(const sim::FrameTruth& truth, const geometry::CameraModel& camera, int k,
+                         TrueRows& rows) {
+  const int H = camera.height();
+  Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  int count = 0;
+  for (const sim::PlantTruth& p : truth.plants) {
+    if (p.cls != sim::PlantClass::kCrop || p.row != k - 1 || p.area_px < 30) continue;
+    const Eigen::Vector2d& c = p.centroid_px;
+    if (c.x() < 10.0 || c.x() > camera.width() - 10.0 || c.y() > H - 10.0) continue;
+    const Eigen::Vector2d row(1.0, c.y());
+    a += row * row.transpose();
+    b += c.x() * row;
+    ++count;
+  }
+  if (count < 4 || std::abs(a.determinant()) < 1e-6) return;
+  const Eigen::Vector2d line = a.ldlt().solve(b);
+  for (int vi = 0; vi < H; ++vi) {
+    double& u = rows.u[static_cast<size_t>(vi)][static_cast<size_t>(k)];
+    if (!std::isnan(u)) u = line(0) + line(1) * (vi + 0.5);
+  }
+}
+
 // The bed's central three row lines (at half the crop's rim height, where
 // the plant matter is seen) projected into the frame.
 TrueRows TrueRowsInFrame(const sim::Simulator& sim, const sim::FrameTruth& truth,
                          const RowsEvalOptions& o) {
   const sim::SimulatorOptions& s = sim.options();
   const geometry::CameraModel camera = FrameCamera(s, truth.bounce);
-  const int H = camera.height();
   const double z = 0.5 * s.field.crop_height_ratio * s.field.crop_radius_m;
   const double max_range = o.max_range_fraction * s.render.max_range_m;
   TrueRows rows;
-  rows.u.assign(static_cast<size_t>(H), {std::nan(""), std::nan(""), std::nan("")});
-  for (int k = 0; k < 3; ++k) {
-    const int n = k - 1;
-    std::vector<Eigen::Vector2d> points;  // (u, v), v decreasing with range
-    for (double ahead = 0.0; ahead <= max_range; ahead += 0.02) {
-      const double y_field = truth.pose.y_m + ahead;  // rows run along field y
-      const Eigen::Vector2d g = sim::FieldToVehicle(
-          truth.pose, {sim.field().RowX(n, y_field), y_field});
-      if (g.y() <= 0.0 || std::hypot(g.x(), g.y()) > max_range) continue;
-      const auto uv = camera.Project({g.x(), g.y(), z});
-      if (uv) points.push_back(*uv);
-    }
-    for (size_t i = 1; i < points.size(); ++i) {
-      const Eigen::Vector2d& a = points[i - 1];
-      const Eigen::Vector2d& b = points[i];
-      if (!(b.y() < a.y())) continue;
-      for (int vi = static_cast<int>(std::ceil(b.y() - 0.5)); vi <= static_cast<int>(std::floor(a.y() - 0.5)); ++vi) {
-        if (vi < 0 || vi >= H) continue;
-        const double v = vi + 0.5;
-        rows.u[static_cast<size_t>(vi)][static_cast<size_t>(k)] =
-            a.x() + (v - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
-      }
-    }
-  }
-  // A human labels the centre of the plants as seen, not a line on the
-  // soil: where the frame shows enough of a row's crop plants, its true line
-  // is the least-squares line u = a + b·v through their visible centroids.
-  for (int k = 0; k < 3; ++k) {
-    Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    int count = 0;
-    for (const sim::PlantTruth& p : truth.plants) {
-      if (p.cls != sim::PlantClass::kCrop || p.row != k - 1 || p.area_px < 30) continue;
-      const Eigen::Vector2d& c = p.centroid_px;
-      if (c.x() < 10.0 || c.x() > camera.width() - 10.0 || c.y() > H - 10.0) continue;
-      const Eigen::Vector2d row(1.0, c.y());
-      a += row * row.transpose();
-      b += c.x() * row;
-      ++count;
-    }
-    if (count < 4 || std::abs(a.determinant()) < 1e-6) continue;
-    const Eigen::Vector2d line = a.ldlt().solve(b);
-    for (int vi = 0; vi < H; ++vi) {
-      double& u = rows.u[static_cast<size_t>(vi)][static_cast<size_t>(k)];
-      if (!std::isnan(u)) u = line(0) + line(1) * (vi + 0.5);
-    }
-  }
+  rows.u.assign(static_cast<size_t>(camera.height()), {std::nan(""), std::nan(""), std::nan("")});
+  for (int k = 0; k < 3; ++k) ProjectRowLine(sim, truth, camera, z, max_range, k, rows);
+  for (int k = 0; k < 3; ++k) FitVisibleCentroids(truth, camera, k, rows);
   return rows;
 }
 
@@ -224,17 +231,71 @@ RowsEvaluation EvaluateRows(const RowsEvalOptions& options) {
   return e;
 }
 
+namespace {
+
+// The label image of a photograph: the same stem in `labels`, PNG or JPEG.
+fs::path LabelFor(const fs::path& file, const fs::path& labels) {
+  fs::path label_file;
+  for (const char* ext : {".png", ".jpg", ".jpeg", ".PNG", ".JPG"}) {
+    const fs::path candidate = labels / (file.stem().string() + ext);
+    if (fs::exists(candidate)) label_file = candidate;
+  }
+  return label_file;
+}
+
+// CRDA of one labelled image row: the three label lines nearest the
+// image's centre column (`centres` in image pixels, left to right), each
+// against the detected row nearest it at height v; −1 when the row is not
+// scored (fewer than three lines, or closer than 10 px).
+double ScoreLabelRow(const rows::RowDetection& det, const std::vector<double>& centres, double v,
+                     int width) {
+  if (centres.size() < 3) return -1.0;
+  size_t c = 1;
+  for (size_t i = 1; i + 1 < centres.size(); ++i) {
+    if (std::abs(centres[i] - 0.5 * width) < std::abs(centres[c] - 0.5 * width)) c = i;
+  }
+  const double d = 0.5 * (centres[c + 1] - centres[c - 1]);
+  if (d < 10.0) return -1.0;
+  double sum = 0.0;
+  for (size_t k = c - 1; k <= c + 1; ++k) {
+    if (det.rows.empty() || v < det.top_v_px) continue;
+    double best = 1e18;
+    for (const rows::DetectedRow& r : det.rows) {
+      const double u = det.U(r.n, v);
+      if (std::abs(u - centres[k]) < std::abs(best - centres[k])) best = u;
+    }
+    sum += CrdaScore(best, centres[k], d);
+  }
+  return sum / 3.0;
+}
+
+// One photograph against its label image: the sum over its scored label
+// rows in `score.crda` (the caller divides), their count.
+PhotoRowScore ScorePhoto(const cv::Mat& image, const cv::Mat& label, const rows::RowDetection& det,
+                         const std::string& name) {
+  PhotoRowScore score{name, 0.0, 0, det.confidence > 0.0};
+  const double sx = static_cast<double>(image.cols) / label.cols;
+  const double sy = static_cast<double>(image.rows) / label.rows;
+  for (int y = 0; y < label.rows; ++y) {
+    // Label lines crossing this label row: centres of the white runs.
+    const std::vector<double> centres = rows::LabelLineCentres(label.ptr<uint8_t>(y), label.cols, sx);
+    const double s = ScoreLabelRow(det, centres, (y + 0.5) * sy, image.cols);
+    if (s < 0.0) continue;
+    score.crda += s;
+    ++score.image_rows_scored;
+  }
+  return score;
+}
+
+}  // namespace
+
 PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path& labels) {
   PhotoRowsEvaluation e;
   rows::RowDetector detector{rows::RowDetectorOptions{}};
   const std::vector<fs::path> files = CollectImages({images}, e.errors);
   double total = 0.0;
   for (const fs::path& file : files) {
-    fs::path label_file;
-    for (const char* ext : {".png", ".jpg", ".jpeg", ".PNG", ".JPG"}) {
-      const fs::path candidate = labels / (file.stem().string() + ext);
-      if (fs::exists(candidate)) label_file = candidate;
-    }
+    const fs::path label_file = LabelFor(file, labels);
     if (label_file.empty()) {
       e.errors.push_back(file.string() + ": no label image in " + labels.string());
       continue;
@@ -246,35 +307,9 @@ PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path&
       const rows::RowDetection det = DetectRowsInPhoto(image, detector);
       ++e.images;
       if (det.confidence > 0.0) ++e.images_with_rows;
-      PhotoRowScore score{file.filename().string(), 0.0, 0, det.confidence > 0.0};
-      const double sx = static_cast<double>(image.cols) / label.cols;
-      const double sy = static_cast<double>(image.rows) / label.rows;
-      for (int y = 0; y < label.rows; ++y) {
-        // Label lines crossing this label row: centres of the white runs.
-        const std::vector<double> centres = rows::LabelLineCentres(label.ptr<uint8_t>(y), label.cols, sx);
-        if (centres.size() < 3) continue;
-        size_t c = 1;
-        for (size_t i = 1; i + 1 < centres.size(); ++i) {
-          if (std::abs(centres[i] - 0.5 * image.cols) < std::abs(centres[c] - 0.5 * image.cols)) c = i;
-        }
-        const double d = 0.5 * (centres[c + 1] - centres[c - 1]);
-        if (d < 10.0) continue;
-        const double v = (y + 0.5) * sy;
-        double sum = 0.0;
-        for (size_t k = c - 1; k <= c + 1; ++k) {
-          if (det.rows.empty() || v < det.top_v_px) continue;
-          double best = 1e18;
-          for (const rows::DetectedRow& r : det.rows) {
-            const double u = det.U(r.n, v);
-            if (std::abs(u - centres[k]) < std::abs(best - centres[k])) best = u;
-          }
-          sum += CrdaScore(best, centres[k], d);
-        }
-        total += sum / 3.0;
-        ++e.image_rows_scored;
-        score.crda += sum / 3.0;
-        ++score.image_rows_scored;
-      }
+      PhotoRowScore score = ScorePhoto(image, label, det, file.filename().string());
+      total += score.crda;
+      e.image_rows_scored += score.image_rows_scored;
       if (score.image_rows_scored > 0) score.crda /= score.image_rows_scored;
       e.per_image.push_back(score);
     } catch (const std::exception& ex) {
