@@ -463,46 +463,55 @@ void PipelineStage::PublishTiles(int64_t utime, Publisher& publisher, bool to_th
   const treatment::TreatmentMap& map = system().map();
   const double bar_y = BarY();
   const double edge = kTileCells * map.options().cell_m;
-  int last_seen = -1;  // the last tile row with a cell the camera saw
-  if (to_the_end) {
-    for (int row = map.rows() / kTileCells - 1; row >= next_tile_row_; --row) {
-      if (TileRowObserved(row)) {
-        last_seen = row;
-        break;
-      }
-    }
-  }
+  const int last_seen = to_the_end ? LastObservedTileRow() : -1;
+  // A tile row is due once the bar has passed it (at the end of the run:
+  // up to the last row the camera saw).
   const auto due = [&](int row) {
     if ((row + 1) * kTileCells > map.rows()) return false;
     return to_the_end ? row <= last_seen : map.options().start_y_m + (row + 1) * edge < bar_y;
   };
-  while (due(next_tile_row_)) {
+  for (; due(next_tile_row_); ++next_tile_row_) {
     for (int tx = 0; tx * kTileCells < map.columns(); ++tx) {
-      MapTileDelta d;
-      d.tile_x = tx;
-      d.tile_y = next_tile_row_;
-      d.revision = tile_revision_;
-      d.origin_m = {map.origin_x_m() + tx * edge, map.options().start_y_m + next_tile_row_ * edge};
-      d.resolution_m = map.options().cell_m;
-      d.width = d.height = kTileCells;
-      d.cells.reserve(static_cast<size_t>(kTileCells * kTileCells));
-      for (int j = 0; j < kTileCells; ++j) {
-        for (int i = 0; i < kTileCells; ++i) {
-          const int c = tx * kTileCells + i;
-          const int r = next_tile_row_ * kTileCells + j;
-          const treatment::CellClass cls = c < map.columns() ? map.ClassOf(c, r) : treatment::CellClass::kSoil;
-          d.cells.push_back(c >= map.columns() ? plantscale_map_tile_t::CELL_UNKNOWN
-                            : map.Treated(c, r) ? plantscale_map_tile_t::CELL_TREATED
-                            : cls == treatment::CellClass::kSoil && !map.Observed(c, r)
-                                ? plantscale_map_tile_t::CELL_UNKNOWN
-                                : TileCell(cls));
-        }
-      }
-      publisher.Publish(channels::kMapTiles, ToLcm(d, utime));
+      publisher.Publish(channels::kMapTiles, ToLcm(Tile(tx, next_tile_row_), utime));
     }
-    ++next_tile_row_;
   }
   ++tile_revision_;
+}
+
+// The last tile row (from next_tile_row_ on) with a cell the camera saw; −1: none.
+int PipelineStage::LastObservedTileRow() const {
+  for (int row = system().map().rows() / kTileCells - 1; row >= next_tile_row_; --row) {
+    if (TileRowObserved(row)) return row;
+  }
+  return -1;
+}
+
+// One kTileCells² tile of the treatment map: treated, else the cell's class,
+// unknown where the camera never saw soil or beyond the map's columns.
+MapTileDelta PipelineStage::Tile(int tx, int ty) const {
+  const treatment::TreatmentMap& map = system().map();
+  const double edge = kTileCells * map.options().cell_m;
+  MapTileDelta d;
+  d.tile_x = tx;
+  d.tile_y = ty;
+  d.revision = tile_revision_;
+  d.origin_m = {map.origin_x_m() + tx * edge, map.options().start_y_m + ty * edge};
+  d.resolution_m = map.options().cell_m;
+  d.width = d.height = kTileCells;
+  d.cells.reserve(static_cast<size_t>(kTileCells * kTileCells));
+  for (int j = 0; j < kTileCells; ++j) {
+    for (int i = 0; i < kTileCells; ++i) {
+      const int c = tx * kTileCells + i;
+      const int r = ty * kTileCells + j;
+      const treatment::CellClass cls = c < map.columns() ? map.ClassOf(c, r) : treatment::CellClass::kSoil;
+      d.cells.push_back(c >= map.columns() ? plantscale_map_tile_t::CELL_UNKNOWN
+                        : map.Treated(c, r) ? plantscale_map_tile_t::CELL_TREATED
+                        : cls == treatment::CellClass::kSoil && !map.Observed(c, r)
+                            ? plantscale_map_tile_t::CELL_UNKNOWN
+                            : TileCell(cls));
+    }
+  }
+  return d;
 }
 
 }  // namespace plantscale::vehicle

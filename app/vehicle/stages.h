@@ -157,6 +157,8 @@ class PipelineStage : public Stage, public BlobView {
   void PublishNozzles(int64_t utime, Publisher& publisher);
   void PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end = false);
   bool TileRowObserved(int tile_row) const;
+  int LastObservedTileRow() const;
+  telemetry::MapTileDelta Tile(int tx, int ty) const;
   // The plants sprayed since the last call join the changed records.
   void NoteNewlySprayed();
   // The changed record ids, sorted and unique; the list starts again.
