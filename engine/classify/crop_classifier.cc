@@ -111,63 +111,75 @@ void CropClassifier::Classify(std::span<const tracking::Feature> features,
     s_inverse.push_back(AssociationCovariance(c, covariance, options_).inverse());
   }
   out.clear();
-  for (const tracking::Feature& f : features) {
-    BlobDecision d;
-    d.area_m2 = f.area_m2;
-    d.clipped = f.clipped;
-    for (size_t i = 0; i < predictions.size(); ++i) {
-      const Eigen::Vector2d nu = f.ground_m - predictions[i].ground_m;
-      const double g2 = nu.dot(s_inverse[i] * nu);
-      if (g2 < d.gamma2) {
-        d.gamma2 = g2;
-        d.distance_m = nu.norm();
-        d.m = predictions[i].m;
-        d.n = predictions[i].n;
-        d.predicted_ground_m = predictions[i].ground_m;
-      }
-    }
-    d.associated = d.gamma2 <= options_.assoc_chi2;
-    d.size_filter_m2 = size_filter_m2_;
-    d.crop = !predictions.empty() &&
-             IsCrop(d.area_m2, d.clipped, d.gamma2, size_filter_m2_, options_.assoc_chi2,
-                    options_.sure_crop_area_m2);
-    out.push_back(d);
-  }
-  // Leaf fragments of the crops found (ClassifierOptions::fragment_reach).
-  const double reach = options_.fragment_reach * typical_crop_radius_m();
-  if (reach > 0.0) {
-    for (size_t i = 0; i < out.size(); ++i) {
-      BlobDecision& d = out[i];
-      if (d.crop || d.clipped || !(d.area_m2 < d.size_filter_m2)) continue;
-      for (size_t j = 0; j < out.size() && !d.crop; ++j) {
-        const BlobDecision& c = out[j];
-        if (!c.crop || !c.associated || c.fragment) continue;
-        if ((features[i].ground_m - c.predicted_ground_m).norm() <= reach) {
-          d.crop = d.fragment = true;
-          d.m = c.m;
-          d.n = c.n;
-        }
-      }
-    }
-  }
-  // Lone small crops (ClassifierOptions::lone_crop_fraction).
-  if (options_.lone_crop_fraction > 0.0) {
-    for (BlobDecision& d : out) {
-      if (d.crop || d.clipped || !d.associated ||
-          d.area_m2 < options_.lone_crop_fraction * d.size_filter_m2) {
-        continue;
-      }
-      const bool taken = std::any_of(out.begin(), out.end(), [&](const BlobDecision& c) {
-        return c.crop && c.associated && c.m == d.m && c.n == d.n;
-      });
-      if (!taken) d.crop = d.lone = true;
-    }
-  }
+  for (const tracking::Feature& f : features) out.push_back(Decide(f, predictions, s_inverse));
+  MarkFragments(features, out);
+  MarkLoneCrops(out);
   // Learnt after the frame, so every blob of a frame meets the same filter.
   for (const BlobDecision& d : out) {
     if (d.crop && d.associated && !d.clipped && !d.lone) RememberCropArea(d.area_m2);
   }
   UpdateSizeFilter();
+}
+
+// The thesis's rule on one blob: its nearest prediction by γ², then crop
+// when associated and above the size filter (IsCrop).
+BlobDecision CropClassifier::Decide(const tracking::Feature& f, std::span<const PredictedCrop> predictions,
+                                    std::span<const Eigen::Matrix2d> s_inverse) const {
+  BlobDecision d;
+  d.area_m2 = f.area_m2;
+  d.clipped = f.clipped;
+  for (size_t i = 0; i < predictions.size(); ++i) {
+    const Eigen::Vector2d nu = f.ground_m - predictions[i].ground_m;
+    const double g2 = nu.dot(s_inverse[i] * nu);
+    if (g2 < d.gamma2) {
+      d.gamma2 = g2;
+      d.distance_m = nu.norm();
+      d.m = predictions[i].m;
+      d.n = predictions[i].n;
+      d.predicted_ground_m = predictions[i].ground_m;
+    }
+  }
+  d.associated = d.gamma2 <= options_.assoc_chi2;
+  d.size_filter_m2 = size_filter_m2_;
+  d.crop = !predictions.empty() &&
+           IsCrop(d.area_m2, d.clipped, d.gamma2, size_filter_m2_, options_.assoc_chi2,
+                  options_.sure_crop_area_m2);
+  return d;
+}
+
+// Leaf fragments of the crops found (ClassifierOptions::fragment_reach).
+void CropClassifier::MarkFragments(std::span<const tracking::Feature> features,
+                                   std::vector<BlobDecision>& out) const {
+  const double reach = options_.fragment_reach * typical_crop_radius_m();
+  if (!(reach > 0.0)) return;
+  for (size_t i = 0; i < out.size(); ++i) {
+    BlobDecision& d = out[i];
+    if (d.crop || d.clipped || !(d.area_m2 < d.size_filter_m2)) continue;
+    for (size_t j = 0; j < out.size() && !d.crop; ++j) {
+      const BlobDecision& c = out[j];
+      if (!c.crop || !c.associated || c.fragment) continue;
+      if ((features[i].ground_m - c.predicted_ground_m).norm() <= reach) {
+        d.crop = d.fragment = true;
+        d.m = c.m;
+        d.n = c.n;
+      }
+    }
+  }
+}
+
+// Lone small crops (ClassifierOptions::lone_crop_fraction).
+void CropClassifier::MarkLoneCrops(std::vector<BlobDecision>& out) const {
+  if (!(options_.lone_crop_fraction > 0.0)) return;
+  for (BlobDecision& d : out) {
+    if (d.crop || d.clipped || !d.associated ||
+        d.area_m2 < options_.lone_crop_fraction * d.size_filter_m2) {
+      continue;
+    }
+    const bool taken = std::any_of(out.begin(), out.end(), [&](const BlobDecision& c) {
+      return c.crop && c.associated && c.m == d.m && c.n == d.n;
+    });
+    if (!taken) d.crop = d.lone = true;
+  }
 }
 
 int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,

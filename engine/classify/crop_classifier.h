@@ -182,6 +182,10 @@ class CropClassifier {
   const ClassifierOptions& options() const { return options_; }
 
  private:
+  BlobDecision Decide(const tracking::Feature& f, std::span<const PredictedCrop> predictions,
+                      std::span<const Eigen::Matrix2d> s_inverse) const;
+  void MarkFragments(std::span<const tracking::Feature> features, std::vector<BlobDecision>& out) const;
+  void MarkLoneCrops(std::vector<BlobDecision>& out) const;
   void RememberCropArea(double area_m2);
   void UpdateSizeFilter();
 
