@@ -153,15 +153,30 @@ int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
                             const std::vector<uint64_t>& grown_bits,
                             const std::vector<uint8_t>* counted, cv::Mat& mask,
                             const std::vector<uint8_t>* small) {
-  const int width = width_, height = height_;
-  const auto words = static_cast<size_t>((width + 63) / 64);
+  const auto words = static_cast<size_t>((width_ + 63) / 64);
   LabelRuns(
-      width, height, true, [&](int v) { return grown_bits.data() + static_cast<size_t>(v) * words; },
+      width_, height_, true, [&](int v) { return grown_bits.data() + static_cast<size_t>(v) * words; },
       grown_runs_, grown_parent_, &grown_row_start_);
+  FindJoins(counted, small);
+  // New pixels: grown bits that were soil, in runs of regions that join
+  // nothing.
+  int added = 0;
+  for (size_t i = 0; i < grown_runs_.size(); ++i) {
+    const auto root = static_cast<size_t>(grown_parent_[i]);
+    if (joins_[root] && (small == nullptr || small_[root])) continue;
+    added += PaintFresh(grown_runs_[i], mask_bits, grown_bits, words, mask);
+  }
+  return added;
+}
+
+// Per grown region: the first blob of the mask inside it, whether it holds
+// another (joins_) and whether it holds a small one (small_).
+void GrowthWithoutJoins::FindJoins(const std::vector<uint8_t>* counted,
+                                   const std::vector<uint8_t>* small) {
   first_blob_.assign(grown_runs_.size(), -1);
   joins_.assign(grown_runs_.size(), 0);
   small_.assign(grown_runs_.size(), 0);
-  for (int v = 0; v < height; ++v) {
+  for (int v = 0; v < height_; ++v) {
     int g = grown_row_start_[static_cast<size_t>(v)];
     const int g_end = grown_row_start_[static_cast<size_t>(v) + 1];
     for (int m = mask_row_start_[static_cast<size_t>(v)];
@@ -180,27 +195,25 @@ int GrowthWithoutJoins::Add(const std::vector<uint64_t>& mask_bits,
       }
     }
   }
-  // New pixels: grown bits that were soil, in runs of regions that join
-  // nothing.
+}
+
+// Sets the pixels of one grown run that were soil in the mask; how many.
+int GrowthWithoutJoins::PaintFresh(const RowRun& run, const std::vector<uint64_t>& mask_bits,
+                                   const std::vector<uint64_t>& grown_bits, size_t words,
+                                   cv::Mat& mask) {
   int added = 0;
-  for (size_t i = 0; i < grown_runs_.size(); ++i) {
-    const auto root = static_cast<size_t>(grown_parent_[i]);
-    if (joins_[root] && (small == nullptr || small_[root])) continue;
-    const RowRun& run = grown_runs_[i];
-    const size_t base = static_cast<size_t>(run.v) * words;
-    uint8_t* row = mask.ptr<uint8_t>(run.v);
-    for (int w = run.u_begin / 64; w <= (run.u_end - 1) / 64; ++w) {
-      uint64_t fresh = grown_bits[base + static_cast<size_t>(w)] &
-                       ~mask_bits[base + static_cast<size_t>(w)];
-      // Only this run's span of the word.
-      const int lo = std::max(run.u_begin - 64 * w, 0), hi = std::min(run.u_end - 64 * w, 64);
-      if (lo > 0) fresh &= ~uint64_t{0} << lo;
-      if (hi < 64) fresh &= (uint64_t{1} << hi) - 1;
-      while (fresh != 0) {
-        row[64 * w + std::countr_zero(fresh)] = 255;
-        fresh &= fresh - 1;
-        ++added;
-      }
+  const size_t base = static_cast<size_t>(run.v) * words;
+  uint8_t* row = mask.ptr<uint8_t>(run.v);
+  for (int w = run.u_begin / 64; w <= (run.u_end - 1) / 64; ++w) {
+    uint64_t fresh = grown_bits[base + static_cast<size_t>(w)] & ~mask_bits[base + static_cast<size_t>(w)];
+    // Only this run's span of the word.
+    const int lo = std::max(run.u_begin - 64 * w, 0), hi = std::min(run.u_end - 64 * w, 64);
+    if (lo > 0) fresh &= ~uint64_t{0} << lo;
+    if (hi < 64) fresh &= (uint64_t{1} << hi) - 1;
+    while (fresh != 0) {
+      row[64 * w + std::countr_zero(fresh)] = 255;
+      fresh &= fresh - 1;
+      ++added;
     }
   }
   return added;

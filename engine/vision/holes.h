@@ -47,6 +47,10 @@ class GrowthWithoutJoins {
           const std::vector<uint8_t>* small = nullptr);
 
  private:
+  void FindJoins(const std::vector<uint8_t>* counted, const std::vector<uint8_t>* small);
+  static int PaintFresh(const RowRun& run, const std::vector<uint64_t>& mask_bits,
+                        const std::vector<uint64_t>& grown_bits, size_t words, cv::Mat& mask);
+
   int width_ = 0, height_ = 0;
   std::vector<RowRun> mask_runs_, grown_runs_;
   std::vector<int> mask_parent_, grown_parent_, mask_row_start_, grown_row_start_;
