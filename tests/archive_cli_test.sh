@@ -15,7 +15,9 @@ rm -rf "$work" && mkdir -p "$work"
 source "$(dirname "$0")/cli_lib.sh"
 here="$(cd "$(dirname "$0")" && pwd)"
 
-pgdir="$work/pg"
+# Under /tmp: the server runs as an unprivileged user when we are root, and
+# the build folder may not be open to it.
+pgdir=$(mktemp -u "${TMPDIR:-/tmp}/plantscale_pg.XXXXXX")
 url=$(bash "$here/pg_server.sh" start "$pgdir") || { echo "skip: no PostgreSQL server"; exit 77; }
 trap 'bash "$here/pg_server.sh" stop "$pgdir"' EXIT
 port=$(cat "$pgdir/port")

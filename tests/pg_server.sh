@@ -50,7 +50,9 @@ start() {
     id "$user" >/dev/null 2>&1 || user=nobody
     echo "$user" >"$dir/user"
     chown "$user" "$dir"
-    chmod 0755 "$(dirname "$dir")" 2>/dev/null || true
+    # The user must reach DIR: every folder above it open to others.
+    setpriv --reuid="$user" --regid="$(id -g "$user")" --clear-groups -- test -x "$dir" ||
+      skip "$user cannot reach $dir (a folder above it is closed to others)"
   fi
   echo plantscale >"$dir/pwfile"
   [[ $(id -u) -ne 0 ]] || chown "$(cat "$dir/user")" "$dir/pwfile"
