@@ -100,7 +100,8 @@ AppendResult AppendRun(const std::string& target, const ArchiveRun& run, const C
 using ArchivedRun = ArchiveRun;
 
 // Runs of `field` whose start time lies in [from, to] (dates YYYY-MM-DD, or
-// empty for open), oldest first.
+// empty for open; runs of unknown start time only when both are open),
+// oldest first.
 std::vector<ArchivedRun> QueryRuns(const std::string& target, const std::string& field,
                                    const std::string& from = "", const std::string& to = "");
 

@@ -6,6 +6,7 @@
 
 #include "maps/archive.h"
 #include "maps/archive_db.h"
+#include "maps/gdal_dataset.h"
 #include "maps/gdal_util.h"
 #include "maps/map_errors.h"
 
@@ -78,6 +79,23 @@ void Copy(GDALDataset& out, OGRLayer& src, const char* name, const std::string& 
   if (copied == nullptr) ThrowGdal(where, std::string("cannot copy table ") + name);
 }
 
+// A query's result as a point layer (a result's geometry type is unknown to GDAL).
+void CopyPoints(GDALDataset& out, OGRLayer& src, const char* name, const std::string& where) {
+  OGRSpatialReference wgs84 = Wgs84Srs();
+  OGRLayer* layer = out.CreateLayer(name, &wgs84, wkbPoint, nullptr);
+  if (layer == nullptr) ThrowGdal(where, std::string("cannot create table ") + name);
+  OGRFeatureDefn* defn = src.GetLayerDefn();
+  for (int i = 0; i < defn->GetFieldCount(); ++i) {
+    if (layer->CreateField(defn->GetFieldDefn(i)) != OGRERR_NONE) ThrowGdal(where, std::string("cannot copy ") + name);
+  }
+  src.ResetReading();
+  while (std::unique_ptr<OGRFeature> f{src.GetNextFeature()}) {
+    OGRFeature copy(layer->GetLayerDefn());
+    copy.SetFrom(f.get());
+    if (layer->CreateFeature(&copy) != OGRERR_NONE) ThrowGdal(where, std::string("cannot copy ") + name);
+  }
+}
+
 std::string SafeFileName(const std::string& field) {
   std::string out;
   for (char c : field) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
@@ -93,6 +111,7 @@ std::vector<ArchivedRun> QueryRuns(const std::string& target, const std::string&
   GdalErrorScope scope;
   ArchiveDb db = OpenArchive(target, false);
   std::string filter = "field = " + SqlLiteral(field);
+  if (!from.empty() || !to.empty()) filter += " AND start_time <> ''";  // runs of unknown time: no date
   if (!from.empty()) filter += " AND start_time >= " + SqlLiteral(from);
   // "YYYY-MM-DDZ" sorts after every "YYYY-MM-DDThh:mm:ssZ" of that day.
   if (!to.empty()) filter += " AND start_time <= " + SqlLiteral(to + "Z");
@@ -165,7 +184,7 @@ std::filesystem::path ExportSeason(const std::string& target, const std::string&
       " GROUP BY s.fid, s.field, s.class, s.field_x_m, s.field_y_m, s.first_run, s.geom";
   OGRLayer* season = db.ds->ExecuteSQL(sql.c_str(), nullptr, nullptr);
   if (season == nullptr) ThrowGdal(db.name, "cannot read the season's plants");
-  Copy(*out, *season, "season_plants", file.string());
+  CopyPoints(*out, *season, "season_plants", file.string());
   db.ds->ReleaseResultSet(season);
   CloseAndCopy(out, mem);
   return file;

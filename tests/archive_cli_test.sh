@@ -27,6 +27,8 @@ sql() { PGPASSWORD=plantscale psql -X -qtA -h 127.0.0.1 -p "$port" -U plantscale
 # so the runs share no plants; a map re-export of run 1 is the second visit).
 "$plantscale" simulate --preset field --length-m 6 --seed 11 --publish --fast --lcm-url memq:// \
   --log "$work/run1.lcmlog" >/dev/null 2>&1 || fail "simulate run 1"
+"$plantscale" simulate --preset field --length-m 6 --seed 13 --publish --fast --lcm-url memq:// \
+  --log "$work/run3.lcmlog" >/dev/null 2>&1 || fail "simulate run 3"
 "$plantscale" export "$work/run1.lcmlog" --out "$work/files" --format map --origin 52,-0.4 --heading 30 --quiet >/dev/null ||
   fail "export run 1 to a map"
 
@@ -63,7 +65,7 @@ ogrinfo -so "$work/season/north.gpkg" runs | grep -q "Feature Count: 2" || fail 
 # Field names are data: quotes and SQL stored and queried as written.
 evil="O'Brien's'; DROP TABLE runs; --"
 expect 0 "of field 'O'Brien's'; DROP TABLE runs; --'" -- \
-  "$plantscale" export "$work/run1.lcmlog" --to "$url" --field "$evil" --origin 52,-0.4 --quiet
+  "$plantscale" export "$work/run3.lcmlog" --to "$url" --field "$evil" --origin 52,-0.4 --quiet
 expect 0 "1 run\(s\)" -- "$plantscale" archive query --to "$url" --field "$evil"
 [[ $(sql "SELECT COUNT(*) FROM runs") == 3 ]] || fail "the runs table lost runs"
 
@@ -88,8 +90,6 @@ expect 2 "no plants" -- "$plantscale" export "$work/empty.lcmlog" --to "$url" --
 
 # Two exports of the same plants into one new field at once (the log and its
 # map file): both runs, every plant once in the season.
-"$plantscale" simulate --preset field --length-m 6 --seed 13 --publish --fast --lcm-url memq:// \
-  --log "$work/run3.lcmlog" >/dev/null 2>&1 || fail "simulate run 3"
 "$plantscale" export "$work/run1.lcmlog" --to "$url" --field south --origin 52,-0.4 --heading 30 --quiet >"$work/a.txt" 2>&1 &
 a=$!
 "$plantscale" export "$work/files/map.psmap" --to "$url" --field south --origin 52,-0.4 --heading 30 --quiet >"$work/b.txt" 2>&1 &
