@@ -4,8 +4,10 @@
 //
 // The runs are made cheaply from one synthetic 1 km bed, the kind a run's
 // log gives (app/log_map.h): lettuce, 3 rows 0.4 m apart, a plant every
-// 0.3 m (10 000 crops), 2.5 weeds per m² (3 000), a 1.333 cm map grid with
-// every plant's footprint painted and the weeds treated. Run k moves every
+// 0.3 m (10 000 crops), 2.5 weeds per m² (3 000), a 4 cm map grid with
+// every plant's footprint painted and the weeds treated (a map grid holds at
+// most 32768 rows, maps/map_grid.h: 1 km of the vehicle's 1.333 cm cells is
+// more than one map). Run k moves every
 // plant by N(0, 1 cm) (re-localisation), loses 1 % of the crops, grows them
 // by 2 % and brings new weeds, so matching does the work it does on a farm;
 // its run id and start date vary. Each run goes through what
@@ -50,7 +52,7 @@ maps::CropMap Bed(int run) {
   std::mt19937 rng(static_cast<unsigned>(1000 + run));
   std::normal_distribution<double> jitter(0.0, 0.01);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  maps::CropMap map(maps::MapGrid::Covering({-0.8, -0.5}, {0.8, kLengthM + 0.5}, 0.01333));
+  maps::CropMap map(maps::MapGrid::Covering({-0.8, -0.5}, {0.8, kLengthM + 0.5}, 0.04));
   map.MarkObserved({-0.8, -0.5}, {0.8, kLengthM + 0.5});
   int64_t id = 1;
   for (int n = -1; n <= 1; ++n) {

@@ -117,8 +117,8 @@ done
 
 # The GeoPackage archive: same schema, appended in place.
 gpkg="$work/season.gpkg"
-expect 0 "added" -- "$plantscale" export "$work/run1.lcmlog" --to "$gpkg" --field north --bed 4 --origin 52,-0.4 --quiet
-expect 0 "added: .*plants \([1-9][0-9]* matched" -- "$plantscale" export "$work/files/map.psmap" --to "$gpkg" --field north --quiet
+expect 0 "added" -- "$plantscale" export "$work/run1.lcmlog" --to "$gpkg" --field north --bed 4 --origin 52,-0.4 --heading 30 --quiet
+expect 0 "added: $plants1 plants \($plants1 matched.* 0 new" -- "$plantscale" export "$work/files/map.psmap" --to "$gpkg" --field north --quiet
 for layer in fields runs season_plants plants rows treated_areas map_tiles; do
   ogrinfo -so "$gpkg" "$layer" | grep -q "Feature Count: [1-9]" || fail "ogrinfo: $gpkg layer $layer empty or unreadable"
 done
