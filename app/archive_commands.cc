@@ -194,7 +194,8 @@ int ExportToArchive(const ArchiveExportArgs& args, const maps::CropMap& map,
   std::cout << "plantscale export: run " << run.run_id << " of field '" << run.field << "' bed " << run.bed
             << (r.replaced ? " replaced" : " added") << ": " << r.plants << " plants (" << r.matched
             << " matched to plants of earlier runs within " << args.match_m << " m, " << r.new_plants
-            << " new), field frame " << r.field_origin << "\n  into " << maps::Redacted(args.to) << "\n";
+            << " new; run aligned by " << Fixed(r.offset_m.x(), 3) << ", " << Fixed(r.offset_m.y(), 3)
+            << " m), field frame " << r.field_origin << "\n  into " << maps::Redacted(args.to) << "\n";
   return 0;
 }
 

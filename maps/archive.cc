@@ -153,6 +153,33 @@ std::unique_ptr<OGRPoint> Point(const Frames& frames, const Eigen::Vector2d& p) 
   return std::make_unique<OGRPoint>(ll.x(), ll.y());
 }
 
+// How far the run's field frame sits from the season's: the median offset
+// from the run's crops to the nearest season crop within `radius` (less than
+// half the plant spacing, so each pair is one plant), when at least 10 pairs
+// agree; else none. Passes differ by where their frame started (tracker
+// initialisation, odometry), a shift common to every plant of the run.
+Eigen::Vector2d AlignmentOffset(const std::vector<Eigen::Vector2d>& xy, const std::vector<PlantKind>& kind,
+                                const std::vector<SeasonPlant>& season, double radius) {
+  std::vector<Eigen::Vector2d> crops;
+  std::vector<PlantKind> crop_kind;
+  for (size_t i = 0; i < xy.size(); ++i) {
+    if (kind[i] == PlantKind::kCrop) crops.push_back(xy[i]), crop_kind.push_back(kind[i]);
+  }
+  const std::vector<int> match = MatchPlants(crops, crop_kind, season, radius);
+  std::vector<double> dx, dy;
+  for (size_t i = 0; i < crops.size(); ++i) {
+    if (match[i] < 0) continue;
+    const Eigen::Vector2d d = season[static_cast<size_t>(match[i])].xy - crops[i];
+    dx.push_back(d.x()), dy.push_back(d.y());
+  }
+  if (dx.size() < 10) return Eigen::Vector2d::Zero();
+  const auto median = [](std::vector<double>& v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  return {median(dx), median(dy)};
+}
+
 // Season ids of the run's plants: matched or new (written to season_plants).
 std::vector<int64_t> SeasonIds(ArchiveDb& db, const ArchiveRun& run, const CropMap& map,
                                const Frames& frames, const ArchiveOptions& o, AppendResult& result) {
@@ -160,6 +187,8 @@ std::vector<int64_t> SeasonIds(ArchiveDb& db, const ArchiveRun& run, const CropM
   std::vector<Eigen::Vector2d> xy;
   std::vector<PlantKind> kind;
   for (const MapPlant& p : map.plants()) xy.push_back(frames.ToField(p.position_m)), kind.push_back(p.kind);
+  result.offset_m = AlignmentOffset(xy, kind, season, o.align_radius_m);
+  for (Eigen::Vector2d& p : xy) p += result.offset_m;
   const std::vector<int> match = MatchPlants(xy, kind, season, o.match_tolerance_m);
   int64_t next = QueryInt(db, "SELECT MAX(fid) FROM season_plants").value_or(0) + 1;
   OGRLayer& layer = EnsureTable(db, "season_plants");
@@ -186,13 +215,13 @@ std::vector<int64_t> SeasonIds(ArchiveDb& db, const ArchiveRun& run, const CropM
 }
 
 void WritePlants(ArchiveDb& db, const ArchiveRun& run, const CropMap& map, const Frames& frames,
-                 const std::vector<int64_t>& season_ids) {
+                 const std::vector<int64_t>& season_ids, const Eigen::Vector2d& offset) {
   OGRLayer& layer = EnsureTable(db, "plants");
   for (size_t i = 0; i < map.plants().size(); ++i) {
     const MapPlant& p = map.plants()[i];
     const Eigen::Vector2d ll = frames.run.FieldToWgs84(p.position_m);
     const Eigen::Vector2d en = frames.run.FieldToProjected(p.position_m);
-    const Eigen::Vector2d xy = frames.ToField(p.position_m);
+    const Eigen::Vector2d xy = frames.ToField(p.position_m) + offset;
     OGRFeature f(layer.GetLayerDefn());
     SetCommon(f, run);
     f.SetField("season_id", static_cast<GIntBig>(season_ids[i]));
@@ -382,6 +411,7 @@ void CheckRun(const ArchiveRun& run, const CropMap& map, const ArchiveOptions& o
 OptionErrors ArchiveOptions::Validate() const {
   OptionErrors e;
   RequireInRange(e, "match_tolerance_m", match_tolerance_m, 1e-4, 1.0);
+  RequireInRange(e, "align_radius_m", align_radius_m, 0.0, 1.0);
   return e;
 }
 
@@ -411,7 +441,7 @@ AppendResult AppendRun(const std::string& target, const ArchiveRun& run, const C
     result.replaced = QueryInt(db, "SELECT COUNT(*) FROM runs WHERE run_id = " + SqlLiteral(run.run_id)).value_or(0) > 0;
     DeleteRun(db, run.run_id);
     const std::vector<int64_t> ids = SeasonIds(db, run, map, frames, options, result);
-    WritePlants(db, run, map, frames, ids);
+    WritePlants(db, run, map, frames, ids, result.offset_m);
     if (result.replaced) DeleteOrphans(db, run.run_id);
     WriteRows(db, run, frames);
     WriteTreatedAreas(db, run, map, frames);

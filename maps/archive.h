@@ -70,14 +70,20 @@ struct ArchiveRun {
 };
 
 struct ArchiveOptions {
-  // Plants of one field and class closer than this in two runs are one plant.
+  // Plants of one field and class closer than this in two runs are one plant
+  // (after aligning the run to the season, below).
   double match_tolerance_m = 0.05;
+  // A run is first shifted by the median offset of its crops to the season's
+  // crops within this radius (0: no alignment). Below half the smallest plant
+  // spacing (30 cm, lettuce) so that a pair is one plant.
+  double align_radius_m = 0.12;
   OptionErrors Validate() const;
 };
 
 struct AppendResult {
   bool replaced = false;  // the run was in the archive before
   int plants = 0, matched = 0, new_plants = 0;
+  Eigen::Vector2d offset_m{0.0, 0.0};  // the run's shift onto the season's frame
   std::string field_origin;  // "lat,lon heading" the field frame used
 };
 

@@ -70,11 +70,14 @@ void CheckSeason(const std::string& target, const std::string& field, const std:
   EXPECT_FALSE(a.replaced);
   EXPECT_EQ(a.plants, 32);
   EXPECT_EQ(a.new_plants, 32);
-  // 3 cm away: within the 5 cm tolerance; the field's stored frame is used.
+  // The second pass's frame 3 cm across and 8 cm along from the first: beyond
+  // the 5 cm tolerance, found by the alignment; the field's stored frame is used.
   const AppendResult b = AppendRun(target, MakeRun(run_b, field, "2026-05-15T08:00:00Z"),
-                                   SecondVisit({0.03, 0.0}), std::nullopt);
+                                   SecondVisit({0.03, 0.08}), std::nullopt);
   EXPECT_EQ(b.matched, 31);
   EXPECT_EQ(b.new_plants, 1);
+  EXPECT_NEAR(b.offset_m.x(), -0.03, 1e-9);
+  EXPECT_NEAR(b.offset_m.y(), -0.08, 1e-9);
   // Re-export of run a: replaced, nothing duplicated.
   const AppendResult again = AppendRun(target, MakeRun(run_a, field, "2026-05-01T08:00:00Z"), SyntheticMap(), TestAnchor());
   EXPECT_TRUE(again.replaced);
