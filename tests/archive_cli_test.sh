@@ -123,5 +123,16 @@ for layer in fields runs season_plants plants rows treated_areas map_tiles; do
   ogrinfo -so "$gpkg" "$layer" | grep -q "Feature Count: [1-9]" || fail "ogrinfo: $gpkg layer $layer empty or unreadable"
 done
 expect 0 "field 'north': 2 run\(s\)" -- "$plantscale" archive query --to "$gpkg" --field north
+# Two exports of the same plants into the GeoPackage at once (it is locked per append).
+"$plantscale" export "$work/run1.lcmlog" --to "$gpkg" --field west --origin 52,-0.4 --heading 30 --quiet >/dev/null &
+a=$!
+"$plantscale" export "$work/files/map.psmap" --to "$gpkg" --field west --origin 52,-0.4 --heading 30 --quiet >/dev/null &
+b=$!
+wait $a || fail "concurrent GeoPackage export a"
+wait $b || fail "concurrent GeoPackage export b"
+gcount() { ogrinfo -q -sql "$1" "$gpkg" | grep -oE "= [0-9]+" | grep -oE "[0-9]+"; }
+[[ $(gcount "SELECT COUNT(*) FROM runs WHERE field = 'west'") == 2 ]] || fail "GeoPackage: a concurrent export lost a run"
+[[ $(gcount "SELECT COUNT(*) FROM season_plants WHERE field = 'west'") == "$plants1" ]] ||
+  fail "GeoPackage: concurrent exports duplicated season plants"
 
 finish "archive CLI"
