@@ -27,7 +27,8 @@ PACKAGES=(
 # tests/fuzz (docs/fuzzing.md): clang and its libFuzzer/ASan runtimes.
 FUZZ_PACKAGES=(clang libclang-rt-dev)
 # The full test suite also opens a report in headless Chromium (cli.report_browser).
-TEST_PACKAGES=(chromium)
+# The archive tests (tests/pg_server.sh) start PostgreSQL with PostGIS.
+TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3)
 
 ensure_packages() {
   local missing=()

@@ -1,5 +1,6 @@
 #include "app/commands.h"
 
+#include "app/archive_commands.h"
 #include "app/command_auth_commands.h"
 #include "app/export_commands.h"
 #include "app/log_eval_commands.h"
@@ -20,6 +21,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddSegmentCommands(registry_);
   AddTelemetryCommands(registry_);
   AddExportCommands(registry_);
+  AddArchiveCommands(registry_);
   AddTrackingCommands(registry_);
   AddTreatmentCommands(registry_);
   AddLogEvalCommands(registry_);

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "app/archive_commands.h"
 #include "app/config_loader.h"
 #include "app/log_map.h"
 #include "app/progress.h"
@@ -29,6 +30,10 @@ struct ExportArgs {
   double rate_l_per_ha = 200.0;
   double isoxml_cell_m = 0.0;
   bool quiet = false;
+  // The season archive (--to): docs/cli/archive.md.
+  std::string to, field;
+  int bed = 0;
+  double match_m = 0.05;
 };
 
 std::vector<std::string> SplitList(const std::string& text) {
@@ -143,7 +148,31 @@ void PrintResult(const maps::CropMap& map, const maps::ExportResult& r) {
   for (const fs::path& f : r.files) std::cout << "  wrote " << f.string() << "\n";
 }
 
+// One run into the season archive.
+int ExportArchive(const ExportArgs& args) {
+  if (!args.out.empty()) throw ConfigError("export", "--out", "give --out (files) or --to (archive), not both");
+  if (args.inputs.size() != 1) throw ConfigError("export", "LOG_OR_MAP", "--to archives one run: give one log or map");
+  const maps::CropMap map = LoadInput(args.inputs[0], args);
+  std::optional<maps::GeoAnchorOptions> anchor = args.origin.empty() ? StoredAnchor(map) : ParseOrigin(args.origin);
+  if (anchor) {
+    if (args.heading_deg) anchor->heading_deg = *args.heading_deg;
+    anchor->epsg = args.epsg;
+    ThrowIfInvalid("command line (--origin, --heading, --epsg)", anchor->Validate());
+  }
+  ArchiveExportArgs a;
+  a.input = args.inputs[0];
+  a.is_log = IsLcmLog(a.input);
+  a.to = args.to;
+  a.field = args.field;
+  a.bed = args.bed;
+  a.match_m = args.match_m;
+  a.quiet = args.quiet;
+  return ExportToArchive(a, map, anchor);
+}
+
 int Export(const ExportArgs& args) {
+  if (!args.to.empty()) return ExportArchive(args);
+  if (args.out.empty()) throw ConfigError("export", "--out", "give the output folder (--out DIR) or an archive (--to)");
   std::vector<maps::CropMap> inputs;
   for (const std::string& input : args.inputs) inputs.push_back(LoadInput(input, args));
   const maps::CropMap map = inputs.size() == 1 ? inputs[0] : maps::MergeMaps(inputs);
@@ -175,7 +204,16 @@ void AddExportCommands(CommandRegistry& registry) {
   cmd->add_option("LOG_OR_MAP", args.inputs,
                   "LCM log of a run, map file (.psmap) or simulator output folder; several are merged")
       ->required();
-  cmd->add_option("--out", args.out, "output folder")->required();
+  cmd->add_option("--out", args.out, "output folder");
+  cmd->add_option("--to", args.to,
+                  "season archive instead of files: postgresql://USER:PASSWORD@HOST:PORT/DB or FILE.gpkg "
+                  "(docs/cli/archive.md)");
+  cmd->add_option("--field", args.field, "field name of the run (with --to)");
+  cmd->add_option("--bed", args.bed, "bed number of the run (with --to)")->capture_default_str();
+  cmd->add_option("--match-m", args.match_m,
+                  "plants of two runs closer than this are one plant (with --to), metres")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--format", args.formats,
                   "comma-separated: gtiff,northup,gpkg,geojson,csv,png,isoxml,map (default: all)");
   cmd->add_option("--origin", args.origin, "WGS84 LAT,LON of the field-frame origin (degrees)");

@@ -22,6 +22,7 @@ extern char** environ;
 
 #include "app/config_loader.h"
 #include "app/run_config.h"
+#include "maps/archive.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/command_auth.h"
 #include "ui/canvas.h"
@@ -230,6 +231,7 @@ struct DemoArgs {
   bool real_time = false;
   std::string lcm_url = "udpm://239.255.76.67:7668?ttl=0";  // a port apart from LCM's default
   std::string origin = "52.0063,-0.4206";  // WGS84 of the field-frame origin for the map exports
+  std::string to;  // the season archive; empty: OUT/archive.gpkg
 };
 
 // Starts `args` (args[0] looked up on PATH); returns the child's pid, or -1.
@@ -251,6 +253,22 @@ int Wait(pid_t pid) {
   int status = 0;
   if (pid < 0 || waitpid(pid, &status, 0) < 0) return -1;
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// The run into the demo's own season archive (a GeoPackage under the demo's
+// folder by default, PostGIS when `to` names a server), as field "demo".
+int ArchiveDemoRun(const DemoArgs& a, const std::string& self, const std::filesystem::path& log,
+                   const std::filesystem::path& out) {
+  const std::string to = a.to.empty() ? (out / "archive.gpkg").string() : a.to;
+  const int status = Wait(Spawn({self, "export", log.string(), "--to", to, "--field", "demo", "--bed", "1",
+                                 "--origin", a.origin, "--heading", "0", "--quiet"},
+                                out / "archive.txt"));
+  std::cout << "demo: archive         "
+            << (status == 0 ? maps::Redacted(to) + "  (field 'demo'; plantscale archive query --to " +
+                                  maps::Redacted(to) + " --field demo)"
+                            : "not written, see " + (out / "archive.txt").string())
+            << '\n';
+  return status;
 }
 
 // Without a display the whole demo runs again under one `xvfb-run -a` (one
@@ -339,7 +357,8 @@ int DemoSystem(const DemoArgs& a) {
             << (maps_status == 0 ? (out / "maps").string() + "/  (GeoTIFF, GeoPackage, GeoJSON, CSV, PNG, ISOXML)"
                                  : "not written, see " + (out / "maps.txt").string())
             << '\n';
-  return report_status == 0 && station_status == 0 && maps_status == 0 ? 0 : 1;
+  const int archive_status = ArchiveDemoRun(a, self, log, out);
+  return report_status == 0 && station_status == 0 && maps_status == 0 && archive_status == 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -395,6 +414,7 @@ void AddUiCommands(CommandRegistry& registry) {
     demo->add_flag("--real-time", d.real_time, "drive in real time (default: as fast as possible)");
     demo->add_option("--lcm-url", d.lcm_url, "LCM URL")->capture_default_str();
     demo->add_option("--origin", d.origin, "WGS84 LAT,LON of the field origin for the maps")->capture_default_str();
+    demo->add_option("--to", d.to, "season archive of the run: postgresql://… or FILE.gpkg (default OUT/archive.gpkg)");
   }
 }
 

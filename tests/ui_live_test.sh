@@ -38,3 +38,7 @@ cat "$work/demo.txt"
 grep -q "<th>distance</th><td>[12]\.[0-9][0-9] m</td>" "$work/demo/report/index.html" \
   || { echo "FAIL: demo-system report lacks the ~2 m distance"; exit 1; }
 echo "ok: demo-system wrote its report"
+grep -q "demo: archive .*archive.gpkg" "$work/demo.txt" || { echo "FAIL: demo-system did not archive its run"; exit 1; }
+"$plantscale" archive query --to "$work/demo/archive.gpkg" --field demo | grep -q "field 'demo': 1 run(s)" \
+  || { echo "FAIL: the demo's archive lacks its run"; exit 1; }
+echo "ok: demo-system archived its run"

@@ -204,15 +204,25 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   a.area_treated_m2 = run.area_treated_m2;
   if (run.area_treated_m2) a.product_l = *run.area_treated_m2 * 1e-4 * o.rate_l_ha;
 
-  std::vector<const PlantRecord*> crops, weeds;
+  std::vector<const PlantRecord*> crops;
   for (const auto& [id, r] : model.plants()) {
+    if (r.plant.kind == tm::PlantKind::kCrop) crops.push_back(&r);
+  }
+  a.row_spacing_m = RowSpacing(model, crops, a.row_spacing_source);
+  AddPlantFigures(a, model.plants(), o);
+  return a;
+}
+
+void AddPlantFigures(AgronomySummary& a, const std::map<int64_t, PlantRecord>& plants, const AgronomyOptions& o) {
+  std::vector<const PlantRecord*> crops, weeds;
+  for (const auto& [id, r] : plants) {
     if (r.plant.kind == tm::PlantKind::kCrop) crops.push_back(&r);
     if (r.plant.kind == tm::PlantKind::kWeed) weeds.push_back(&r);
   }
-  a.row_spacing_m = RowSpacing(model, crops, a.row_spacing_source);
+  if (a.row_spacing_m <= 0.0) a.row_spacing_m = RowSpacing(RunModel(), crops, a.row_spacing_source);
   const double rs = a.row_spacing_m;
   const RowsOfCrops by_row = CropsByRow(crops, rs);
-  if (by_row.empty()) return a;
+  if (by_row.empty()) return;
   a.y0_m = 1e300;
   a.y1_m = -1e300;
   for (const auto& [n, v] : by_row) {
@@ -238,7 +248,6 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   a.crop_size = SizeStatsOf(all_radii, o.histogram_bin_m, o.histogram_bins);
   FillCropCells(by_row, o, a);
   CountWeeds(weeds, x_lo, x_hi, o, a);
-  return a;
 }
 
 std::string AgronomyCsv(const AgronomySummary& a) {

@@ -22,6 +22,7 @@
 //  - weeds per m² over the surveyed band: the crop rows' span across plus
 //    r̄/2 on each side, times the stand length.
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -104,6 +105,14 @@ SizeStats SizeStatsOf(std::vector<double> radii_m, double bin_m, int bins);
 
 // Throws InvalidOptionsError.
 AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const AgronomyOptions& options = {});
+
+// The per-row and whole-run plant figures (crop, plants per metre, gaps,
+// sizes, weeds, heat cells) of `plants` into `a`, on the rows of spacing
+// a.row_spacing_m (when 0: the median spacing between crop rows, source
+// "plants"). Agronomy() is this on the run model's registry; the season
+// archive calls it on a map's plants.
+void AddPlantFigures(AgronomySummary& a, const std::map<int64_t, PlantRecord>& plants,
+                     const AgronomyOptions& options = {});
 
 // Simulator truth over the same stand (filled by the app, which can rebuild
 // the simulated field from the log's run_config event).
