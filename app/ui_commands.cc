@@ -234,7 +234,7 @@ void LoadReview(const std::filesystem::path& file, ui::StationOptions& o) {
   o.review_model = run.model, o.review_error = run.error;
 }
 
-void PrintTour(const std::vector<double>& ms) {
+void PrintTour(const std::vector<double>& ms, double cpu_ms) {
   if (ms.empty()) return;
   std::vector<double> sorted = ms;
   std::sort(sorted.begin(), sorted.end());
@@ -243,7 +243,8 @@ void PrintTour(const std::vector<double>& ms) {
   const double mean = sum / static_cast<double>(ms.size());
   std::cout << "station: tour " << ms.size() << " frames: mean " << std::fixed << std::setprecision(1) << mean
             << " ms (" << 1e3 / mean << " fps), median " << sorted[sorted.size() / 2] << " ms, 95th percentile "
-            << sorted[sorted.size() * 95 / 100] << " ms, worst " << sorted.back() << " ms\n";
+            << sorted[sorted.size() * 95 / 100] << " ms, worst " << sorted.back() << " ms; process CPU "
+            << cpu_ms / static_cast<double>(ms.size()) << " ms a frame\n";
 }
 
 double PeakResidentMb() {
@@ -261,7 +262,7 @@ int Station(StationArgs& a) {
     std::cout << "station: " << r.frames << " frames in " << std::fixed << std::setprecision(1)
               << r.seconds << " s (" << r.frames_per_second << " fps), peak resident " << PeakResidentMb()
               << " MB\n";
-    PrintTour(r.tour_frame_ms);
+    PrintTour(r.tour_frame_ms, r.tour_cpu_ms);
     std::cout << "station: link: " << r.link << '\n';
     for (const std::string& p : r.problems) std::cout << "station: problem: " << p << '\n';
   } catch (const ui::DisplayError& e) {

@@ -131,9 +131,10 @@ void CovarianceEllipses::Update(const RunModel& model, const FieldWindow& view) 
   seen_plants_ = model.plant_messages();
   built_ = BuiltRange::Around(view, 0.5 * (view.y1_m - view.y0_m));
   std::vector<Polyline> plants;
+  const bool close = view.y1_m - view.y0_m <= params_.max_view_m;
   // Newest first, at most max_plants of those near the view.
   for (auto it = model.plants().rbegin();
-       it != model.plants().rend() && static_cast<int>(plants.size()) < params_.max_plants; ++it) {
+       close && it != model.plants().rend() && static_cast<int>(plants.size()) < params_.max_plants; ++it) {
     const tm::PlantObservation& p = it->second.plant;
     if (p.position_m.y() < built_.y0_m || p.position_m.y() > built_.y1_m) continue;
     if (p.covariance.trace() > 0.0) plants.push_back(EllipseOutline(p.position_m, p.covariance, DrawnK2(), 24));

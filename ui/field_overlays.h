@@ -84,6 +84,7 @@ struct EllipseParams {
   double magnification = 1.0;
   double min_plant_age_s = 0.0;
   int max_plants = 4000;     // newest plants drawn
+  double max_view_m = 60.0;  // no plant ellipses in a longer view (a few pixels each there)
 };
 
 class CovarianceEllipses {

@@ -100,6 +100,17 @@ void MapView::DrawMarks() {
 }
 
 FieldWindow MapView::WholeRun(const RunModel& model) const {
+  // A pass over every plant and path point: once per model state (a
+  // reviewed run's never changes).
+  if (&model == whole_model_ && model.messages() == whole_messages_ && model.tile_revision_sum() == whole_tiles_) {
+    return whole_;
+  }
+  whole_model_ = &model, whole_messages_ = model.messages(), whole_tiles_ = model.tile_revision_sum();
+  whole_ = WholeRunOf(model);
+  return whole_;
+}
+
+FieldWindow MapView::WholeRunOf(const RunModel& model) const {
   double lo = 1e300, hi = -1e300;
   for (const auto& [x, y] : model.path()) lo = std::min(lo, y), hi = std::max(hi, y);
   for (const auto& [id, r] : model.plants()) {

@@ -59,6 +59,7 @@ class MapView {
 
  private:
   FieldWindow PlaceCamera(const RunModel& model);
+  FieldWindow WholeRunOf(const RunModel& model) const;
   void DrawMarks();
 
   MapViewParams params_;
@@ -75,6 +76,10 @@ class MapView {
   double follow_length_m_;
   std::optional<FieldWindow> window_;
   FieldWindow view_;
+  mutable const RunModel* whole_model_ = nullptr;  // WholeRun's cache: the model state it was for
+  mutable int64_t whole_messages_ = -1;
+  mutable int whole_tiles_ = -1;
+  mutable FieldWindow whole_;
   std::array<double, 4> placed_{};  // y0, y1, x centre and aspect the camera was placed for
   bool visible_[5] = {true, true, true, true, true};
 };

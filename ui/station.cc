@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -15,6 +16,8 @@
 
 #include "telemetry/command_auth.h"
 #include "telemetry/transport.h"
+#include <vtkImageData.h>
+#include <vtkImageMapper3D.h>
 #include <vtkTextProperty.h>
 
 #include "ui/palette.h"
@@ -73,7 +76,8 @@ StationScene::StationScene(Canvas& canvas, const StationOptions& options)
         p.cached_height_px = static_cast<int>((kTrace[3] - kTrace[1]) * options.height_px);
         return p;
       }()),
-      timeline_(palette::kNozzleOpen, 12.0, 0.1) {
+      timeline_(palette::kNozzleOpen, 12.0, 0.1),
+      view_span_({1.0, 1.0, 1.0}, 4.0, 0.2) {
   hud_.AddTo(Add(canvas, kHud, palette::kHudOk));
   map_renderer_ = Add(canvas, kMap, palette::kBackground);
   map_.AddTo(map_renderer_);
@@ -83,6 +87,10 @@ StationScene::StationScene(Canvas& canvas, const StationOptions& options)
   trace_.AddTo(Add(canvas, kTrace, {1, 1, 1}));
   timeline_renderer_ = Add(canvas, kTimeline, {0.2, 0.2, 0.22});
   timeline_.AddTo(timeline_renderer_);
+  overview_->InterpolateOff();
+  overview_->VisibilityOff();
+  timeline_renderer_->AddActor(overview_);
+  view_span_.AddTo(timeline_renderer_);
   for (vtkTextActor* t : {timeline_left_.Get(), timeline_right_.Get()}) {
     t->GetTextProperty()->SetFontSize(11);
     t->GetTextProperty()->SetFontFamilyToCourier();
@@ -131,6 +139,52 @@ std::string StationKeysHelp() {
          "  log: space pause   + - speed   Left/Right seek 5 s   Home restart   click the timeline\n"
          "  live, to the vehicle: S start   P pause   C spray the crop   W spray the weeds   O spraying off\n"
          "  q or Esc quit";
+}
+
+std::vector<Rgb> WeedStrip(const RunModel& model, const FieldWindow& whole, int columns) {
+  const double length = std::max(1e-6, whole.y1_m - whole.y0_m);
+  std::vector<int> weeds(static_cast<size_t>(columns), 0), plants(static_cast<size_t>(columns), 0);
+  for (const auto& [id, r] : model.plants()) {
+    const int c = std::clamp(static_cast<int>((r.plant.position_m.y() - whole.y0_m) / length * columns), 0, columns - 1);
+    ++plants[static_cast<size_t>(c)];
+    weeds[static_cast<size_t>(c)] += r.plant.kind == telemetry::PlantKind::kWeed;
+  }
+  const int most = std::max(1, *std::max_element(weeds.begin(), weeds.end()));
+  std::vector<Rgb> out;
+  for (size_t c = 0; c < weeds.size(); ++c) {
+    const double w = static_cast<double>(weeds[c]) / most;
+    const Rgb a = palette::kSoil, b = palette::kWeed;
+    out.push_back(plants[c] == 0 ? palette::kUnknownCell
+                                 : Rgb{a.r + w * (b.r - a.r), a.g + w * (b.g - a.g), a.b + w * (b.b - a.b)});
+  }
+  return out;
+}
+
+void StationScene::SetOverview(const std::vector<Rgb>& columns, double from, double to) {
+  if (columns.size() != overview_columns_ && !columns.empty()) {
+    overview_columns_ = columns.size();
+    // Two rows of the same colours: the strip's height is the bar's.
+    const double aspect = std::max(1e-6, timeline_renderer_->GetTiledAspectRatio()), h = 1.0 / aspect;
+    auto image = vtkSmartPointer<vtkImageData>::New();
+    image->SetDimensions(static_cast<int>(columns.size()), 2, 1);
+    image->SetSpacing(1.0 / static_cast<double>(columns.size()), 0.5 * h, 1.0);
+    image->SetOrigin(0.5 / static_cast<double>(columns.size()), 0.5 - 0.25 * h, 0.0);
+    image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+    auto* px = static_cast<unsigned char*>(image->GetScalarPointer());
+    for (size_t row = 0, i = 0; row < 2; ++row) {
+      for (const Rgb& c : columns) {
+        for (const double v : {c.r, c.g, c.b}) px[i++] = static_cast<unsigned char>(std::lround(255.0 * v));
+      }
+    }
+    overview_->GetMapper()->BorderOn();
+    overview_->GetMapper()->SetInputData(image);
+    overview_->VisibilityOn();
+  }
+  const std::pair<double, double> span{std::clamp(from, 0.0, 1.0), std::clamp(to, 0.0, 1.0)};
+  if (span == view_span_at_) return;
+  view_span_at_ = span;
+  const double min_width = 2.0 / std::max(1, timeline_renderer_->GetSize()[0]);
+  view_span_.Set({{{span.first, 0.5}, {std::max(span.second, span.first + min_width), 0.5}}});
 }
 
 void StationScene::Update(const RunModel& model, int64_t now_utime, double fraction) {
@@ -246,7 +300,9 @@ StationResult RunStation(const StationOptions& options) {
   StationResult result;
   if (options.tour_frames > 0) {
     controller.Frame(0.0);
+    const std::clock_t cpu0 = std::clock();
     result.tour_frame_ms = RunTour(controller, options.tour_frames);
+    result.tour_cpu_ms = 1e3 * static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
   } else if (options.offscreen) {
     Clock::time_point last = start;
     while (!controller.ShouldClose(start)) {
@@ -256,6 +312,9 @@ StationResult RunStation(const StationOptions& options) {
       }
       last = now;
     }
+    // The time the last frame took plays too: off-screen, the log has played
+    // max_seconds × speed when the station closes, however slow the frames.
+    controller.Frame(std::chrono::duration<double>(Clock::now() - last).count());
   } else {
     RunInteractive(canvas, controller);
   }

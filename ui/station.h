@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <vtkImageActor.h>
+
 #include "engine/common/options.h"
 #include "ui/camera_view.h"
 #include "ui/canvas.h"
@@ -51,6 +53,12 @@ struct StationOptions {
   OptionErrors Validate() const;
 };
 
+// The bed from `whole.y0_m` to `y1_m` in `columns` columns, each coloured
+// from soil brown (no weed) to weed red (the most weeds per metre of any
+// column, or more), grey where no plant was seen: where the weed pressure is,
+// readable at any length.
+std::vector<Rgb> WeedStrip(const RunModel& model, const FieldWindow& whole, int columns);
+
 // Every key of the station and what it does, one per line (for `h` and --help).
 std::string StationKeysHelp();
 
@@ -62,6 +70,9 @@ class StationScene {
   void Update(const RunModel& model, int64_t now_utime, double timeline_fraction);
   // Words at the timeline's two ends (position, and the whole run).
   void SetTimelineText(const std::string& left, const std::string& right);
+  // Review: the bottom bar is the whole bed, coloured by `columns` (from its
+  // start to its end), with the part in view [from, to] (fractions) marked.
+  void SetOverview(const std::vector<Rgb>& columns, double from, double to);
   MapView& map() { return map_; }
   MapAnnotations& annotations() { return annotations_; }
   Hud& hud() { return hud_; }
@@ -77,6 +88,10 @@ class StationScene {
   OffsetTrace trace_;
   LineLayer timeline_;
   vtkNew<vtkTextActor> timeline_left_, timeline_right_;
+  vtkNew<vtkImageActor> overview_;
+  LineLayer view_span_;
+  size_t overview_columns_ = 0;
+  std::pair<double, double> view_span_at_{-1.0, -1.0};
   double timeline_end_ = -1.0;  // fraction the timeline bar was drawn to
   vtkRenderer* map_renderer_ = nullptr;
   vtkRenderer* timeline_renderer_ = nullptr;
@@ -90,6 +105,7 @@ struct StationResult {
   std::string link;                   // the link when it closed (LinkStatus::text)
   // With tour_frames: the time of each toured frame (update and render), ms.
   std::vector<double> tour_frame_ms;
+  double tour_cpu_ms = 0.0;  // process CPU time (all threads, llvmpipe's too) over the tour
 };
 
 // Runs until the window closes, max_seconds pass or, with close_when_quiet_s,

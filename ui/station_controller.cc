@@ -14,6 +14,7 @@ constexpr double kConfidences[] = {0.5, 0.9, 0.95, 0.99};
 constexpr double kMagnifications[] = {1.0, 5.0, 20.0, 50.0};
 constexpr double kZoomStep = 1.5;    // Up / Down
 constexpr double kWheelStep = 1.25;  // one wheel notch
+constexpr int kStripColumns = 640;    // review: the bed's weed strip along the bottom bar
 
 }  // namespace
 
@@ -70,8 +71,15 @@ bool StationController::Frame(double wall_s) {
     if (source_.review() && !placed_) placed_ = true, scene_.map().SetWindow(scene_.map().WholeRun(source_.model()));
     scene_.hud().SetStatus(status);
     scene_.map().SetMarks(PickPosition(), measure_);
+    scene_.Update(source_.model(), source_.now_utime(), source_.review() ? -1.0 : source_.fraction());
+    // After the update: the view it framed.
     scene_.SetTimelineText(TimelineLeft(), TimelineRight());
-    scene_.Update(source_.model(), source_.now_utime(), Fraction());
+    if (source_.review()) {
+      const FieldWindow whole = scene_.map().WholeRun(source_.model()), &view = scene_.map().view();
+      const double length = std::max(1e-6, whole.y1_m - whole.y0_m);
+      if (strip_.empty()) strip_ = WeedStrip(source_.model(), whole, kStripColumns);
+      scene_.SetOverview(strip_, (view.y0_m - whole.y0_m) / length, (view.y1_m - whole.y0_m) / length);
+    }
   }
   canvas_.window()->Render();
   ++frames_;
@@ -224,13 +232,6 @@ void StationController::TourStep(int i) {
   const double start = length >= bed ? whole.y0_m : whole.y0_m + place * (bed - length);
   const double y0 = start + (i % 50) * (length >= bed ? 0.01 : 0.1) * length;
   map.SetWindow(FieldWindow{y0, y0 + length, 0.0});
-}
-
-double StationController::Fraction() const {
-  if (!source_.review()) return source_.fraction();
-  const FieldWindow whole = scene_.map().WholeRun(source_.model()), &view = scene_.map().view();
-  const double length = whole.y1_m - whole.y0_m;
-  return length > 0 ? (0.5 * (view.y0_m + view.y1_m) - whole.y0_m) / length : 0.0;
 }
 
 std::string StationController::TimelineLeft() const {

@@ -71,7 +71,6 @@ class StationController {
   void PlayKey(const std::string& key);
   void CommandKey(const std::string& key);
   void GoToMetre(double fraction);  // review: the view moves to that fraction of the bed
-  double Fraction() const;          // where the timeline bar ends
 
   Canvas& canvas_;
   StationScene& scene_;
@@ -84,6 +83,7 @@ class StationController {
   std::optional<int64_t> pick_;           // the picked plant's id
   std::optional<Eigen::Vector2d> drag_;   // the pointer where a pan drag last was
   std::string tool_text_;
+  std::vector<Rgb> strip_;  // review: the bed's weed strip (WeedStrip), made once
   int64_t frames_ = 0;
   bool dirty_ = true;
   int64_t last_messages_ = 0;

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
+#include <tuple>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -247,6 +249,19 @@ TEST(StationReview, WholeRunThenAnyMetre) {
   const cv::Mat overview = canvas.Render();
   cv::imwrite(testing::OutputDir() + "/station_review.png", overview);
   EXPECT_GT(PixelsOf(overview, palette::kCrop, 30, 190), 200) << "the bed's crop cells are seen";
+  // The bottom bar is the bed's weed strip (soil brown to weed red by weeds
+  // per metre): many shades, not one bar colour; the view marked white.
+  int soil = 0, weedy = 0, marked = 0;
+  for (int c = 0; c < overview.cols; ++c) {
+    const cv::Vec3b p = overview.at<cv::Vec3b>(overview.rows - 2, c);  // below the view's mark
+    soil += PixelsOf(overview(cv::Rect(c, overview.rows - 2, 1, 1)), palette::kSoil);
+    weedy += p[2] > p[1] + 100;  // red well above green: a column with weeds
+    const cv::Vec3b m = overview.at<cv::Vec3b>(overview.rows - 6, c);  // the bar's middle row
+    marked += m[0] > 240 && m[1] > 240 && m[2] > 240;
+  }
+  EXPECT_GT(soil, 50) << "columns without weeds";
+  EXPECT_GT(weedy, 50) << "columns with weeds";
+  EXPECT_GT(marked, 400) << "the whole bed is in view (the bar's words cover some of it)";
   controller.Click(320, 3);  // the middle of the bottom bar
   controller.Frame(0.0);
   const FieldWindow at = scene.map().view();
