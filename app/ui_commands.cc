@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,11 +24,14 @@ extern char** environ;
 #include "app/config_loader.h"
 #include "app/run_config.h"
 #include "maps/archive.h"
+#include "maps/map_errors.h"
+#include "maps/plants_layer.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/command_auth.h"
 #include "ui/canvas.h"
 #include "ui/report.h"
 #include "ui/station.h"
+#include "ui/station_sources.h"
 
 namespace plantscale::app {
 namespace {
@@ -35,6 +39,7 @@ namespace {
 struct StationArgs {
   ui::StationOptions options;
   std::string log;
+  std::string review;
 };
 
 struct ReportArgs {
@@ -175,19 +180,102 @@ std::optional<ui::AgronomyTruth> SimTruth(const std::string& run_config, const u
   return t;
 }
 
+// A row of an exported plants layer as the station's plant record.
+ui::PlantRecord PlantRecordOf(const maps::PlantsLayerRow& row) {
+  ui::PlantRecord r;
+  telemetry::PlantObservation& p = r.plant;
+  p.id = row.plant_id;
+  p.kind = row.kind == "crop"   ? telemetry::PlantKind::kCrop
+           : row.kind == "weed" ? telemetry::PlantKind::kWeed
+                                : telemetry::PlantKind::kUnknown;
+  p.position_m = {row.field_x_m, row.field_y_m};
+  p.size_m2 = 3.14159265358979 * row.radius_m * row.radius_m;  // the leaf-tip disc
+  p.sprayed = row.treated;
+  r.why_text = row.why.empty() ? "no reason recorded" : row.why;
+  return r;
+}
+
+bool IsGeoPackage(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char head[16] = {};
+  in.read(head, sizeof head);
+  return file.extension() == ".gpkg" || std::string(head, 15) == "SQLite format 3";
+}
+
+// The run --review opens: an exported GeoPackage's plants, or a log read to
+// its end. Throws ReviewInputError naming the file when there is nothing to
+// review (no file, an empty log or one of another program, a GeoPackage
+// without its plants layer); a log cut mid-event opens with what was read.
+struct ReviewInputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void LoadReview(const std::filesystem::path& file, ui::StationOptions& o) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) throw ReviewInputError(file.string() + ": no such file");
+  o.review_name = file.filename().string();
+  if (IsGeoPackage(file)) {
+    auto model = std::make_shared<ui::RunModel>();
+    try {
+      for (const maps::PlantsLayerRow& row : maps::ReadPlantsLayer(file)) model->InsertPlant(PlantRecordOf(row));
+    } catch (const maps::MapIoError& e) {
+      throw ReviewInputError(e.what());
+    }
+    o.review_model = model;
+    return;
+  }
+  const ui::ReviewRun run = ui::LoadReviewRun(file);
+  if (run.empty) {
+    throw ReviewInputError(file.string() + ": no events to review" + (run.error.empty() ? " (empty log)" : ": " + run.error));
+  }
+  if (run.model->plantscale_messages() == 0) {
+    throw ReviewInputError(file.string() + ": no plantscale messages in " + std::to_string(run.model->messages()) +
+                           " events (a log of another program?)");
+  }
+  o.review_model = run.model, o.review_error = run.error;
+}
+
+void PrintTour(const std::vector<double>& ms, double cpu_ms) {
+  if (ms.empty()) return;
+  std::vector<double> sorted = ms;
+  std::sort(sorted.begin(), sorted.end());
+  double sum = 0.0;
+  for (const double m : ms) sum += m;
+  const double mean = sum / static_cast<double>(ms.size());
+  std::cout << "station: tour " << ms.size() << " frames: mean " << std::fixed << std::setprecision(1) << mean
+            << " ms (" << 1e3 / mean << " fps), median " << sorted[sorted.size() / 2] << " ms, 95th percentile "
+            << sorted[sorted.size() * 95 / 100] << " ms, worst " << sorted.back() << " ms; process CPU "
+            << cpu_ms / static_cast<double>(ms.size()) << " ms a frame\n";
+}
+
+double PeakResidentMb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+
 int Station(StationArgs& a) {
   a.options.log = a.log;
-  if (!a.options.screenshot.empty()) RerunUnderXvfb();
+  if (!a.options.screenshot.empty() || a.options.tour_frames > 0) RerunUnderXvfb();
   try {
+    if (!a.review.empty()) LoadReview(a.review, a.options);
     const ui::StationResult r = ui::RunStation(a.options);
     std::cout << "station: " << r.frames << " frames in " << std::fixed << std::setprecision(1)
-              << r.seconds << " s (" << r.frames_per_second << " fps)\n";
+              << r.seconds << " s (" << r.frames_per_second << " fps), peak resident " << PeakResidentMb()
+              << " MB\n";
+    PrintTour(r.tour_frame_ms, r.tour_cpu_ms);
     std::cout << "station: link: " << r.link << '\n';
     for (const std::string& p : r.problems) std::cout << "station: problem: " << p << '\n';
   } catch (const ui::DisplayError& e) {
     return NoDisplay(e);
   } catch (const telemetry::CommandAuthError& e) {
     std::cerr << "plantscale: error: station: --command-key: " << e.what() << '\n';
+    return 2;
+  } catch (const ReviewInputError& e) {
+    std::cerr << "plantscale: error: station --review: " << e.what() << '\n';
+    return 2;
+  } catch (const telemetry::LogError& e) {
+    std::cerr << "plantscale: error: station: " << e.what() << '\n';
     return 2;
   }
   return 0;
@@ -370,6 +458,18 @@ void AddUiCommands(CommandRegistry& registry) {
   station->add_option("--lcm-url", s.options.lcm_url, "LCM URL to subscribe to (default LCM's)");
   station->add_option("--log", s.log, "replay this LCM log with a timeline instead of live")
       ->check(CLI::ExistingFile);
+  station->add_option("--review", s.review,
+                      "open a finished run whole (an LCM log, or a GeoPackage from plantscale export): "
+                      "overview, zoom and pan, pick, measure")
+      ->excludes("--log");
+  station->add_option("--magnification", s.options.ellipse_magnification,
+                      "covariance ellipses drawn this many times their size (key x cycles 1/5/20/50)")
+      ->capture_default_str();
+  station->add_option("--tour", s.options.tour_frames,
+                      "draw this many frames touring the bed (6 m, 40 m, 300 m and whole views, panning), "
+                      "print their frame times, and close")
+      ->check(CLI::NonNegativeNumber);
+  station->footer(ui::StationKeysHelp());
   station->add_option("--speed", s.options.speed, "log replay speed")->capture_default_str();
   station->add_option("--confidence", s.options.ellipse_confidence, "ellipse confidence")
       ->capture_default_str();

@@ -5,7 +5,10 @@
 //    per log second; target ≥ 60 fps, i.e. ≤ 16.7 ms per frame.
 //  - BM_Report/40, /1000, /5000: `plantscale report` of a 40 m, 1 km and 5 km
 //    run; targets ≤ 10 s and ≤ 60 s, linear in distance (ratio_5km_1km ≈ 5).
-// Both use the synthetic run (ui/synthetic_run.h) until the tracker and the
+//  - BM_ReviewFrame/5000: `station --review` of a 5 km run: one frame of
+//    the tour (StationController::TourStep: 6 m, 40 m, 300 m and whole-bed
+//    views, panning); target ≥ 30 fps. Counter peak_rss_mb.
+// All use the synthetic run (ui/synthetic_run.h) until the tracker and the
 // treatment map publish for real.
 
 #include <benchmark/benchmark.h>
@@ -20,6 +23,8 @@
 #include "ui/canvas.h"
 #include "ui/report.h"
 #include "ui/station.h"
+#include "ui/station_controller.h"
+#include "ui/station_sources.h"
 #include "ui/station_timeline.h"
 #include "ui/synthetic_run.h"
 
@@ -100,6 +105,42 @@ void BM_StationRenderOnly(benchmark::State& state) {
 }
 BENCHMARK(BM_StationRenderOnly)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
+// The synthetic log of `length` metres, written once (outside the timing).
+std::filesystem::path BenchLog(int64_t length) {
+  const auto dir = std::filesystem::temp_directory_path() / "plantscale_ui_bench";
+  std::filesystem::create_directories(dir);
+  const auto log = dir / ("run" + std::to_string(length) + "m.lcmlog");
+  if (!std::filesystem::exists(log)) {
+    SyntheticRunOptions run;
+    run.length_m = static_cast<double>(length);
+    WriteSyntheticLog(log, run);
+  }
+  return log;
+}
+
+void BM_ReviewFrame(benchmark::State& state) {
+  if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
+  const ReviewRun run = LoadReviewRun(BenchLog(state.range(0)));
+  StationOptions options;
+  Canvas canvas(options.width_px, options.height_px, /*offscreen=*/false);
+  StationScene scene(canvas, options);
+  ReviewSource source(run.model, "bench");
+  StationController controller(canvas, scene, source, options);
+  controller.Frame(0.0);
+  int i = 0;
+  for (auto _ : state) {
+    controller.TourStep(i++);
+    controller.Frame(0.0);
+  }
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["peak_rss_mb"] = static_cast<double>(u.ru_maxrss) / 1024.0;
+  state.counters["tiles"] = static_cast<double>(run.model->tiles().size());
+  state.counters["plants"] = static_cast<double>(run.model->plants().size());
+}
+BENCHMARK(BM_ReviewFrame)->Arg(5000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(400);
+
 // `plantscale report` of a synthetic run of state.range(0) metres (40 m,
 // 1 km, 5 km; the log is written once per length, outside the timing).
 // Counters: ms_per_m, and at 5 km ratio_5km_1km, the time of 5 km over that
@@ -112,14 +153,8 @@ std::map<int64_t, double>& ReportSeconds() {
 
 void BM_Report(benchmark::State& state) {
   const int64_t length = state.range(0);
-  const auto dir = std::filesystem::temp_directory_path() / "plantscale_ui_bench";
-  std::filesystem::create_directories(dir);
-  const auto log = dir / ("run" + std::to_string(length) + "m.lcmlog");
-  if (!std::filesystem::exists(log)) {
-    SyntheticRunOptions run;
-    run.length_m = static_cast<double>(length);
-    WriteSyntheticLog(log, run);
-  }
+  const auto log = BenchLog(length);
+  const auto dir = log.parent_path();
   double seconds = 0.0;
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();

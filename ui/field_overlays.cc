@@ -1,6 +1,7 @@
 #include "ui/field_overlays.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "ui/palette.h"
 
@@ -76,11 +77,26 @@ void GridOverlay::SetVisible(bool visible) {
   lines_.SetVisible(visible);
 }
 
+std::optional<Eigen::Matrix2d> VehicleCovariance(const RunModel& model, const tm::Pose& pose) {
+  const Eigen::Matrix2d own = pose.covariance.topLeftCorner<2, 2>();
+  if (own.trace() > 0.0) return own;
+  const tm::GridEstimate* grid = GridOf(model);
+  if (grid == nullptr) return std::nullopt;
+  const Eigen::Matrix2d c = grid->covariance.topLeftCorner<2, 2>();  // offset (across), forward (along)
+  if (!(c.trace() > 0.0)) return std::nullopt;
+  const double cs = std::cos(pose.heading_rad), sn = std::sin(pose.heading_rad);
+  Eigen::Matrix2d r;
+  r << cs, -sn, sn, cs;  // vehicle → field, as VehicleToField
+  return r * c * r.transpose();
+}
+
 CovarianceEllipses::CovarianceEllipses(const EllipseParams& params)
     : params_(params),
       k2_(EllipseScale2d(params.confidence)),
       vehicle_(palette::kVehicle, 2.0, 0.07),
-      plants_(palette::kPlantEllipse, 1.0, 0.06) {}
+      plants_(palette::kPlantEllipse, 1.0, 0.06) {
+  SetMagnification(params.magnification);
+}
 
 void CovarianceEllipses::AddTo(vtkRenderer* renderer) {
   vehicle_.AddTo(renderer);
@@ -94,28 +110,37 @@ void CovarianceEllipses::SetConfidence(double confidence) {
   seen_plants_ = -1;
 }
 
+void CovarianceEllipses::SetMagnification(double magnification) {
+  if (!(magnification > 0.0)) throw std::invalid_argument("ellipse magnification must be > 0");
+  params_.magnification = magnification;
+  seen_messages_ = -1;
+  seen_plants_ = -1;
+}
+
 void CovarianceEllipses::Update(const RunModel& model, const FieldWindow& view) {
   if (model.messages() != seen_messages_) {
     seen_messages_ = model.messages();
     const std::optional<tm::Pose> pose = model.pose();
     std::vector<Polyline> vehicle;
-    if (pose && pose->covariance.topLeftCorner<2, 2>().trace() > 0.0) {
-      vehicle.push_back(EllipseOutline({pose->x_m, pose->y_m}, pose->covariance.topLeftCorner<2, 2>(), k2_));
-    }
+    const std::optional<Eigen::Matrix2d> cov = pose ? VehicleCovariance(model, *pose) : std::nullopt;
+    if (cov) vehicle.push_back(EllipseOutline({pose->x_m, pose->y_m}, *cov, DrawnK2()));
     vehicle_.Set(vehicle);
+    drew_vehicle_ = cov.has_value();
   }
   if (model.plant_messages() == seen_plants_ && built_.Covers(view)) return;
   seen_plants_ = model.plant_messages();
   built_ = BuiltRange::Around(view, 0.5 * (view.y1_m - view.y0_m));
   std::vector<Polyline> plants;
-  int drawn = 0;
-  for (auto it = model.plants().rbegin(); it != model.plants().rend() && drawn < params_.max_plants;
-       ++it, ++drawn) {
+  const bool close = view.y1_m - view.y0_m <= params_.max_view_m;
+  // Newest first, at most max_plants of those near the view.
+  for (auto it = model.plants().rbegin();
+       close && it != model.plants().rend() && static_cast<int>(plants.size()) < params_.max_plants; ++it) {
     const tm::PlantObservation& p = it->second.plant;
     if (p.position_m.y() < built_.y0_m || p.position_m.y() > built_.y1_m) continue;
-    if (p.covariance.trace() > 0.0) plants.push_back(EllipseOutline(p.position_m, p.covariance, k2_, 24));
+    if (p.covariance.trace() > 0.0) plants.push_back(EllipseOutline(p.position_m, p.covariance, DrawnK2(), 24));
   }
   plants_.Set(plants);
+  drew_plants_ = !plants.empty();
 }
 
 void CovarianceEllipses::SetVisible(bool visible) {

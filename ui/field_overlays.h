@@ -72,10 +72,19 @@ class GridOverlay {
   ModelStamp built_;
 };
 
+// The vehicle's position covariance in the field frame: its pose's, else
+// (a vehicle that publishes its pose without one) the tracker's covariance
+// of offset and forward position turned by the heading; nullopt without either.
+std::optional<Eigen::Matrix2d> VehicleCovariance(const RunModel& model, const telemetry::Pose& pose);
+
 struct EllipseParams {
   double confidence = 0.95;  // probability inside each ellipse
+  // Drawn this many times their size about their centres: a plant's 3 mm sd
+  // is a 7 mm ellipse at 95 %, under its own marker at a map's scale.
+  double magnification = 1.0;
   double min_plant_age_s = 0.0;
   int max_plants = 4000;     // newest plants drawn
+  double max_view_m = 60.0;  // no plant ellipses in a longer view (a few pixels each there)
 };
 
 class CovarianceEllipses {
@@ -86,15 +95,23 @@ class CovarianceEllipses {
   // Plants are drawn near `view` only (the whole run in a report).
   void Update(const RunModel& model, const FieldWindow& view);
   void SetConfidence(double confidence);
+  // Throws std::invalid_argument unless magnification > 0.
+  void SetMagnification(double magnification);
+  const EllipseParams& params() const { return params_; }
   void SetVisible(bool visible);
+  // What the last update drew: the vehicle's ellipse, plants' ellipses.
+  bool drew_vehicle() const { return drew_vehicle_; }
+  bool drew_plants() const { return drew_plants_; }
 
  private:
+  double DrawnK2() const { return k2_ * params_.magnification * params_.magnification; }
   EllipseParams params_;
   double k2_;
   LineLayer vehicle_, plants_;
   int64_t seen_plants_ = -1;
   int64_t seen_messages_ = -1;
   BuiltRange built_;
+  bool drew_vehicle_ = false, drew_plants_ = false;
 };
 
 class PlantMarkers {

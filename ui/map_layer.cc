@@ -5,6 +5,8 @@
 #include <vtkNew.h>
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include "telemetry/convert.h"
 #include "ui/palette.h"
@@ -12,34 +14,52 @@
 namespace plantscale::ui {
 namespace {
 
+using Cell = plantscale_map_tile_t;
+
 Rgb CellColour(uint8_t cell) {
   switch (cell) {
-    case plantscale_map_tile_t::CELL_SOIL:
+    case Cell::CELL_SOIL:
       return palette::kSoil;
-    case plantscale_map_tile_t::CELL_CROP:
+    case Cell::CELL_CROP:
       return palette::kCrop;
-    case plantscale_map_tile_t::CELL_WEED:
+    case Cell::CELL_WEED:
       return palette::kWeed;
-    case plantscale_map_tile_t::CELL_TREATED:
+    case Cell::CELL_TREATED:
       return palette::kTreated;
     default:
       return palette::kUnknownCell;
   }
 }
 
-// Cells row-major from the tile origin, row j at y = origin_y + j·resolution;
-// image points sit at cell centres.
-vtkSmartPointer<vtkImageData> TileImage(const telemetry::MapTileDelta& t) {
+// Which class a far-view cell shows when its tile cells differ: weeds first.
+int Rank(uint8_t cell) {
+  switch (cell) {
+    case Cell::CELL_WEED:
+      return 4;
+    case Cell::CELL_TREATED:
+      return 3;
+    case Cell::CELL_CROP:
+      return 2;
+    case Cell::CELL_SOIL:
+      return 1;
+    default:
+      return 0;
+  }
+}
+
+// An RGB image of `cells` (row-major, row j along y), points at cell centres
+// from `origin` (the first cell's corner).
+vtkSmartPointer<vtkImageData> Image(const std::vector<uint8_t>& cells, int width, int height, double cell_m,
+                                    const Eigen::Vector2d& origin) {
   auto image = vtkSmartPointer<vtkImageData>::New();
-  image->SetDimensions(t.width, t.height, 1);
-  image->SetSpacing(t.resolution_m, t.resolution_m, 1.0);
-  image->SetOrigin(t.origin_m.x() + 0.5 * t.resolution_m, t.origin_m.y() + 0.5 * t.resolution_m,
-                   0.0);
+  image->SetDimensions(width, height, 1);
+  image->SetSpacing(cell_m, cell_m, 1.0);
+  image->SetOrigin(origin.x() + 0.5 * cell_m, origin.y() + 0.5 * cell_m, 0.0);
   image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
   auto* out = static_cast<unsigned char*>(image->GetScalarPointer());
-  const size_t n = std::min(t.cells.size(), static_cast<size_t>(t.width) * t.height);
-  for (size_t i = 0; i < static_cast<size_t>(t.width) * t.height; ++i) {
-    const Rgb c = CellColour(i < n ? t.cells[i] : 0);
+  const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
+  for (size_t i = 0; i < n; ++i) {
+    const Rgb c = CellColour(i < cells.size() ? cells[i] : 0);
     out[3 * i] = static_cast<unsigned char>(c.r * 255.0 + 0.5);
     out[3 * i + 1] = static_cast<unsigned char>(c.g * 255.0 + 0.5);
     out[3 * i + 2] = static_cast<unsigned char>(c.b * 255.0 + 0.5);
@@ -47,61 +67,153 @@ vtkSmartPointer<vtkImageData> TileImage(const telemetry::MapTileDelta& t) {
   return image;
 }
 
+bool Overlaps(double y0, double y1, const BuiltRange& r) { return y1 >= r.y0_m && y0 <= r.y1_m; }
+
+int BlockOf(double y) { return static_cast<int>(std::floor(y / MapLayer::kBlockM)); }
+
+// Paints `tile` into a block image of `nx` × `ny` cells from `origin`, each
+// cell keeping its highest-ranked class.
+void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, int nx, int ny, std::vector<uint8_t>& cells) {
+  const double cell = MapLayer::kBlockCellM;
+  const size_t n = std::min(t.cells.size(), static_cast<size_t>(t.width) * static_cast<size_t>(t.height));
+  for (int j = 0; j < t.height; ++j) {
+    const int by = static_cast<int>(std::floor((t.origin_m.y() + (j + 0.5) * t.resolution_m - origin.y()) / cell));
+    if (by < 0 || by >= ny) continue;
+    for (int i = 0; i < t.width; ++i) {
+      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(t.width) + static_cast<size_t>(i);
+      const int bx = static_cast<int>(std::floor((t.origin_m.x() + (i + 0.5) * t.resolution_m - origin.x()) / cell));
+      if (k >= n || bx < 0 || bx >= nx) continue;
+      uint8_t& to = cells[static_cast<size_t>(by) * static_cast<size_t>(nx) + static_cast<size_t>(bx)];
+      if (Rank(t.cells[k]) > Rank(to)) to = t.cells[k];
+    }
+  }
+}
+
 }  // namespace
 
-void MapLayer::Update(const RunModel& model) {
-  if (renderer_ == nullptr || model.tile_revision_sum() == seen_revisions_) return;
+void MapLayer::Update(const RunModel& model, const FieldWindow& view) {
+  if (renderer_ == nullptr) return;
+  const double length = std::max(1e-3, view.y1_m - view.y0_m);
+  const bool detail = length <= kDetailMaxM;
+  const bool changed = model.tile_revision_sum() != seen_revisions_;
+  if (changed) Index(model);
+  if (!changed && detail == detail_ && built_.Covers(view)) return;
   seen_revisions_ = model.tile_revision_sum();
-  // Tiles the model no longer has (the station sought back in its log: the
-  // model was replayed from the start) leave the map, so that a log time
-  // shows the map as it was then, however one got there.
-  for (auto it = tiles_.begin(); it != tiles_.end();) {
-    if (model.tiles().count(it->first) == 0) {
-      renderer_->RemoveActor(it->second.actor);
-      it = tiles_.erase(it);
-    } else {
+  detail_ = detail;
+  built_ = BuiltRange::Around(view, length);
+  if (detail) {
+    for (auto& [b, d] : blocks_) Drop(d.actor);
+    blocks_.clear();
+    ShowTiles(model, built_);
+  } else {
+    for (auto& [k, d] : actors_) Drop(d.actor);
+    actors_.clear();
+    ShowBlocks(model, built_);
+  }
+}
+
+// The extents of the model's tiles; tiles it no longer has (the station
+// sought back and replayed from the start) leave the index.
+void MapLayer::Index(const RunModel& model) {
+  for (const auto& [key, t] : model.tiles()) {
+    Extent& e = index_[key];
+    if (e.revision == t.revision) continue;
+    e = {t.revision, t.origin_m.x(), t.origin_m.x() + t.width * t.resolution_m, t.origin_m.y(),
+         t.origin_m.y() + t.height * t.resolution_m};
+  }
+  if (index_.size() == model.tiles().size()) return;
+  for (auto it = index_.begin(); it != index_.end();) {
+    it = model.tiles().count(it->first) ? std::next(it) : index_.erase(it);
+  }
+}
+
+void MapLayer::ShowTiles(const RunModel& model, const BuiltRange& near) {
+  for (auto it = actors_.begin(); it != actors_.end();) {
+    const auto e = index_.find(it->first);
+    if (e != index_.end() && Overlaps(e->second.y0_m, e->second.y1_m, near)) {
       ++it;
+      continue;
     }
+    Drop(it->second.actor);
+    it = actors_.erase(it);
   }
-  for (const auto& [key, tile] : model.tiles()) {
-    Tile& slot = tiles_[key];
-    if (slot.revision == tile.revision && slot.actor) continue;
-    if (!slot.actor) {
-      slot.actor = vtkSmartPointer<vtkImageActor>::New();
-      slot.actor->InterpolateOff();
-      slot.actor->GetMapper()->BorderOn();  // whole edge cells: no seams between tiles
-      slot.actor->SetVisibility(visible_);
-      renderer_->AddActor(slot.actor);
-    }
-    slot.actor->GetMapper()->SetInputData(TileImage(tile));
+  for (const auto& [key, e] : index_) {
+    if (!Overlaps(e.y0_m, e.y1_m, near)) continue;
+    Drawn& slot = actors_[key];
+    if (slot.stamp == e.revision && slot.actor) continue;
+    if (!slot.actor) slot.actor = NewActor();
+    const telemetry::MapTileDelta& t = model.tiles().at(key);
+    slot.actor->GetMapper()->SetInputData(Image(t.cells, t.width, t.height, t.resolution_m, t.origin_m));
     slot.actor->Modified();
-    slot.revision = tile.revision;
-    slot.y0_m = tile.origin_m.y();
-    slot.y1_m = tile.origin_m.y() + tile.height * tile.resolution_m;
+    slot.stamp = e.revision;
   }
+}
+
+void MapLayer::ShowBlocks(const RunModel& model, const BuiltRange& near) {
+  struct Pending {
+    int stamp = 0;
+    double x0 = 1e300, x1 = -1e300;
+    std::vector<TileKey> tiles;
+  };
+  std::map<int, Pending> wanted;
+  for (const auto& [key, e] : index_) {
+    if (!Overlaps(e.y0_m, e.y1_m, near)) continue;
+    for (int b = BlockOf(e.y0_m); b <= BlockOf(e.y1_m - 1e-9); ++b) {
+      Pending& p = wanted[b];
+      p.stamp += e.revision + 1;
+      p.x0 = std::min(p.x0, e.x0_m), p.x1 = std::max(p.x1, e.x1_m);
+      p.tiles.push_back(key);
+    }
+  }
+  for (auto it = blocks_.begin(); it != blocks_.end();) {
+    if (wanted.count(it->first)) {
+      ++it;
+      continue;
+    }
+    Drop(it->second.actor);
+    it = blocks_.erase(it);
+  }
+  for (const auto& [b, p] : wanted) {
+    Drawn& slot = blocks_[b];
+    if (slot.stamp == p.stamp && slot.actor) continue;
+    const Eigen::Vector2d origin(std::floor(p.x0 / kBlockCellM) * kBlockCellM, b * kBlockM);
+    const int nx = static_cast<int>(std::ceil((p.x1 - origin.x()) / kBlockCellM));
+    const int ny = static_cast<int>(std::ceil(kBlockM / kBlockCellM - 1e-9));
+    std::vector<uint8_t> cells(static_cast<size_t>(nx) * static_cast<size_t>(ny), Cell::CELL_UNKNOWN);
+    for (const TileKey& key : p.tiles) Paint(model.tiles().at(key), origin, nx, ny, cells);
+    if (!slot.actor) slot.actor = NewActor();
+    slot.actor->GetMapper()->SetInputData(Image(cells, nx, ny, kBlockCellM, origin));
+    slot.actor->Modified();
+    slot.stamp = p.stamp;
+  }
+}
+
+vtkSmartPointer<vtkImageActor> MapLayer::NewActor() {
+  auto actor = vtkSmartPointer<vtkImageActor>::New();
+  actor->InterpolateOff();
+  actor->GetMapper()->BorderOn();  // whole edge cells: no seams between tiles
+  actor->SetVisibility(visible_);
+  renderer_->AddActor(actor);
+  return actor;
+}
+
+void MapLayer::Drop(vtkImageActor* actor) {
+  if (actor != nullptr) renderer_->RemoveActor(actor);
 }
 
 void MapLayer::SetVisible(bool visible) {
   visible_ = visible;
-  for (auto& [key, tile] : tiles_) tile.actor->SetVisibility(visible);
-}
-
-void MapLayer::Cull(const FieldWindow& view) {
-  const double margin = 0.5 * (view.y1_m - view.y0_m);
-  for (auto& [key, tile] : tiles_) {
-    const bool near = tile.y1_m >= view.y0_m - margin && tile.y0_m <= view.y1_m + margin;
-    tile.actor->SetVisibility(visible_ && near);
-  }
+  for (auto& [key, d] : actors_) d.actor->SetVisibility(visible);
+  for (auto& [key, d] : blocks_) d.actor->SetVisibility(visible);
 }
 
 bool MapLayer::Bounds(double b[4]) const {
-  if (tiles_.empty()) return false;
+  if (index_.empty()) return false;
   b[0] = b[2] = 1e300;
   b[1] = b[3] = -1e300;
-  for (const auto& [key, tile] : tiles_) {
-    const double* tb = tile.actor->GetBounds();
-    b[0] = std::min(b[0], tb[0]), b[1] = std::max(b[1], tb[1]);
-    b[2] = std::min(b[2], tb[2]), b[3] = std::max(b[3], tb[3]);
+  for (const auto& [key, e] : index_) {
+    b[0] = std::min(b[0], e.x0_m), b[1] = std::max(b[1], e.x1_m);
+    b[2] = std::min(b[2], e.y0_m), b[3] = std::max(b[3], e.y1_m);
   }
   return true;
 }

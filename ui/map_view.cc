@@ -5,11 +5,25 @@
 #include <vtkNew.h>
 
 #include <algorithm>
+#include <utility>
+
+#include "ui/palette.h"
 
 namespace plantscale::ui {
 
+namespace {
+
+constexpr double kMinViewM = 0.3, kMaxViewM = 20000.0;  // along-bed lengths a zoom stops at
+
+}  // namespace
+
 MapView::MapView(const MapViewParams& params)
-    : params_(params), grid_(params.grid), ellipses_(params.ellipses) {}
+    : params_(params),
+      grid_(params.grid),
+      ellipses_(params.ellipses),
+      pick_(palette::kPick, 3.0, 0.2),
+      measure_(palette::kPick, 3.0, 0.2),
+      follow_length_m_(params.follow_length_m) {}
 
 void MapView::AddTo(vtkRenderer* renderer) {
   renderer_ = renderer;
@@ -18,22 +32,85 @@ void MapView::AddTo(vtkRenderer* renderer) {
   grid_.AddTo(renderer);
   ellipses_.AddTo(renderer);
   vehicle_.AddTo(renderer);
+  pick_.AddTo(renderer);
+  measure_.AddTo(renderer);
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->ParallelProjectionOn();
   camera->SetViewUp(-1.0, 0.0, 0.0);  // field −x up, so field +y runs to the right
 }
 
 void MapView::Update(const RunModel& model) {
-  map_.Update(model);
   const FieldWindow view = PlaceCamera(model);
-  map_.Cull(view);
+  map_.Update(model, view);
   plants_.Update(model, view);
   grid_.Update(model);
   ellipses_.Update(model, view);
   vehicle_.Update(model);
+  if (metres_per_pixel() != marks_mpp_) DrawMarks();
+}
+
+void MapView::Zoom(double factor, std::optional<double> about_y_m) {
+  if (!(factor > 0.0)) return;
+  if (!window_) {
+    follow_length_m_ = std::clamp(follow_length_m_ / factor, kMinViewM, kMaxViewM);
+    return;
+  }
+  FieldWindow& w = *window_;
+  const double length = std::clamp((w.y1_m - w.y0_m) / factor, kMinViewM, kMaxViewM);
+  const double about = about_y_m.value_or(0.5 * (w.y0_m + w.y1_m));
+  // The point under `about` stays where it is on the screen.
+  const double t = w.y1_m > w.y0_m ? (about - w.y0_m) / (w.y1_m - w.y0_m) : 0.5;
+  w.y0_m = about - t * length;
+  w.y1_m = w.y0_m + length;
+}
+
+void MapView::Pan(double along_m, double across_m) {
+  if (!window_) window_ = view_;
+  window_->y0_m += along_m, window_->y1_m += along_m;
+  window_->x_centre_m += across_m;
+}
+
+double MapView::metres_per_pixel() const {
+  if (renderer_ == nullptr || renderer_->GetSize()[1] <= 0) return 0.0;
+  return 2.0 * renderer_->GetActiveCamera()->GetParallelScale() / renderer_->GetSize()[1];
+}
+
+void MapView::SetMarks(std::optional<Eigen::Vector2d> pick, std::vector<Eigen::Vector2d> measure) {
+  if (pick == pick_at_ && measure == measure_at_) return;
+  pick_at_ = pick, measure_at_ = std::move(measure);
+  DrawMarks();
+}
+
+// A ring 12 px across the pick and a cross at it; the measured line with a
+// tick across each end (sized in pixels: they read the same at any zoom).
+void MapView::DrawMarks() {
+  marks_mpp_ = metres_per_pixel();
+  const double px = marks_mpp_ > 0 ? marks_mpp_ : 0.005;
+  std::vector<Polyline> ring, line;
+  if (pick_at_) {
+    ring.push_back(EllipseOutline(*pick_at_, Eigen::Matrix2d::Identity(), (12 * px) * (12 * px), 32));
+  }
+  for (const Eigen::Vector2d& p : measure_at_) {
+    line.push_back({p + Eigen::Vector2d(-6 * px, -6 * px), p + Eigen::Vector2d(6 * px, 6 * px)});
+    line.push_back({p + Eigen::Vector2d(-6 * px, 6 * px), p + Eigen::Vector2d(6 * px, -6 * px)});
+  }
+  if (measure_at_.size() == 2) line.push_back({measure_at_[0], measure_at_[1]});
+  pick_.Set(ring);
+  measure_.Set(line);
 }
 
 FieldWindow MapView::WholeRun(const RunModel& model) const {
+  // A pass over every plant and path point: once per model state (a
+  // reviewed run's never changes).
+  if (&model == whole_model_ && model.messages() == whole_messages_ && model.tile_revision_sum() == whole_tiles_) {
+    return whole_;
+  }
+  whole_model_ = &model, whole_messages_ = model.messages(), whole_tiles_ = model.tile_revision_sum();
+  whole_ = WholeRunOf(model);
+  return whole_;
+}
+
+FieldWindow MapView::WholeRunOf(const RunModel& model) const {
   double lo = 1e300, hi = -1e300;
   for (const auto& [x, y] : model.path()) lo = std::min(lo, y), hi = std::max(hi, y);
   for (const auto& [id, r] : model.plants()) {
@@ -50,9 +127,13 @@ FieldWindow MapView::PlaceCamera(const RunModel& model) {
   if (window_) {
     w = *window_;
   } else if (const auto pose = model.pose()) {
-    const double start = pose->y_m - (0.5 * params_.follow_length_m - params_.follow_ahead_m);
-    w = {start, start + params_.follow_length_m, 0.0};
+    // The vehicle sits follow_ahead_m left of the centre at the default zoom,
+    // in proportion when zoomed.
+    const double ahead = params_.follow_ahead_m * follow_length_m_ / params_.follow_length_m;
+    const double start = pose->y_m - (0.5 * follow_length_m_ - ahead);
+    w = {start, start + follow_length_m_, 0.0};
   }
+  view_ = w;
   if (renderer_ == nullptr) return w;
   // Parallel scale is half the view height; the height holds length / aspect.
   const double aspect = std::max(1e-6, renderer_->GetTiledAspectRatio());
@@ -64,7 +145,9 @@ FieldWindow MapView::PlaceCamera(const RunModel& model) {
   camera->SetFocalPoint(w.x_centre_m, cy, 0.0);
   camera->SetPosition(w.x_centre_m, cy, 50.0);
   camera->SetViewUp(-1.0, 0.0, 0.0);
-  camera->SetParallelScale(std::max(0.5 * params_.min_across_m, 0.5 * (w.y1_m - w.y0_m) / aspect));
+  // At least min_across_m across at the default zoom; zoomed in, less.
+  const double across = params_.min_across_m * std::min(1.0, (w.y1_m - w.y0_m) / params_.follow_length_m);
+  camera->SetParallelScale(std::max(0.5 * across, 0.5 * (w.y1_m - w.y0_m) / aspect));
   camera->SetClippingRange(1.0, 100.0);
   return w;
 }

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <optional>
+#include <vector>
 
 #include "ui/field_overlays.h"
 #include "ui/map_layer.h"
@@ -33,9 +34,24 @@ class MapView {
   bool Visible(MapLayerId layer) const;
   // Frame `window` (free camera) or, with nullopt, follow the vehicle.
   void SetWindow(std::optional<FieldWindow> window) { window_ = window; }
+  bool following() const { return !window_; }
+  // Closer by `factor` (< 1: farther) about along-bed `about_y_m` (nullopt:
+  // the view's centre); following, the followed length changes instead.
+  void Zoom(double factor, std::optional<double> about_y_m = std::nullopt);
+  // Moves the view by field metres (along the bed, across it); following
+  // stops there (the camera stays where it was put).
+  void Pan(double along_m, double across_m);
+  // The field window last framed, and its metres per screen pixel.
+  const FieldWindow& view() const { return view_; }
+  double metres_per_pixel() const;
+  // The picked plant ringed (nullopt: none) and the measure tool's points
+  // (one: its first click, two: the line between them).
+  void SetMarks(std::optional<Eigen::Vector2d> pick, std::vector<Eigen::Vector2d> measure);
   // The whole run: tiles, plants and path.
   FieldWindow WholeRun(const RunModel& model) const;
   CovarianceEllipses& ellipses() { return ellipses_; }
+  const CovarianceEllipses& ellipses() const { return ellipses_; }
+  const MapLayer& map_layer() const { return map_; }
   // Field point under display pixel (x, y) (VTK display coordinates, y up).
   Eigen::Vector2d FieldAtDisplay(double x, double y) const;
   // Display pixel (VTK, y up) of a field point.
@@ -43,6 +59,8 @@ class MapView {
 
  private:
   FieldWindow PlaceCamera(const RunModel& model);
+  FieldWindow WholeRunOf(const RunModel& model) const;
+  void DrawMarks();
 
   MapViewParams params_;
   vtkRenderer* renderer_ = nullptr;
@@ -51,7 +69,17 @@ class MapView {
   GridOverlay grid_;
   CovarianceEllipses ellipses_;
   VehicleMarker vehicle_;
+  LineLayer pick_, measure_;
+  std::optional<Eigen::Vector2d> pick_at_;
+  std::vector<Eigen::Vector2d> measure_at_;
+  double marks_mpp_ = -1.0;  // metres per pixel the marks were drawn for (< 0: redraw)
+  double follow_length_m_;
   std::optional<FieldWindow> window_;
+  FieldWindow view_;
+  mutable const RunModel* whole_model_ = nullptr;  // WholeRun's cache: the model state it was for
+  mutable int64_t whole_messages_ = -1;
+  mutable int whole_tiles_ = -1;
+  mutable FieldWindow whole_;
   std::array<double, 4> placed_{};  // y0, y1, x centre and aspect the camera was placed for
   bool visible_[5] = {true, true, true, true, true};
 };

@@ -20,6 +20,7 @@ inline constexpr Rgb kVehicle{1.0, 0.3, 1.0};      // vehicle marker and its ell
 inline constexpr Rgb kPath{0.85, 0.85, 0.85};
 inline constexpr Rgb kPlantEllipse{1.0, 1.0, 1.0};
 inline constexpr Rgb kGate{1.0, 0.55, 0.0};
+inline constexpr Rgb kPick{1.0, 0.45, 0.0};  // the picked plant's ring and the measured line
 // Blob rings in the camera view: lighter than the plants they ring.
 inline constexpr Rgb kBlobCrop{0.55, 1.0, 0.55};
 inline constexpr Rgb kBlobWeed{1.0, 0.25, 0.25};

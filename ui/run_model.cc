@@ -164,6 +164,13 @@ void RunModel::ObserveTiles(const tm::TelemetrySnapshot& s) {
   tile_revisions_ = sum;
 }
 
+void RunModel::InsertPlant(const PlantRecord& record) {
+  registry_[record.plant.id] = record;
+  inserted_plants_ = true;
+  ++plant_messages_;
+  ++messages_;
+}
+
 void RunModel::ObserveHealth(const tm::TelemetrySnapshot& s) {
   if (!s.health) return;
   if (health_ && s.health->boot_utime != health_->boot_utime) {
@@ -195,6 +202,11 @@ std::optional<tm::Pose> RunModel::pose() const { return pose_ ? pose_ : truth_po
 LinkStatus RunModel::Link(int64_t now_utime) const {
   LinkStatus link;
   link.heartbeat_age_s = std::numeric_limits<double>::quiet_NaN();
+  if (!health_ && inserted_plants_) {
+    link.level = LinkLevel::kFinished;
+    link.text = "an exported map: its plants only, no vehicle link";
+    return link;
+  }
   if (!health_) {
     link.level = messages_ == 0 ? LinkLevel::kNoMessages : LinkLevel::kLost;
     link.text = messages_ == 0 ? "NO MESSAGES: nothing received yet"

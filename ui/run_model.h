@@ -38,6 +38,9 @@ struct TraceSample {
 
 struct PlantRecord {
   telemetry::PlantObservation plant;  // newest observation of this id
+  // From an exported map (RunModel::InsertPlant): the decision's reason in
+  // its words (plant.why unused), and no distance to the predicted crop.
+  std::string why_text;
   int64_t first_utime = 0;
   int64_t last_utime = 0;
   int observations = 0;
@@ -97,6 +100,10 @@ class RunModel {
   void Feed(telemetry::Subscriber& subscriber, const std::string& channel, const void* data, size_t size,
             int64_t recv_utime);
 
+  // A plant read from elsewhere (an exported map's plants layer) into the
+  // registry, as if observed; counts as a message.
+  void InsertPlant(const PlantRecord& record);
+
   const std::optional<telemetry::GridEstimate>& grid() const { return grid_; }
   const std::optional<telemetry::GridEstimate>& truth() const { return truth_; }
   // The vehicle pose to draw: dead reckoning, else simulator truth.
@@ -120,6 +127,7 @@ class RunModel {
   int64_t last_message_utime() const { return last_message_utime_; }
   int64_t first_message_utime() const { return first_message_utime_; }
   int64_t messages() const { return messages_; }
+  int64_t plantscale_messages() const { return messages_ - unknown_messages_; }  // on our channels
 
   // Heartbeat state at `now_utime` (the log clock when replaying).
   LinkStatus Link(int64_t now_utime) const;
@@ -165,6 +173,7 @@ class RunModel {
   int64_t first_message_utime_ = 0;
   int64_t messages_ = 0;
   int64_t plant_messages_ = 0;
+  bool inserted_plants_ = false;  // InsertPlant: a map's plants, no vehicle link
 };
 
 // Chi-square quantile with two degrees of freedom: the squared Mahalanobis

@@ -53,14 +53,15 @@ TEST(MapLayer, SeekBackShowsTheMapAsItWasThen) {
   MapLayer back, forward;
   back.AddTo(renderer_sought);
   forward.AddTo(renderer_forward);
+  const FieldWindow whole{-5.0, 30.0, 0.0};
   sought.Seek(35.0);
-  back.Update(sought.model());
+  back.Update(sought.model(), whole);
   const int actors_at_35s = renderer_sought->GetViewProps()->GetNumberOfItems();
   sought.Seek(10.0);
-  back.Update(sought.model());
+  back.Update(sought.model(), whole);
   LogTimeline fresh(SyntheticRun(run), "");
   fresh.Seek(10.0);
-  forward.Update(fresh.model());
+  forward.Update(fresh.model(), whole);
   double b[4], f[4];
   ASSERT_TRUE(back.Bounds(b));
   ASSERT_TRUE(forward.Bounds(f));

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -15,6 +16,10 @@
 
 #include "telemetry/command_auth.h"
 #include "telemetry/transport.h"
+#include <vtkImageData.h>
+#include <vtkImageMapper3D.h>
+#include <vtkTextProperty.h>
+
 #include "ui/palette.h"
 #include "ui/station_controller.h"
 #include "ui/station_sources.h"
@@ -43,10 +48,13 @@ OptionErrors StationOptions::Validate() const {
   RequireInRange(e, "width_px", width_px, 320, 8192);
   RequireInRange(e, "height_px", height_px, 240, 8192);
   RequireInRange(e, "ellipse_confidence", ellipse_confidence, 0.0, 1.0, false, false);
+  RequireInRange(e, "ellipse_magnification", ellipse_magnification, 1.0, 1000.0);
   RequireInRange(e, "speed", speed, 0.125, 64.0);
   RequireNonNegative(e, "max_seconds", max_seconds);
   RequireNonNegative(e, "close_when_quiet_s", close_when_quiet_s);
-  if (offscreen && max_seconds <= 0.0 && close_when_quiet_s <= 0.0) {
+  RequireInRange(e, "tour_frames", tour_frames, 0, 1000000);
+  if (!log.empty() && review_model) e.push_back({"review", "a log to replay or a run to review, not both"});
+  if (offscreen && max_seconds <= 0.0 && close_when_quiet_s <= 0.0 && tour_frames == 0) {
     e.push_back({"offscreen", "needs max_seconds or close_when_quiet_s (nothing would close it)"});
   }
   return e;
@@ -56,6 +64,7 @@ StationScene::StationScene(Canvas& canvas, const StationOptions& options)
     : map_([&] {
         MapViewParams p;
         p.ellipses.confidence = options.ellipse_confidence;
+        p.ellipses.magnification = options.ellipse_magnification;
         return p;
       }()),
       camera_(options.camera),
@@ -67,22 +76,120 @@ StationScene::StationScene(Canvas& canvas, const StationOptions& options)
         p.cached_height_px = static_cast<int>((kTrace[3] - kTrace[1]) * options.height_px);
         return p;
       }()),
-      timeline_(palette::kNozzleOpen, 12.0, 0.1) {
+      timeline_(palette::kNozzleOpen, 12.0, 0.1),
+      view_span_({1.0, 1.0, 1.0}, 4.0, 0.2) {
   hud_.AddTo(Add(canvas, kHud, palette::kHudOk));
   map_renderer_ = Add(canvas, kMap, palette::kBackground);
   map_.AddTo(map_renderer_);
+  annotations_.AddTo(map_renderer_);
   nozzles_.AddTo(Add(canvas, kNozzles, {0.12, 0.12, 0.13}));
   camera_.AddTo(Add(canvas, kCamera, palette::kBackground));
   trace_.AddTo(Add(canvas, kTrace, {1, 1, 1}));
   timeline_renderer_ = Add(canvas, kTimeline, {0.2, 0.2, 0.22});
   timeline_.AddTo(timeline_renderer_);
+  overview_->InterpolateOff();
+  overview_->VisibilityOff();
+  timeline_renderer_->AddActor(overview_);
+  view_span_.AddTo(timeline_renderer_);
+  for (vtkTextActor* t : {timeline_left_.Get(), timeline_right_.Get()}) {
+    t->GetTextProperty()->SetFontSize(11);
+    t->GetTextProperty()->SetFontFamilyToCourier();
+    t->GetTextProperty()->BoldOn();
+    t->GetTextProperty()->SetColor(1.0, 1.0, 1.0);
+    t->GetTextProperty()->SetVerticalJustificationToCentered();
+    t->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
+    timeline_renderer_->AddActor2D(t);
+  }
+  timeline_left_->SetPosition(0.005, 0.5);
+  timeline_right_->GetTextProperty()->SetJustificationToRight();
+  timeline_right_->SetPosition(0.995, 0.5);
   vtkCamera* c = timeline_renderer_->GetActiveCamera();
   c->ParallelProjectionOn();
   c->SetFocalPoint(0.5, 0.5, 0), c->SetPosition(0.5, 0.5, 10), c->SetParallelScale(0.5);
 }
 
+void StationScene::SetTimelineText(const std::string& left, const std::string& right) {
+  const auto set = [](vtkTextActor* t, const std::string& text) {
+    if (t->GetInput() == nullptr || text != t->GetInput()) t->SetInput(text.c_str());
+  };
+  set(timeline_left_, left);
+  set(timeline_right_, right);
+}
+
+namespace {
+
+std::string EllipseLegend(const MapView& map) {
+  if (!map.Visible(MapLayerId::kEllipses)) return "ellipses off (l)";
+  const CovarianceEllipses& e = map.ellipses();
+  std::ostringstream out;
+  out << "ellipses " << std::lround(100.0 * e.params().confidence) << "%, drawn x" << e.params().magnification;
+  if (!e.drew_plants()) out << " (vehicle only: no plant covariance here)";
+  return out.str();
+}
+
+}  // namespace
+
+std::string StationKeysHelp() {
+  return "Keys (h or ? shows or hides this list):\n"
+         "  m map   p plants   g predicted grid   v vehicle and path   l covariance ellipses\n"
+         "  c ellipse confidence 50/90/95/99 %   x ellipse magnification x1/x5/x20/x50\n"
+         "  f follow the vehicle / whole bed   Up/Down zoom in/out   [ ] pan back/ahead\n"
+         "  mouse wheel zoom about the pointer   right or middle drag pan\n"
+         "  left click a plant: its record, ringed   r measure tool: click two points\n"
+         "  log: space pause   + - speed   Left/Right seek 5 s   Home restart   click the timeline\n"
+         "  live, to the vehicle: S start   P pause   C spray the crop   W spray the weeds   O spraying off\n"
+         "  q or Esc quit";
+}
+
+std::vector<Rgb> WeedStrip(const RunModel& model, const FieldWindow& whole, int columns) {
+  const double length = std::max(1e-6, whole.y1_m - whole.y0_m);
+  std::vector<int> weeds(static_cast<size_t>(columns), 0), plants(static_cast<size_t>(columns), 0);
+  for (const auto& [id, r] : model.plants()) {
+    const int c = std::clamp(static_cast<int>((r.plant.position_m.y() - whole.y0_m) / length * columns), 0, columns - 1);
+    ++plants[static_cast<size_t>(c)];
+    weeds[static_cast<size_t>(c)] += r.plant.kind == telemetry::PlantKind::kWeed;
+  }
+  const int most = std::max(1, *std::max_element(weeds.begin(), weeds.end()));
+  std::vector<Rgb> out;
+  for (size_t c = 0; c < weeds.size(); ++c) {
+    const double w = static_cast<double>(weeds[c]) / most;
+    const Rgb a = palette::kSoil, b = palette::kWeed;
+    out.push_back(plants[c] == 0 ? palette::kUnknownCell
+                                 : Rgb{a.r + w * (b.r - a.r), a.g + w * (b.g - a.g), a.b + w * (b.b - a.b)});
+  }
+  return out;
+}
+
+void StationScene::SetOverview(const std::vector<Rgb>& columns, double from, double to) {
+  if (columns.size() != overview_columns_ && !columns.empty()) {
+    overview_columns_ = columns.size();
+    // Two rows of the same colours: the strip's height is the bar's.
+    const double aspect = std::max(1e-6, timeline_renderer_->GetTiledAspectRatio()), h = 1.0 / aspect;
+    auto image = vtkSmartPointer<vtkImageData>::New();
+    image->SetDimensions(static_cast<int>(columns.size()), 2, 1);
+    image->SetSpacing(1.0 / static_cast<double>(columns.size()), 0.5 * h, 1.0);
+    image->SetOrigin(0.5 / static_cast<double>(columns.size()), 0.5 - 0.25 * h, 0.0);
+    image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+    auto* px = static_cast<unsigned char*>(image->GetScalarPointer());
+    for (size_t row = 0, i = 0; row < 2; ++row) {
+      for (const Rgb& c : columns) {
+        for (const double v : {c.r, c.g, c.b}) px[i++] = static_cast<unsigned char>(std::lround(255.0 * v));
+      }
+    }
+    overview_->GetMapper()->BorderOn();
+    overview_->GetMapper()->SetInputData(image);
+    overview_->VisibilityOn();
+  }
+  const std::pair<double, double> span{std::clamp(from, 0.0, 1.0), std::clamp(to, 0.0, 1.0)};
+  if (span == view_span_at_) return;
+  view_span_at_ = span;
+  const double min_width = 2.0 / std::max(1, timeline_renderer_->GetSize()[0]);
+  view_span_.Set({{{span.first, 0.5}, {std::max(span.second, span.first + min_width), 0.5}}});
+}
+
 void StationScene::Update(const RunModel& model, int64_t now_utime, double fraction) {
   map_.Update(model);
+  annotations_.Update(map_.metres_per_pixel(), EllipseLegend(map_));
   hud_.Update(model, now_utime);
   nozzles_.Update(model, now_utime);
   camera_.Update(model);
@@ -113,28 +220,61 @@ void RunInteractive(Canvas& canvas, StationController& controller) {
   } context{&controller, interactor, Clock::now(), Clock::now()};
   const auto on_event = [](vtkObject*, unsigned long event, void* data, void*) {
     auto* c = static_cast<Context*>(data);
-    if (event == vtkCommand::KeyPressEvent) {
-      if (c->controller->Key(c->interactor->GetKeySym() ? c->interactor->GetKeySym() : "")) {
-        c->interactor->TerminateApp();
+    const int* p = c->interactor->GetEventPosition();
+    switch (event) {
+      case vtkCommand::KeyPressEvent:
+        if (c->controller->Key(c->interactor->GetKeySym() ? c->interactor->GetKeySym() : "")) {
+          c->interactor->TerminateApp();
+        }
+        break;
+      case vtkCommand::LeftButtonPressEvent:
+        return c->controller->Click(p[0], p[1]);
+      case vtkCommand::MouseWheelForwardEvent:
+      case vtkCommand::MouseWheelBackwardEvent:
+        return c->controller->Wheel(p[0], p[1], event == vtkCommand::MouseWheelForwardEvent ? 1 : -1);
+      case vtkCommand::RightButtonPressEvent:
+      case vtkCommand::MiddleButtonPressEvent:
+        return c->controller->DragStart(p[0], p[1]);
+      case vtkCommand::MouseMoveEvent:
+        return c->controller->DragTo(p[0], p[1]);
+      case vtkCommand::RightButtonReleaseEvent:
+      case vtkCommand::MiddleButtonReleaseEvent:
+        return c->controller->DragEnd();
+      case vtkCommand::TimerEvent: {
+        const Clock::time_point now = Clock::now();
+        c->controller->Frame(std::chrono::duration<double>(now - c->last).count());
+        c->last = now;
+        if (c->controller->ShouldClose(c->start)) c->interactor->TerminateApp();
+        break;
       }
-    } else if (event == vtkCommand::LeftButtonPressEvent) {
-      const int* p = c->interactor->GetEventPosition();
-      c->controller->Click(p[0], p[1]);
-    } else if (event == vtkCommand::TimerEvent) {
-      const Clock::time_point now = Clock::now();
-      c->controller->Frame(std::chrono::duration<double>(now - c->last).count());
-      c->last = now;
-      if (c->controller->ShouldClose(c->start)) c->interactor->TerminateApp();
+      default:
+        break;
     }
   };
   vtkNew<vtkCallbackCommand> callback;
   callback->SetCallback(on_event);
   callback->SetClientData(&context);
-  for (unsigned long e : {vtkCommand::KeyPressEvent, vtkCommand::LeftButtonPressEvent, vtkCommand::TimerEvent}) {
+  for (unsigned long e : {vtkCommand::KeyPressEvent, vtkCommand::LeftButtonPressEvent, vtkCommand::TimerEvent,
+                          vtkCommand::MouseWheelForwardEvent, vtkCommand::MouseWheelBackwardEvent,
+                          vtkCommand::RightButtonPressEvent, vtkCommand::RightButtonReleaseEvent,
+                          vtkCommand::MiddleButtonPressEvent, vtkCommand::MiddleButtonReleaseEvent,
+                          vtkCommand::MouseMoveEvent}) {
     interactor->AddObserver(e, callback);
   }
   interactor->CreateRepeatingTimer(15);
   interactor->Start();
+}
+
+// Frames touring the bed, each timed from the update to the rendered frame.
+std::vector<double> RunTour(StationController& controller, int frames) {
+  std::vector<double> ms;
+  for (int i = 0; i < frames; ++i) {
+    const Clock::time_point t0 = Clock::now();
+    controller.TourStep(i);
+    controller.Frame(0.0);
+    ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  return ms;
 }
 
 }  // namespace
@@ -145,7 +285,9 @@ StationResult RunStation(const StationOptions& options) {
   if (!options.command_key.empty() && options.log.empty()) command_key = tm::ReadCommandKey(options.command_key);
   RequireDisplay("plantscale station");
   std::unique_ptr<Source> source;
-  if (!options.log.empty()) {
+  if (options.review_model) {
+    source = std::make_unique<ReviewSource>(options.review_model, options.review_name, options.review_error);
+  } else if (!options.log.empty()) {
     source = std::make_unique<LogSource>(options.log, options.speed);
   } else {
     source = std::make_unique<LiveSource>(options.lcm_url, std::move(command_key));
@@ -155,7 +297,13 @@ StationResult RunStation(const StationOptions& options) {
   StationScene scene(canvas, options);
   StationController controller(canvas, scene, *source, options);
   const Clock::time_point start = Clock::now();
-  if (options.offscreen) {
+  StationResult result;
+  if (options.tour_frames > 0) {
+    controller.Frame(0.0);
+    const std::clock_t cpu0 = std::clock();
+    result.tour_frame_ms = RunTour(controller, options.tour_frames);
+    result.tour_cpu_ms = 1e3 * static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
+  } else if (options.offscreen) {
     Clock::time_point last = start;
     while (!controller.ShouldClose(start)) {
       const Clock::time_point now = Clock::now();
@@ -164,10 +312,12 @@ StationResult RunStation(const StationOptions& options) {
       }
       last = now;
     }
+    // The time the last frame took plays too: off-screen, the log has played
+    // max_seconds × speed when the station closes, however slow the frames.
+    controller.Frame(std::chrono::duration<double>(Clock::now() - last).count());
   } else {
     RunInteractive(canvas, controller);
   }
-  StationResult result;
   if (!options.screenshot.empty()) {
     // The window as it closed, the HUD at the closing time.
     controller.Frame(0.0);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -32,11 +33,14 @@ class Source {
   virtual const RunModel& model() const = 0;
   virtual int64_t now_utime() const = 0;
   virtual double fraction() const { return -1.0; }  // timeline position, < 0 live
+  virtual double position_s() const { return -1.0; }  // log clock from its start, < 0 live
+  virtual double duration_s() const { return -1.0; }  // of the log, < 0 live
   virtual void Seek(double, bool) {}
   virtual void TogglePause() {}
   virtual void ScaleSpeed(double) {}
   virtual std::string Status() const = 0;
   virtual std::string LogError() const { return ""; }  // the log could not be read to its end
+  virtual bool review() const { return false; }  // a finished run: nothing plays
   // Sends a station command to the vehicle (plantscale_command_t COMMAND_*,
   // MODE_* with COMMAND_SET_MODE); returns what happened, for the HUD.
   virtual std::string SendCommand(int8_t /*command*/, int8_t /*mode*/) {
@@ -57,6 +61,8 @@ class LogSource : public Source {
   double fraction() const override {
     return timeline_.duration_s() > 0 ? timeline_.position_s() / timeline_.duration_s() : 0.0;
   }
+  double position_s() const override { return timeline_.position_s(); }
+  double duration_s() const override { return timeline_.duration_s(); }
   void Seek(double value, bool relative) override {
     timeline_.Seek(relative ? timeline_.position_s() + value : value * timeline_.duration_s());
   }
@@ -75,6 +81,45 @@ class LogSource : public Source {
 
  private:
   LogTimeline timeline_;
+};
+
+// A finished run read whole: the run model of a log fed to its end
+// (streamed, so only the model stays in memory; the timeline that fed it
+// is kept alive by the pointer) and what went wrong reading it.
+struct ReviewRun {
+  std::shared_ptr<const RunModel> model;
+  std::string error;  // the log is cut off or corrupt here (what was read before it is shown)
+  bool empty = true;  // not one whole event
+};
+
+// Throws telemetry::LogError when the log cannot be opened.
+inline ReviewRun LoadReviewRun(const std::filesystem::path& log) {
+  auto timeline = std::make_shared<LogTimeline>(LogTimeline::Load(log));
+  timeline->Seek(timeline->duration_s());
+  return {std::shared_ptr<const RunModel>(timeline, &timeline->model()), timeline->error(), timeline->empty()};
+}
+
+// A finished run, whole (a log's, LoadReviewRun, or an exported map's
+// plants, read in app/). Nothing plays; the station's timeline is the bed.
+class ReviewSource : public Source {
+ public:
+  ReviewSource(std::shared_ptr<const RunModel> model, std::string what, std::string error = "")
+      : what_(std::move(what)), model_(std::move(model)), error_(std::move(error)) {}
+  void Tick(double) override {}
+  const RunModel& model() const override { return *model_; }
+  int64_t now_utime() const override { return model_->last_message_utime(); }
+  bool review() const override { return true; }
+  std::string LogError() const override { return error_; }
+  std::string Status() const override {
+    std::string s = "review " + what_ + ": " + std::to_string(model_->plants().size()) + " plants";
+    if (!error_.empty()) s += "  LOG CUT: " + error_;
+    return s;
+  }
+
+ private:
+  std::string what_;
+  std::shared_ptr<const RunModel> model_;
+  std::string error_;
 };
 
 // Commands are signed with `command_key` (telemetry/command_auth.h); without

@@ -5,15 +5,22 @@
 namespace plantscale::ui {
 
 LogTimeline::LogTimeline(std::vector<telemetry::LogEvent> events, std::string error)
-    : events_(std::move(events)), error_(std::move(error)) {
+    : events_(std::move(events)), count_(events_.size()), error_(std::move(error)) {
+  if (!events_.empty()) first_utime_ = events_.front().utime, last_utime_ = events_.back().utime;
   Reset();
 }
 
 LogTimeline LogTimeline::Load(const std::filesystem::path& log) {
+  LogTimeline t;
+  t.file_ = log;
   telemetry::LogReader reader(log);
-  std::vector<telemetry::LogEvent> events;
-  while (auto e = reader.Next()) events.push_back(std::move(*e));
-  return LogTimeline(std::move(events), reader.error());
+  while (auto e = reader.Next()) {
+    if (t.count_++ == 0) t.first_utime_ = e->utime;
+    t.last_utime_ = e->utime;
+  }
+  t.error_ = reader.error();
+  t.Reset();
+  return t;
 }
 
 void LogTimeline::Reset() {
@@ -22,24 +29,30 @@ void LogTimeline::Reset() {
   model_->Follow(*subscriber_);
   next_ = 0;
   position_s_ = 0.0;
+  pending_.reset();
+  if (!file_.empty()) reader_ = std::make_unique<telemetry::LogReader>(file_);
 }
 
-double LogTimeline::duration_s() const {
-  if (events_.empty()) return 0.0;
-  return 1e-6 * static_cast<double>(events_.back().utime - events_.front().utime);
-}
+double LogTimeline::duration_s() const { return count_ == 0 ? 0.0 : 1e-6 * static_cast<double>(last_utime_ - first_utime_); }
 
 int64_t LogTimeline::now_utime() const {
-  if (events_.empty()) return 0;
-  return events_.front().utime + static_cast<int64_t>(position_s_ * 1e6);
+  if (count_ == 0) return 0;
+  return first_utime_ + static_cast<int64_t>(position_s_ * 1e6);
+}
+
+const telemetry::LogEvent* LogTimeline::Peek() {
+  if (!reader_) return next_ < events_.size() ? &events_[next_] : nullptr;
+  if (!pending_) pending_ = reader_->Next();
+  return pending_ ? &*pending_ : nullptr;
 }
 
 void LogTimeline::FeedUpTo(double position_s) {
   position_s_ = std::clamp(position_s, 0.0, duration_s());
   const int64_t until = now_utime();
-  while (next_ < events_.size() && events_[next_].utime <= until) {
-    const telemetry::LogEvent& e = events_[next_++];
-    model_->Feed(*subscriber_, e.channel, e.data.data(), e.data.size(), e.utime);  // one look-up per map tile
+  for (const telemetry::LogEvent* e = Peek(); e != nullptr && e->utime <= until; e = Peek()) {
+    model_->Feed(*subscriber_, e->channel, e->data.data(), e->data.size(), e->utime);  // one look-up per map tile
+    if (reader_) pending_.reset();
+    else ++next_;
   }
 }
 

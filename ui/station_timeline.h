@@ -1,9 +1,13 @@
 #pragma once
-// A log loaded into memory and played into a subscriber and run model at a
-// chosen speed, with pause and seek (seeking back replays from the start,
-// which takes well under a second for a 100 m run).
+// A log played into a subscriber and run model at a chosen speed, with pause
+// and seek. A log file is read as it plays, not held in memory (a 5 km log is
+// hundreds of MB); Load reads it through once for its time span. Seeking back
+// replays from the start (well under a second for a 100 m run, some seconds
+// for kilometres).
 
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,9 +18,10 @@ namespace plantscale::ui {
 
 class LogTimeline {
  public:
-  // `error` is the LogReader's complaint (cut-off log), kept for the HUD.
+  // Events in memory (tests); `error` is the LogReader's complaint (cut-off
+  // log), kept for the HUD.
   LogTimeline(std::vector<telemetry::LogEvent> events, std::string error);
-  // Throws telemetry::LogError when the log cannot be opened.
+  // Streamed from the file. Throws telemetry::LogError when the log cannot be opened.
   static LogTimeline Load(const std::filesystem::path& log);
 
   // Moves the log clock on by wall_s × speed (nothing while paused).
@@ -31,13 +36,20 @@ class LogTimeline {
   int64_t now_utime() const;
   const RunModel& model() const { return *model_; }
   const std::string& error() const { return error_; }
-  bool empty() const { return events_.empty(); }
+  bool empty() const { return count_ == 0; }
 
  private:
+  LogTimeline() = default;
   void Reset();
   void FeedUpTo(double position_s);
+  const telemetry::LogEvent* Peek();  // the next event to feed, nullptr at the end
 
-  std::vector<telemetry::LogEvent> events_;
+  std::vector<telemetry::LogEvent> events_;  // in memory, or empty when streamed
+  std::filesystem::path file_;               // streamed from here
+  std::unique_ptr<telemetry::LogReader> reader_;
+  std::optional<telemetry::LogEvent> pending_;  // read from the file, not fed yet
+  int64_t first_utime_ = 0, last_utime_ = 0;
+  size_t count_ = 0;
   std::string error_;
   std::unique_ptr<telemetry::Subscriber> subscriber_;
   std::unique_ptr<RunModel> model_;
