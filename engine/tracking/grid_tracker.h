@@ -56,6 +56,24 @@ struct TrackerOptions {
   // suspension's), kept as a state: bounce that lasts over several frames
   // moves them all alike, so treating it as white is overconfident.
   double camera_bounce_correlation_s = 0.0;
+  // How far the camera's calibration may be off (the vehicle profile's
+  // camera.calibration_sd): tilt, roll, height and focal length (a
+  // fraction). A calibration error moves every feature of every frame the
+  // same way, a bounce that never decays: with any of these set it is a
+  // state (pitch, roll, height, focal) of that prior and no process noise.
+  // What the frames and the wheels cannot tell apart from the grid's own
+  // offset, bearing and scale (a roll reads as a lateral offset) stays at
+  // its prior, and the grid's covariance carries it, so σ(t_x) covers it;
+  // what they can (a tilt's along-row stretch over the view, a roll's shear
+  // of the outer rows) is learnt. 0: the calibration is taken as exact.
+  double calibration_pitch_sd_rad = 0.0;
+  double calibration_roll_sd_rad = 0.0;
+  double calibration_height_sd_m = 0.0;
+  double calibration_focal_sd = 0.0;
+  bool CalibrationStates() const {
+    return calibration_pitch_sd_rad > 0.0 || calibration_roll_sd_rad > 0.0 ||
+           calibration_height_sd_m > 0.0 || calibration_focal_sd > 0.0;
+  }
   int rows_each_side = 1;      // the bed: rows −k..k
   double row_spacing_m = 0.475;    // r̄: nominal, the fixed value or the initial estimate
   double plant_spacing_m = 0.45;   // l̄
@@ -275,7 +293,9 @@ class GridTracker {
   // bounce's uncertainty, in increments of `step_m` (the wheels' noise is
   // per increment, as the odometry's: one long step would overstate it).
   // Where the plants now in view will stand when the spray bar reaches
-  // them, had no frame come since. The filter is not changed.
+  // them, had no frame come since. With calibration states, the covariance
+  // is the grid's given the calibration (its share, a fixed bias of every
+  // frame, taken out). The filter is not changed.
   GridAhead PredictAhead(double distance_m, double step_m) const;
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
   // Where plant (m, n) of the current grid stands (vehicle frame, on its
@@ -320,8 +340,12 @@ class GridTracker {
     return options_.model_bounce && options_.camera_bounce_correlation_s > 0.0;
   }
   int BounceIndex() const { return core() + (options_.estimate_odometry_scale ? 1 : 0); }
-  int head() const { return BounceIndex() + (PersistentBounce() ? 3 : 0); }
+  // Then the calibration's error (pitch, roll, height, focal) when modelled.
+  int CalibrationIndex() const { return BounceIndex() + (PersistentBounce() ? 3 : 0); }
+  int head() const { return CalibrationIndex() + (options_.CalibrationStates() ? 4 : 0); }
   Eigen::Vector3d BouncePrior() const;
+  Eigen::Vector4d CalibrationPrior() const;
+  void ResetCalibration();
   // The ObservationModel's prediction of plant (m, n) with the persistent
   // bounce's effect and columns added.
   Prediction PredictPlant(const ObservationModel& h, const geometry::GridState& s, int m,
