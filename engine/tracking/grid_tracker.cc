@@ -904,9 +904,20 @@ double GridTracker::Apply(const PseudoObservation& z) {
   Eigen::MatrixXd s = l * plt(z.support, Eigen::all);
   s.diagonal().array() += 1.0;
   const Eigen::LLT<Eigen::MatrixXd> s_llt(s);
-  const Eigen::MatrixXd k = s_llt.solve(plt.transpose()).transpose();
-  x_ += k * z.residual;
-  p_.noalias() -= k * plt.transpose();
+  Eigen::MatrixXd k = s_llt.solve(plt.transpose()).transpose();
+  if (!ConsiderStates()) {
+    x_ += k * z.residual;
+    p_.noalias() -= k * plt.transpose();
+  } else {
+    // Schmidt: the consider states' gain rows are zero; for that gain K̃,
+    // P⁺ = P − K̃ Mᵀ − M K̃ᵀ + K̃ S K̃ᵀ (M = P Lᵀ), which leaves their own
+    // block unchanged and updates the rest as the full gain would.
+    const int c = CalibrationIndex();
+    for (const int i : {c, c + 2, c + 3}) k.row(i).setZero();
+    x_ += k * z.residual;
+    const Eigen::MatrixXd kmt = k * plt.transpose();
+    p_ += k * s * k.transpose() - kmt - kmt.transpose();
+  }
   p_ = 0.5 * (p_ + p_.transpose());
   return z.residual.dot(s_llt.solve(z.residual));
 }

@@ -70,6 +70,15 @@ struct TrackerOptions {
   double calibration_roll_sd_rad = 0.0;
   double calibration_height_sd_m = 0.0;
   double calibration_focal_sd = 0.0;
+  // Tilt, height and focal length scale the vision's distances, which
+  // trade against the wheels' scale k and the spacings: estimated, they
+  // drift along that direction (field, tuning seeds 1–2 with the issue's
+  // calibration error: placement along 41 mm, bias +38 mm). As consider
+  // states (Schmidt) they are never updated, so the grid's mean is as if
+  // the calibration were exact, but their uncertainty and its correlation
+  // with the grid stay in the covariance: σ covers their error. The roll is
+  // estimated.
+  bool calibration_scale_consider = true;
   bool CalibrationStates() const {
     return calibration_pitch_sd_rad > 0.0 || calibration_roll_sd_rad > 0.0 ||
            calibration_height_sd_m > 0.0 || calibration_focal_sd > 0.0;
@@ -345,6 +354,10 @@ class GridTracker {
   int head() const { return CalibrationIndex() + (options_.CalibrationStates() ? 4 : 0); }
   Eigen::Vector3d BouncePrior() const;
   Eigen::Vector4d CalibrationPrior() const;
+  // Pitch, height and focal calibration states held as consider states.
+  bool ConsiderStates() const {
+    return options_.CalibrationStates() && options_.calibration_scale_consider;
+  }
   void ResetCalibration();
   // The ObservationModel's prediction of plant (m, n) with the persistent
   // bounce's effect and columns added.
