@@ -343,18 +343,15 @@ tracking::TrackerOptions ProductTrackerOptions(const Profiles& p) {
   o.camera_roll_sd_rad = std::max(1e-4, v.roll_sd_rad);
   o.camera_height_sd_m = std::max(1e-4, v.height_sd_m);
   o.camera_bounce_correlation_s = v.bounce_correlation_s;
-  // And how well its camera was calibrated: calibration states, the roll
-  // estimated, tilt, height and focal as consider states
-  // (TrackerOptions::calibration_scale_consider). Estimated, those three
-  // cost placement along the rows (field, tuning seeds 1–2 with the
-  // issue's calibration error: 41 mm with bias +38 mm, crops hit 94.6 %;
-  // roll only: 18.9 mm, −6.6 mm, 100 %; none: 19.1 mm, −6.7 mm, 100 %);
-  // left out, the covariance does not cover their error (field, held-out
-  // seeds, roll only: NEES in bounds 0.65, forward e²/σ² 6.7).
-  o.calibration_pitch_sd_rad = v.calibration_tilt_sd_rad;
+  // And how well its camera's roll was calibrated: a calibration state,
+  // estimated. Tilt, height and focal are not carried: estimated, they cost
+  // placement along the rows (field, tuning seeds 1–2 with the issue's
+  // calibration error: 41 mm with bias +38 mm, crops hit 94.6 %; roll
+  // only: 18.9 mm, −6.6 mm, 100 %); as consider states
+  // (TrackerOptions::calibration_scale_consider) they make the field's
+  // NEES honest (0.95 against 0.65) but lost the grid's lateral on two of
+  // five lettuce-fast runs (23 and 30 mm; docs/results/2026-11-27-calibration.md).
   o.calibration_roll_sd_rad = v.calibration_roll_sd_rad;
-  o.calibration_height_sd_m = v.calibration_height_sd_m;
-  o.calibration_focal_sd = v.calibration_focal_sd;
   return o;
 }
 

@@ -336,6 +336,16 @@ Eigen::Vector4d GridTracker::CalibrationPrior() const {
           o.calibration_focal_sd * o.calibration_focal_sd};
 }
 
+Eigen::Vector4d GridTracker::calibration_estimate() const {
+  if (!options_.CalibrationStates()) return Eigen::Vector4d::Zero();
+  return x_.segment<4>(CalibrationIndex());
+}
+
+Eigen::Matrix4d GridTracker::calibration_covariance() const {
+  if (!options_.CalibrationStates()) return Eigen::Matrix4d::Zero();
+  return p_.block<4, 4>(CalibrationIndex(), CalibrationIndex());
+}
+
 void GridTracker::ResetCalibration() {
   if (!options_.CalibrationStates()) return;
   const int c = CalibrationIndex();

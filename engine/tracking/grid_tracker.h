@@ -64,8 +64,8 @@ struct TrackerOptions {
   // What the frames and the wheels cannot tell apart from the grid's own
   // offset, bearing and scale (a roll reads as a lateral offset) stays at
   // its prior, and the grid's covariance carries it, so σ(t_x) covers it;
-  // what they can (a tilt's along-row stretch over the view, a roll's shear
-  // of the outer rows) is learnt. 0: the calibration is taken as exact.
+  // what they can (a roll's shear of the outer rows) is learnt. 0: the
+  // calibration is taken as exact.
   double calibration_pitch_sd_rad = 0.0;
   double calibration_roll_sd_rad = 0.0;
   double calibration_height_sd_m = 0.0;
@@ -307,6 +307,10 @@ class GridTracker {
   // frame, taken out). The filter is not changed.
   GridAhead PredictAhead(double distance_m, double step_m) const;
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
+  // The calibration states (pitch, roll, height, focal) and their
+  // covariance; zero when not modelled (TrackerOptions::CalibrationStates).
+  Eigen::Vector4d calibration_estimate() const;
+  Eigen::Matrix4d calibration_covariance() const;
   // Where plant (m, n) of the current grid stands (vehicle frame, on its
   // axis): its grid position plus its own offset when it has one.
   Eigen::Vector2d PlantPosition(int m, int n) const;

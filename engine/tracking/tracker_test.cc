@@ -352,7 +352,13 @@ TEST(GridTracker, CovarianceIsConsistentOnTheSyntheticGrid) {
 // filter takes the roll's lateral shift for the grid's offset and is sure
 // of it (NEES far above its 3 states); with them, told the calibration may
 // be 0.3° off, its covariance covers the error.
-double NeesWithRolledCamera(const TrackerOptions& o, double roll_rad) {
+struct RolledRun {
+  double nees = 0.0;
+  Eigen::Vector4d calibration = Eigen::Vector4d::Zero();
+  Eigen::Matrix4d calibration_covariance = Eigen::Matrix4d::Zero();
+};
+
+RolledRun WithRolledCamera(const TrackerOptions& o, double roll_rad) {
   struct RolledDrive : Drive {
     geometry::CameraModel rolled;
     RolledDrive(const TrackerOptions& options, double roll)
@@ -395,7 +401,7 @@ double NeesWithRolledCamera(const TrackerOptions& o, double roll_rad) {
     sum += e.dot(run.tracker.covariance().topLeftCorner<3, 3>().ldlt().solve(e));
     ++n;
   }
-  return sum / n;
+  return {sum / n, run.tracker.calibration_estimate(), run.tracker.calibration_covariance()};
 }
 
 TEST(GridTracker, CalibrationStatesKeepTheCovarianceHonestUnderACameraRoll) {
@@ -405,12 +411,25 @@ TEST(GridTracker, CalibrationStatesKeepTheCovarianceHonestUnderACameraRoll) {
   o.plant_offset_walk_across_sd_per_sqrt_m = 0.0;
   o.plant_offset_walk_along_sd_per_sqrt_m = 0.0;
   const double roll = 0.3 * std::numbers::pi / 180.0;
-  const double blind = NeesWithRolledCamera(o, roll);
+  const double blind = WithRolledCamera(o, roll).nees;
   o.calibration_roll_sd_rad = roll;
   o.calibration_pitch_sd_rad = 0.5 * std::numbers::pi / 180.0;
   o.calibration_height_sd_m = 0.01;
   o.calibration_focal_sd = 0.01;
-  const double told = NeesWithRolledCamera(o, roll);
+  const RolledRun run = WithRolledCamera(o, roll);
+  const double told = run.nees;
+  // Pitch, height and focal are consider states: never updated, their
+  // prior kept; the roll is estimated (its sign is the camera model's
+  // convention) and its variance shrinks.
+  EXPECT_EQ(run.calibration(0), 0.0);
+  EXPECT_EQ(run.calibration(2), 0.0);
+  EXPECT_EQ(run.calibration(3), 0.0);
+  EXPECT_NEAR(run.calibration_covariance(0, 0), std::pow(o.calibration_pitch_sd_rad, 2), 1e-12);
+  EXPECT_NEAR(run.calibration_covariance(2, 2), 1e-4, 1e-12);
+  EXPECT_NEAR(run.calibration_covariance(3, 3), 1e-4, 1e-12);
+  EXPECT_GT(std::abs(run.calibration(1)), 0.1 * roll) << "the roll is partly observable";
+  EXPECT_LT(run.calibration_covariance(1, 1), roll * roll);
+  RecordProperty("roll_estimate_deg", std::to_string(run.calibration(1) * 180.0 / std::numbers::pi));
   RecordProperty("nees_without_calibration_states", std::to_string(blind));
   RecordProperty("nees_with_calibration_states", std::to_string(told));
   EXPECT_GT(blind, 6.0) << "the roll is invisible to a filter that trusts its camera";
