@@ -50,6 +50,12 @@ struct VehicleProfile {
   double height_sd_m = 0.004;
   double bounce_correlation_s = 0.25;
   bool suspension_given = false;       // false: the defaults above
+  // How far the camera's calibration may be off (sd): what a field
+  // calibration leaves (1 cm, 0.5°, 0.3°, 1 %) unless the profile says.
+  double calibration_tilt_sd_rad = 0.5 * 3.14159265358979323846 / 180.0;
+  double calibration_roll_sd_rad = 0.3 * 3.14159265358979323846 / 180.0;
+  double calibration_height_sd_m = 0.01;
+  double calibration_focal_sd = 0.01;
 };
 
 struct Profiles {

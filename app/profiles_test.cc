@@ -71,6 +71,35 @@ TEST(Profiles, AnUnknownVehicleGetsDefaultSuspension) {
   EXPECT_DOUBLE_EQ(v.height_sd_m, 0.004);
 }
 
+// How well the camera was calibrated: the roll's sd becomes the tracker's
+// calibration state; absent, a field calibration's figures; all 0, none.
+TEST(Profiles, CalibrationUncertaintyReachesTheTrackersRollState) {
+  const fs::path dir = DefaultConfigDir();
+  const VehicleProfile unknown = LoadVehicleProfile("sanchiz-pla-66", dir);
+  EXPECT_NEAR(unknown.calibration_roll_sd_rad, 0.3 * kDeg, 1e-12);
+  EXPECT_NEAR(unknown.calibration_tilt_sd_rad, 0.5 * kDeg, 1e-12);
+  EXPECT_DOUBLE_EQ(unknown.calibration_height_sd_m, 0.01);
+  EXPECT_DOUBLE_EQ(unknown.calibration_focal_sd, 0.01);
+  const Profiles field = LoadProfiles("", "", "field", dir);
+  const tracking::TrackerOptions o = ProductTrackerOptions(field);
+  EXPECT_NEAR(o.calibration_roll_sd_rad, 0.3 * kDeg, 1e-12);
+  EXPECT_TRUE(o.CalibrationStates());
+  EXPECT_EQ(o.calibration_pitch_sd_rad, 0.0);
+  EXPECT_EQ(o.calibration_height_sd_m, 0.0);
+  EXPECT_EQ(o.calibration_focal_sd, 0.0);
+  const Profiles trusted = LoadProfiles("", "silsoe-trusted-calibration", "field", dir);
+  EXPECT_FALSE(ProductTrackerOptions(trusted).CalibrationStates());
+  const fs::path bad = Write("calsd.yaml",
+                             "track_width_m: 1.5\ncamera: {calibration: thesis, image_width_px: 640, "
+                             "image_height_px: 480}\nvalve_latency_s: 0.04\nnozzles: {count: 64, "
+                             "spacing_m: 0.0225, bar_offset_m: 0.6}\ncalibration_sd: {tilt_deg: 0.5, "
+                             "roll_deg: 30, height_m: 0.01, focal: 0.01}\n");
+  EXPECT_NE(ErrorOf([&] { LoadVehicleProfile(bad.string(), dir); })
+                .find(bad.string() + ": calibration_sd.roll_deg: is 30, expected 0 to 5 deg"),
+            std::string::npos)
+      << ErrorOf([&] { LoadVehicleProfile(bad.string(), dir); });
+}
+
 // The contract: the engine's options are built from the profiles
 // only, so they do not move when the simulator's hidden parameters do.
 TEST(Profiles, EngineOptionsDoNotChangeWithTheSimulatorsHiddenParameters) {

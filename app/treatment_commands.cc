@@ -63,7 +63,7 @@ struct TreatmentArgs {
   std::optional<double> own_offset_along;
   std::optional<double> own_offset_across;
   bool clipped_on_crop_votes_weed = false;
-  bool uncertainty_fail_safe = false;
+  bool uncertainty_fail_safe = true;
   std::optional<double> uncertainty_margin_mm;
   double costs_ratio = 1.0;
   bool json = false;
@@ -231,7 +231,7 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   if (a.own_offset_across) o.treatment.own_offset_fraction_across = *a.own_offset_across;
   if (a.min_weed_part_mm2) o.treatment.min_weed_part_m2 = *a.min_weed_part_mm2 * 1e-6;
   if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
-  if (a.uncertainty_fail_safe) o.treatment.close_on_uncertainty = true;
+  o.treatment.close_on_uncertainty = a.uncertainty_fail_safe;
   if (a.uncertainty_margin_mm) {
     o.treatment.uncertainty_margin_across_m = *a.uncertainty_margin_mm * 1e-3;
     o.treatment.uncertainty_margin_along_m = *a.uncertainty_margin_mm * 1e-3;
@@ -413,10 +413,10 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                 "unassociated blobs covering a predicted crop cast no weed votes");
   cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,
                 "blobs cut by the image border that cover a predicted crop vote weed (the old way)");
-  cmd->add_flag("--uncertainty-fail-safe", args.uncertainty_fail_safe,
-                "the bar closes on the plants' uncertain position at the bar (docs/fail-safe.md)");
+  cmd->add_flag("--uncertainty-fail-safe,!--no-uncertainty-fail-safe", args.uncertainty_fail_safe,
+                "the bar closes on the plants' uncertain position at the bar (docs/fail-safe.md; on by default)");
   cmd->add_option("--uncertainty-margin-mm", args.uncertainty_margin_mm,
-                  "with --uncertainty-fail-safe: its margin along and across (default: from the crop footprint)")
+                  "the fail-safe on uncertainty's margin along and across (default: from the crop footprint)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--size-height-sd-mm", args.size_height_sd_mm,
                   "tracker: sd per frame of a plant's centroid height read from its blob's size (0: not read; default 6)")

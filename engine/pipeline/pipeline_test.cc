@@ -297,9 +297,13 @@ TEST_F(PipelineFaults, CoastingClosesTheBarOnUncertaintyAndFramesReopenIt) {
     const FrameResult& r = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index, blank);
     ASSERT_TRUE(r.accepted);
     ASSERT_EQ(r.mode, tracking::TrackerMode::kTracking) << "lost before the bar closed, frame " << i;
+    // Coasting: the grid's covariance grows with every metre; the plant at
+    // the bar changes line as the vehicle moves (its lever arm on l̄ with
+    // it), so the reach may dip by a few per cent from one frame to the next.
     const double reach = system.ReachAtBar(p_.tracker()).along_m;
-    EXPECT_GE(reach, last_reach - 1e-9) << "coasting: the reach only grows";
-    last_reach = reach;
+    EXPECT_GE(reach, tracked.along_m) << "coasting: the reach grows from where tracking left it";
+    EXPECT_GE(reach, 0.95 * last_reach) << "frame " << i;
+    last_reach = std::max(last_reach, reach);
     if (Reasons() & treatment::kPositionUncertain) closed_at = i;
   }
   ASSERT_GE(closed_at, 0) << "reach " << last_reach << " m, margin " << margin_along << " m";
@@ -321,6 +325,8 @@ TEST_F(PipelineFaults, CoastingClosesTheBarOnUncertaintyAndFramesReopenIt) {
     if (cleared_at >= 0 && last_mask_ != 0) opened_at = i;
   }
   ASSERT_GE(cleared_at, 0);
+  RecordProperty("reach_along_tracking_mm", std::to_string(1e3 * tracked.along_m));
+  RecordProperty("margin_along_mm", std::to_string(1e3 * margin_along));
   RecordProperty("closed_after_coasting_frames", closed_at + 1);
   RecordProperty("cleared_after_frames", cleared_at + 1);
   RecordProperty("opened_after_frames", opened_at + 1);

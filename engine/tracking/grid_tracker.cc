@@ -52,6 +52,10 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "camera_roll_sd_rad", camera_roll_sd_rad);
   RequireNonNegative(e, "camera_height_sd_m", camera_height_sd_m);
   RequireNonNegative(e, "camera_bounce_correlation_s", camera_bounce_correlation_s);
+  RequireInRange(e, "calibration_pitch_sd_rad", calibration_pitch_sd_rad, 0.0, 0.2);
+  RequireInRange(e, "calibration_roll_sd_rad", calibration_roll_sd_rad, 0.0, 0.2);
+  RequireInRange(e, "calibration_height_sd_m", calibration_height_sd_m, 0.0, 0.2);
+  RequireInRange(e, "calibration_focal_sd", calibration_focal_sd, 0.0, 0.2);
   RequirePositive(e, "track_width_m", track_width_m);
   RequireNonNegative(e, "wheel_sd_fraction", wheel_sd_fraction);
   RequireNonNegative(e, "forward_sd_per_sqrt_m", forward_sd_per_sqrt_m);
@@ -134,6 +138,7 @@ void GridTracker::Reset() {
     p_(core(), core()) = options_.odometry_scale_sd * options_.odometry_scale_sd;
   }
   ResetBounce();
+  ResetCalibration();
   offsets_.clear();
   initialiser_.Reset();
   slip_guard_.Reset();
@@ -171,6 +176,11 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
   // What was learnt of the wheels' scale outlives a loss of the grid.
   const double scale_k = options_.estimate_odometry_scale ? x_(core()) : 0.0;
   const double scale_var = options_.estimate_odometry_scale ? p_(core(), core()) : 0.0;
+  // So does what was learnt of the calibration.
+  const int cal = CalibrationIndex();
+  const bool calibrated = options_.CalibrationStates();
+  const Eigen::Vector4d cal_x = calibrated ? Eigen::Vector4d(x_.segment<4>(cal)) : Eigen::Vector4d::Zero();
+  const Eigen::Matrix4d cal_p = calibrated ? Eigen::Matrix4d(p_.block<4, 4>(cal, cal)) : Eigen::Matrix4d::Zero();
   x_ = Eigen::VectorXd::Zero(head());
   x_(GridState::kOffset) = s.offset_m;
   x_(GridState::kForward) = s.forward_m;
@@ -184,6 +194,10 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
   if (options_.estimate_odometry_scale) {
     x_(core()) = scale_k;
     p_(core(), core()) = scale_var;
+  }
+  if (calibrated) {
+    x_.segment<4>(cal) = cal_x;
+    p_.block<4, 4>(cal, cal) = cal_p;
   }
   ResetBounce();
   mode_ = TrackerMode::kTracking;
@@ -314,6 +328,33 @@ void GridTracker::ResetBounce() {
   p_.block<3, 3>(b, b) = BouncePrior().asDiagonal();
 }
 
+Eigen::Vector4d GridTracker::CalibrationPrior() const {
+  const TrackerOptions& o = options_;
+  return {o.calibration_pitch_sd_rad * o.calibration_pitch_sd_rad,
+          o.calibration_roll_sd_rad * o.calibration_roll_sd_rad,
+          o.calibration_height_sd_m * o.calibration_height_sd_m,
+          o.calibration_focal_sd * o.calibration_focal_sd};
+}
+
+Eigen::Vector4d GridTracker::calibration_estimate() const {
+  if (!options_.CalibrationStates()) return Eigen::Vector4d::Zero();
+  return x_.segment<4>(CalibrationIndex());
+}
+
+Eigen::Matrix4d GridTracker::calibration_covariance() const {
+  if (!options_.CalibrationStates()) return Eigen::Matrix4d::Zero();
+  return p_.block<4, 4>(CalibrationIndex(), CalibrationIndex());
+}
+
+void GridTracker::ResetCalibration() {
+  if (!options_.CalibrationStates()) return;
+  const int c = CalibrationIndex();
+  x_.segment<4>(c).setZero();
+  p_.middleRows(c, 4).setZero();
+  p_.middleCols(c, 4).setZero();
+  p_.block<4, 4>(c, c) = CalibrationPrior().asDiagonal();
+}
+
 Prediction GridTracker::PredictPlant(const ObservationModel& h, const GridState& s, int m,
                                      int n) const {
   Prediction pred = h.Predict(x_, s, m, n, OffsetIndex(m, n));
@@ -321,6 +362,12 @@ Prediction GridTracker::PredictPlant(const ObservationModel& h, const GridState&
     const int b = BounceIndex();
     pred.value += pred.bounce_jacobian * x_.segment<3>(b);
     pred.jacobian.middleCols<3>(b) = pred.bounce_jacobian;
+  }
+  if (options_.CalibrationStates()) {
+    const int c = CalibrationIndex();
+    pred.value += pred.bounce_jacobian * x_.segment<3>(c) + pred.focal_jacobian * x_(c + 3);
+    pred.jacobian.middleCols<3>(c) = pred.bounce_jacobian;
+    pred.jacobian.col(c + 3) = pred.focal_jacobian;
   }
   return pred;
 }
@@ -425,6 +472,13 @@ GridAhead GridTracker::PredictAhead(double distance_m, double step_m) const {
     p = t.a * p * t.a.transpose() + t.q;
   }
   ahead.covariance.topLeftCorner(c, c) = p.topLeftCorner(c, c);
+  if (options_.CalibrationStates()) {
+    // Given the calibration: its error is a fixed bias of every frame, not
+    // an uncertainty that grows while coasting (the footprint's size covers it).
+    const int k = CalibrationIndex();
+    const Eigen::MatrixXd pck = p.block(0, k, c, 4);
+    ahead.covariance.topLeftCorner(c, c) -= pck * p.block<4, 4>(k, k).ldlt().solve(pck.transpose());
+  }
   return ahead;
 }
 
@@ -660,9 +714,7 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     // plant's own states, so only that block of P is needed.
     std::vector<int> used;
     for (int i2 = 0; i2 < core(); ++i2) used.push_back(i2);
-    if (PersistentBounce()) {
-      for (int i2 = 0; i2 < 3; ++i2) used.push_back(BounceIndex() + i2);
-    }
+    for (int i2 = BounceIndex(); i2 < head(); ++i2) used.push_back(i2);
     if (offset >= 0) {
       for (int i2 = 0; i2 < PlantStates(); ++i2) used.push_back(offset + i2);
     }
@@ -862,9 +914,20 @@ double GridTracker::Apply(const PseudoObservation& z) {
   Eigen::MatrixXd s = l * plt(z.support, Eigen::all);
   s.diagonal().array() += 1.0;
   const Eigen::LLT<Eigen::MatrixXd> s_llt(s);
-  const Eigen::MatrixXd k = s_llt.solve(plt.transpose()).transpose();
-  x_ += k * z.residual;
-  p_.noalias() -= k * plt.transpose();
+  Eigen::MatrixXd k = s_llt.solve(plt.transpose()).transpose();
+  if (!ConsiderStates()) {
+    x_ += k * z.residual;
+    p_.noalias() -= k * plt.transpose();
+  } else {
+    // Schmidt: the consider states' gain rows are zero; for that gain K̃,
+    // P⁺ = P − K̃ Mᵀ − M K̃ᵀ + K̃ S K̃ᵀ (M = P Lᵀ), which leaves their own
+    // block unchanged and updates the rest as the full gain would.
+    const int c = CalibrationIndex();
+    for (const int i : {c, c + 2, c + 3}) k.row(i).setZero();
+    x_ += k * z.residual;
+    const Eigen::MatrixXd kmt = k * plt.transpose();
+    p_ += k * s * k.transpose() - kmt - kmt.transpose();
+  }
   p_ = 0.5 * (p_ + p_.transpose());
   return z.residual.dot(s_llt.solve(z.residual));
 }

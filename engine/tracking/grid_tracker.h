@@ -56,6 +56,33 @@ struct TrackerOptions {
   // suspension's), kept as a state: bounce that lasts over several frames
   // moves them all alike, so treating it as white is overconfident.
   double camera_bounce_correlation_s = 0.0;
+  // How far the camera's calibration may be off (the vehicle profile's
+  // camera.calibration_sd): tilt, roll, height and focal length (a
+  // fraction). A calibration error moves every feature of every frame the
+  // same way, a bounce that never decays: with any of these set it is a
+  // state (pitch, roll, height, focal) of that prior and no process noise.
+  // What the frames and the wheels cannot tell apart from the grid's own
+  // offset, bearing and scale (a roll reads as a lateral offset) stays at
+  // its prior, and the grid's covariance carries it, so σ(t_x) covers it;
+  // what they can (a roll's shear of the outer rows) is learnt. 0: the
+  // calibration is taken as exact.
+  double calibration_pitch_sd_rad = 0.0;
+  double calibration_roll_sd_rad = 0.0;
+  double calibration_height_sd_m = 0.0;
+  double calibration_focal_sd = 0.0;
+  // Tilt, height and focal length scale the vision's distances, which
+  // trade against the wheels' scale k and the spacings: estimated, they
+  // drift along that direction (field, tuning seeds 1–2 with the issue's
+  // calibration error: placement along 41 mm, bias +38 mm). As consider
+  // states (Schmidt) they are never updated, so the grid's mean is as if
+  // the calibration were exact, but their uncertainty and its correlation
+  // with the grid stay in the covariance: σ covers their error. The roll is
+  // estimated.
+  bool calibration_scale_consider = true;
+  bool CalibrationStates() const {
+    return calibration_pitch_sd_rad > 0.0 || calibration_roll_sd_rad > 0.0 ||
+           calibration_height_sd_m > 0.0 || calibration_focal_sd > 0.0;
+  }
   int rows_each_side = 1;      // the bed: rows −k..k
   double row_spacing_m = 0.475;    // r̄: nominal, the fixed value or the initial estimate
   double plant_spacing_m = 0.45;   // l̄
@@ -275,9 +302,15 @@ class GridTracker {
   // bounce's uncertainty, in increments of `step_m` (the wheels' noise is
   // per increment, as the odometry's: one long step would overstate it).
   // Where the plants now in view will stand when the spray bar reaches
-  // them, had no frame come since. The filter is not changed.
+  // them, had no frame come since. With calibration states, the covariance
+  // is the grid's given the calibration (its share, a fixed bias of every
+  // frame, taken out). The filter is not changed.
   GridAhead PredictAhead(double distance_m, double step_m) const;
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
+  // The calibration states (pitch, roll, height, focal) and their
+  // covariance; zero when not modelled (TrackerOptions::CalibrationStates).
+  Eigen::Vector4d calibration_estimate() const;
+  Eigen::Matrix4d calibration_covariance() const;
   // Where plant (m, n) of the current grid stands (vehicle frame, on its
   // axis): its grid position plus its own offset when it has one.
   Eigen::Vector2d PlantPosition(int m, int n) const;
@@ -320,8 +353,16 @@ class GridTracker {
     return options_.model_bounce && options_.camera_bounce_correlation_s > 0.0;
   }
   int BounceIndex() const { return core() + (options_.estimate_odometry_scale ? 1 : 0); }
-  int head() const { return BounceIndex() + (PersistentBounce() ? 3 : 0); }
+  // Then the calibration's error (pitch, roll, height, focal) when modelled.
+  int CalibrationIndex() const { return BounceIndex() + (PersistentBounce() ? 3 : 0); }
+  int head() const { return CalibrationIndex() + (options_.CalibrationStates() ? 4 : 0); }
   Eigen::Vector3d BouncePrior() const;
+  Eigen::Vector4d CalibrationPrior() const;
+  // Pitch, height and focal calibration states held as consider states.
+  bool ConsiderStates() const {
+    return options_.CalibrationStates() && options_.calibration_scale_consider;
+  }
+  void ResetCalibration();
   // The ObservationModel's prediction of plant (m, n) with the persistent
   // bounce's effect and columns added.
   Prediction PredictPlant(const ObservationModel& h, const geometry::GridState& s, int m,

@@ -144,6 +144,30 @@ TEST(ObservationModel, BounceJacobianMatchesTheCameraModel) {
   }
 }
 
+// The calibration's focal column against the camera model: a point seen by
+// a camera whose true focal length is (1 + ε) f, located with f.
+TEST(ObservationModel, FocalJacobianMatchesTheCameraModel) {
+  const geometry::CameraOptions nominal = geometry::testing::ThesisCamera();
+  const geometry::CameraModel camera(nominal);
+  const double eps = 1e-6;
+  geometry::CameraOptions longer = nominal;
+  longer.focal_length_m *= 1.0 + eps;
+  const geometry::CameraModel truth(longer);
+  // (The optical axis meets the ground near (0, 1.5): no move there.)
+  for (const Eigen::Vector2d& p : {Eigen::Vector2d(0.1, 0.9), Eigen::Vector2d(0.4, 1.2),
+                                   Eigen::Vector2d(-0.5, 2.2), Eigen::Vector2d(0.6, 3.0)}) {
+    for (const double plane : {0.0, 0.1}) {
+      const Eigen::Vector2d j = FocalJacobian(camera, p, plane);
+      const auto uv = truth.Project({p.x(), p.y(), plane});
+      ASSERT_TRUE(uv.has_value());
+      const Eigen::Vector2d fd = (*camera.ImageToPlane(*uv, plane) - p) / eps;
+      EXPECT_LT((fd - j).norm(), 1e-3 * j.norm()) << p.transpose() << " " << fd.transpose()
+                                                  << " vs " << j.transpose();
+      EXPECT_GT(j.norm(), 0.1) << "a 1 % focal error moves points by millimetres";
+    }
+  }
+}
+
 // The whole prediction of a plant with its offset and its own centroid
 // height δh, located on the crop's centroid heights: ∂/∂ every state.
 TEST(ObservationModel, PredictionJacobianWithPlantHeightMatchesFiniteDifferences) {

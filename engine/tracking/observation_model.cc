@@ -41,6 +41,13 @@ Eigen::Matrix<double, 2, 3> BounceJacobian(const Eigen::Vector2d& p, double hc) 
   return j;
 }
 
+Eigen::Vector2d FocalJacobian(const geometry::CameraModel& camera, const Eigen::Vector2d& p,
+                              double plane) {
+  const auto uv = camera.Project({p.x(), p.y(), plane});
+  if (!uv) return Eigen::Vector2d::Zero();
+  return camera.ImageToPlaneJacobian(*uv, plane) * (*uv - camera.principal_point());
+}
+
 ObservationModel::ObservationModel(const geometry::CameraModel& camera,
                                    const TrackerOptions& options,
                                    const geometry::CentroidHeights* heights)
@@ -87,6 +94,9 @@ Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& 
   p.value = scale * g;
   const double hc = camera_.options().height_m - camera_.options().virtual_plane_height_m;
   p.bounce_jacobian = BounceJacobian(p.value, hc);
+  if (options_.CalibrationStates()) {
+    p.focal_jacobian = FocalJacobian(camera_, p.value, camera_.options().virtual_plane_height_m);
+  }
   if (options_.space == ObservationSpace::kImage) {
     const Eigen::Vector3d ground(g.x(), g.y(), camera_.options().virtual_plane_height_m);
     const auto uv = camera_.Project(ground);
@@ -95,6 +105,7 @@ Prediction ObservationModel::Predict(const Eigen::VectorXd& x, const GridState& 
     p.jacobian = d_uv * p.jacobian;
     p.offset_jacobian = d_uv * p.offset_jacobian;
     p.bounce_jacobian = d_uv * p.bounce_jacobian;
+    p.focal_jacobian = d_uv * p.focal_jacobian;
   }
   return p;
 }

@@ -27,12 +27,19 @@ Eigen::Matrix<double, 2, 7> PlantWithOffsetJacobian(const geometry::GridState& s
 // above that plane moves when the camera pitches (about x), rolls (about y)
 // or rises, to first order: d(x, y)/d(pitch, roll, height).
 Eigen::Matrix<double, 2, 3> BounceJacobian(const Eigen::Vector2d& point, double camera_above_plane_m);
+// How a point on the plane z = plane_height_m (vehicle frame) located with
+// `camera` moves when the true focal length is (1 + ε) times the camera's:
+// its image point moves away from the principal point by ε (uv − c), so
+// d(x, y)/dε = ∂(x, y)/∂(u, v) · (uv − c). Zero where the point is not seen.
+Eigen::Vector2d FocalJacobian(const geometry::CameraModel& camera, const Eigen::Vector2d& point,
+                              double plane_height_m);
 
 struct Prediction {
   Eigen::Vector2d value;
   Eigen::MatrixXd jacobian;           // 2 × state size
   Eigen::MatrixXd offset_jacobian;    // d value / d(δx, δy[, δh]) of this plant
   Eigen::Matrix<double, 2, 3> bounce_jacobian;  // d value / d(pitch, roll, height) of the camera
+  Eigen::Vector2d focal_jacobian = Eigen::Vector2d::Zero();  // d value / d(f_true / f − 1)
 };
 
 struct Measurement {

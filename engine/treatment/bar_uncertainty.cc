@@ -25,11 +25,11 @@ Eigen::Matrix2d PlantCovarianceAt(const geometry::GridState& s, const geometry::
   return j * p * j.transpose();
 }
 
-PlantReach PlantReachAtBar(const tracking::GridTracker& tracker, double view_near_y_m,
+PlantReach PlantReachAtBar(const tracking::GridTracker& tracker, double ahead_m,
                            double bar_offset_m, double step_m) {
   PlantReach worst;
   if (tracker.mode() != tracking::TrackerMode::kTracking) return worst;
-  worst.ahead_m = std::max(0.0, view_near_y_m + bar_offset_m);
+  worst.ahead_m = std::max(0.0, ahead_m);
   const tracking::GridAhead ahead = tracker.PredictAhead(worst.ahead_m, step_m);
   const int k = tracker.options().rows_each_side;
   for (int n = -k; n <= k; ++n) {

@@ -124,22 +124,26 @@ TEST(PredictAhead, ForwardVarianceGrowsByTheDeadReckoningNoise) {
 TEST(PlantReachAtBar, ZeroWhenTheGridIsNotHeld) {
   static const geometry::CameraModel camera(geometry::testing::ThesisCamera());
   tracking::GridTracker t(camera, tracking::TrackerOptions{});
-  const PlantReach r = PlantReachAtBar(t, 0.8, 0.6, 0.014);
+  const PlantReach r = PlantReachAtBar(t, 0.05, 0.6, 0.014);
   EXPECT_EQ(r.across_m, 0.0);
   EXPECT_EQ(r.along_m, 0.0);
 }
 
-TEST(PlantReachAtBar, GrowsWithTheGridsCovarianceAndTheDistanceToTheBar) {
+TEST(PlantReachAtBar, GrowsWithTheGridsCovarianceTheBarsOffsetAndTheDistanceDeadReckoned) {
   const tracking::TrackerOptions o;
   const GridState x0{0.0, 0.8, 0.0, 0.475, 0.45};
   Matrix5d p0 = Matrix5d::Zero();
   p0.diagonal() << 4e-6, 4e-6, 1e-6, 1e-6, 1e-6;
-  const PlantReach near = PlantReachAtBar(Holding(o, x0, p0, 0.7, 0.7), 0.8, 0.6, 0.014);
-  EXPECT_NEAR(near.ahead_m, 1.4, 1e-12);
-  const PlantReach far = PlantReachAtBar(Holding(o, x0, p0, 0.7, 0.7), 0.8, 1.6, 0.014);
-  const PlantReach loose = PlantReachAtBar(Holding(o, x0, 4.0 * p0, 0.7, 0.7), 0.8, 0.6, 0.014);
+  const PlantReach near = PlantReachAtBar(Holding(o, x0, p0, 0.7, 0.7), 0.042, 0.6, 0.014);
+  EXPECT_NEAR(near.ahead_m, 0.042, 1e-12);
+  const PlantReach far = PlantReachAtBar(Holding(o, x0, p0, 0.7, 0.7), 0.042, 1.6, 0.014);
+  const PlantReach coasted = PlantReachAtBar(Holding(o, x0, p0, 0.7, 0.7), 1.4, 0.6, 0.014);
+  const PlantReach loose = PlantReachAtBar(Holding(o, x0, 4.0 * p0, 0.7, 0.7), 0.042, 0.6, 0.014);
+  // A bar further behind: Ψ's and l̄'s lever arms are longer.
   EXPECT_GT(far.along_m, near.along_m);
   EXPECT_GT(far.across_m, near.across_m);
+  EXPECT_GT(coasted.along_m, near.along_m);
+  EXPECT_GT(coasted.across_m, near.across_m);
   EXPECT_GT(loose.along_m, near.along_m);
   // At least the filter's own σ(Y) = 2 mm, times √5.991.
   EXPECT_GT(near.along_m, std::sqrt(5.991) * 0.002);

@@ -101,11 +101,13 @@ TreatmentSystem::TreatmentSystem(const geometry::CameraModel& camera,
 
 PlantReach TreatmentSystem::ReachAtBar(const tracking::GridTracker& tracker) const {
   if (!options_.close_on_uncertainty) return {};
-  // Increments of the odometry's: the ground driven in a pose period.
+  // Dead reckoning from now until the spray lands: the valves' latency and
+  // the pose period the ticks are led over, in increments of one period.
   const SchedulerOptions& s = scheduler_.options();
-  const double ahead = std::max(0.0, view_near_y_m_ + s.bar.bar_offset_m);
-  const double step = std::max(std::abs(tracker.ground_speed_m_s()) * s.pose_period_s, ahead / 100.0);
-  return PlantReachAtBar(tracker, view_near_y_m_, s.bar.bar_offset_m, std::max(step, 1e-3));
+  const double travel = std::abs(tracker.ground_speed_m_s());
+  const double ahead = travel * (s.bar.valve_latency_s + s.pose_period_s);
+  const double step = std::max(travel * s.pose_period_s, 1e-3);
+  return PlantReachAtBar(tracker, ahead, s.bar.bar_offset_m, step);
 }
 
 double TreatmentSystem::CropPlaneHeight(const Eigen::Vector2d& centroid_px) const {

@@ -150,15 +150,14 @@ struct TreatmentOptions {
   bool merged_weed_parts_only = true;
   double min_weed_part_m2 = 0.0003;  // a disk of 10 mm radius: the field's smallest weeds
   // Fail-safe on uncertainty (bar_uncertainty.h): the bar closes while the
-  // 95 % ellipse of where the plants reaching it stand reaches further from
-  // them than the sprayed footprint does, across or along the rows
+  // 95 % ellipse of where the plants at the bar stand, as the grid is held
+  // now and dead-reckoned until the spray lands, reaches further from them
+  // than the sprayed footprint does, across or along the rows
   // (kPositionUncertain). The margins (0: derived, UncertaintyMargin) set
-  // scheduler.fail_safe.max_reach_*. Off by default for now: on presets B
-  // and D (small crops, 25 mm footprints) the reach in normal tracking
-  // exceeds the derived margin and the bar stayed closed (1 seed each: 0–1
-  // of 228 crops hit); on the field preset it changes nothing
-  // (docs/results/2026-11-27-failsafe.md).
-  bool close_on_uncertainty = false;
+  // scheduler.fail_safe.max_reach_*. On by default
+  // (docs/results/2026-11-27-failsafe.md: no figure of presets A–D or the
+  // field changes in normal tracking; coasting closes the bar).
+  bool close_on_uncertainty = true;
   double uncertainty_margin_across_m = 0.0;
   double uncertainty_margin_along_m = 0.0;
   // (across, along): the margins as set, or derived from the footprint a
