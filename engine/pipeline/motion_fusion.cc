@@ -81,4 +81,9 @@ void ToWheels(const PlanarSpeed& s, double scale, double track_width_m, double& 
   right_m_s = (s.speed_m_s + 0.5 * track_width_m * s.yaw_rate_rad_s) / scale;
 }
 
+double WheelSdFraction(const PlanarSpeed& s, double track_width_m) {
+  const double wheel = std::hypot(s.speed_sd_m_s, 0.5 * track_width_m * s.yaw_rate_sd_rad_s);
+  return wheel / std::max(0.1, std::abs(s.speed_m_s));
+}
+
 }  // namespace plantscale::pipeline

@@ -57,4 +57,10 @@ FusedSpeed Fuse(const PlanarSpeed& wheels, const PlanarSpeed* visual, double gat
 void ToWheels(const PlanarSpeed& s, double scale, double track_width_m, double& left_m_s,
               double& right_m_s);
 
+// The σ of each wheel's speed, as a fraction of the mean wheel speed, that
+// gives the speed's and the yaw rate's σ of `s` together (the tracker's
+// dead reckoning takes one σ per wheel): √(σ_v² + (σ_ω·W/2)²) / |v|, the
+// speed floored at 0.1 m/s.
+double WheelSdFraction(const PlanarSpeed& s, double track_width_m);
+
 }  // namespace plantscale::pipeline

@@ -52,6 +52,13 @@ TEST(MotionFusion, WheelSpeedsRoundTrip) {
   EXPECT_NEAR(s.speed_sd_m_s, 0.5 * std::hypot(0.03 * 0.68 * 1.04, 0.03 * 0.73 * 1.04), 1e-12);
 }
 
+TEST(MotionFusion, OneWheelSigmaCarriesSpeedAndTurnRate) {
+  const PlanarSpeed s{0.7, 0.0, 0.03, 0.04};
+  // σ_wheel = √(0.03² + (0.04·0.75)²) = 0.0424; over 0.7 m/s.
+  EXPECT_NEAR(WheelSdFraction(s, 1.5), std::hypot(0.03, 0.03) / 0.7, 1e-12);
+  EXPECT_NEAR(WheelSdFraction({0.0, 0.0, 0.03, 0.0}, 1.5), 0.3, 1e-12);  // speed floor
+}
+
 TEST(MotionFusion, OptionsExplainWhatIsWrong) {
   MotionFusionOptions o;
   o.gate_chi2 = 0.0;

@@ -120,9 +120,9 @@ const PoseResult& Pipeline::AddOdometry(const OdometrySample& o) {
   if (o.utime > last_wheel_utime_) last_wheel_utime_ = o.utime;
   if (!visual_) return DeadReckon(o, options_.tracker.wheel_sd_fraction);
   const OdometrySample s = Fused(o);
-  // The camera's own σ when it stands in (a fraction of the speed).
+  // The camera's own σ when it stands in.
   const double sd = last_source_ == FusedSource::kCamera
-                        ? driven_.speed_sd_m_s / std::max(0.05, std::abs(driven_.speed_m_s))
+                        ? WheelSdFraction(driven_, options_.tracker.track_width_m)
                         : options_.tracker.wheel_sd_fraction;
   return DeadReckon(s, sd);
 }
@@ -242,8 +242,7 @@ void Pipeline::UpdateVisualMotion() {
   last_source_ = FusedSource::kCamera;
   ++camera_substitutions_;
   frame_.visual_substituted = true;
-  const PoseResult& p =
-      DeadReckon(s, driven_.speed_sd_m_s / std::max(0.05, std::abs(driven_.speed_m_s)));
+  const PoseResult& p = DeadReckon(s, WheelSdFraction(driven_, options_.tracker.track_width_m));
   frame_ticks_.insert(frame_ticks_.end(), p.ticks.begin(), p.ticks.end());
   frame_.faults.push_back("odometry: silent; the camera's motion stands in");
 }
