@@ -227,22 +227,32 @@ void Pipeline::UpdateVisualMotion() {
   if (!visual_) return;
   frame_.visual = visual_->Update(frame_.utime, frame_.blobs, driven_.speed_m_s,
                                   driven_.yaw_rate_rad_s);
-  if (!frame_.visual.valid) {
-    frame_.faults.push_back("camera motion: " + frame_.visual.reason);
-    return;
-  }
+  if (!frame_.visual.valid) frame_.faults.push_back("camera motion: " + frame_.visual.reason);
   const bool silent = last_wheel_utime_ >= 0 &&
                       (frame_.utime - last_wheel_utime_) * 1e-6 > options_.motion.substitute_after_s;
   if (!silent || frame_.utime <= tracker_.utime()) return;
+  // The wheels are silent: the camera's motion, or when it gave none the
+  // speeds last driven with (as the tracker would dead-reckon on its own,
+  // without the wide bridge of an odometry gap).
+  double sd = options_.tracker.wheel_sd_fraction;
+  if (frame_.visual.valid) {
+    driven_ = VisualSpeed(frame_.visual);
+    sd = WheelSdFraction(driven_, options_.tracker.track_width_m);
+    last_source_ = FusedSource::kCamera;
+    ++camera_substitutions_;
+    frame_.visual_substituted = true;
+  }
   OdometrySample s;
   s.utime = frame_.utime;
-  driven_ = VisualSpeed(frame_.visual);
   ToWheels(driven_, tracker_.odometry_scale(), options_.tracker.track_width_m, s.left_m_s,
            s.right_m_s);
-  last_source_ = FusedSource::kCamera;
-  ++camera_substitutions_;
-  frame_.visual_substituted = true;
-  const PoseResult& p = DeadReckon(s, WheelSdFraction(driven_, options_.tracker.track_width_m));
+  if (!frame_.visual.valid) {
+    // Dead reckoning only: no odometry stands behind it, so the bar still
+    // closes on the stopped odometry (CloseIfOdometryStopped).
+    tracker_.AddOdometry(s.utime, s.left_m_s, s.right_m_s, sd);
+    return;
+  }
+  const PoseResult& p = DeadReckon(s, sd);
   frame_ticks_.insert(frame_ticks_.end(), p.ticks.begin(), p.ticks.end());
   frame_.faults.push_back("odometry: silent; the camera's motion stands in");
 }
