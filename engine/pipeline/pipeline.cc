@@ -225,15 +225,8 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
 // odometry of the frame's capture when the wheels have gone silent.
 void Pipeline::UpdateVisualMotion() {
   if (!visual_) return;
-  // The search prior: the camera's own previous motion while it is fresh
-  // (smoothness of motion, which spinning wheels do not spoil), else what
-  // the tracker last drove with.
-  const motion::VisualMotion& before = visual_->last();
-  const bool fresh = before.valid &&
-                     (frame_.utime - before.utime) * 1e-6 <= options_.motion.max_visual_age_s;
-  const PlanarSpeed prior = fresh ? VisualSpeed(before) : driven_;
-  frame_.visual =
-      visual_->Update(frame_.utime, frame_.blobs, prior.speed_m_s, prior.yaw_rate_rad_s);
+  frame_.visual = visual_->Update(frame_.utime, frame_.blobs, driven_.speed_m_s,
+                                  driven_.yaw_rate_rad_s);
   if (!frame_.visual.valid) frame_.faults.push_back("camera motion: " + frame_.visual.reason);
   const bool silent = last_wheel_utime_ >= 0 &&
                       (frame_.utime - last_wheel_utime_) * 1e-6 > options_.motion.substitute_after_s;
