@@ -21,6 +21,7 @@ struct MotionArgs {
   std::optional<double> speed_m_s, frame_rate_hz, offset_m;
   bool json = false;
   std::string baseline;
+  std::string prior = "none";
 };
 
 nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
@@ -53,6 +54,7 @@ nlohmann::json EvaluationJson(const MotionEvaluation& e) {
   j["frames"] = e.frames;
   j["distance_m"] = e.distance_m;
   j["true_row_spacing_m"] = e.true_row_spacing_m;
+  j["prior"] = e.wheel_prior ? "wheels" : "none";
   j["baseline_paper"] = MethodJson(e.paper);
   j["published"] = {{"correct_correspondence_rate_min", 0.95},
                     {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
@@ -104,6 +106,7 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   o.frames = a.frames;
   o.paper = PaperMethod();
   o.ours = OursMethod(o.sim);
+  o.wheel_prior = a.prior == "wheels";
   const MotionEvaluation e = EvaluateMotion(o);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';
@@ -137,6 +140,13 @@ void AddMotionCommands(CommandRegistry& registry) {
   cmd->add_flag("--json", a.json, "print one JSON object");
   cmd->add_option("--baseline", a.baseline, "paper: the published method beside ours")
       ->check(CLI::IsMember({"paper"}));
+  cmd->add_option("--prior", a.prior,
+                  "what ours searches each frame around: none (the smoothed previous motion, no "
+                  "odometry at all) or wheels (the simulated wheel odometry since the previous "
+                  "frame, as the vehicle's pipeline does; the pose still composes the camera's "
+                  "motion only)")
+      ->check(CLI::IsMember({"none", "wheels"}))
+      ->capture_default_str();
 }
 
 }  // namespace plantscale::app

@@ -5,6 +5,8 @@
 #include <map>
 #include <unordered_map>
 
+#include "engine/motion/visual_odometry.h"
+
 namespace plantscale::app {
 namespace {
 
@@ -80,10 +82,18 @@ class MethodRun {
         mosaic_((mosaic.plane_height_m = o.mosaic_plane_height_m, mosaic), camera),
         tolerance_m_(tolerance_m) {}
 
+  // Search around the wheels' motion since the previous frame (a track of
+  // `track_width_m`, the rotation's σ per frame `psi_sd_rad`).
+  void UseWheelPrior(double track_width_m, double psi_sd_rad) {
+    track_width_m_ = track_width_m;
+    wheel_psi_sd_rad_ = psi_sd_rad;
+  }
+
   void Step(const sim::SimFrame& frame, const vision::Segmentation& seg,
             const geometry::CameraModel& camera,
             const std::unordered_map<int, const sim::PlantTruth*>& by_instance, Totals& totals) {
     const auto& features = extractor_.Extract(seg.blobs, camera);
+    if (track_width_m_ > 0.0 && !first_) SetWheelPrior(frame);
     const auto start = std::chrono::steady_clock::now();
     const motion::FrameMotion& m = tracker_.Update(features);
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -97,6 +107,7 @@ class MethodRun {
     }
     first_ = false;
     previous_pose_ = frame.truth.pose;
+    previous_utime_ = frame.truth.utime;
     last_distance_ = frame.truth.distance_m;
     cv::Mat labels;
     motion::LabelFrame(seg.mask, seg.blobs,
@@ -127,6 +138,17 @@ class MethodRun {
   }
 
  private:
+  // The mean measured wheel speeds over the frame's odometry samples.
+  void SetWheelPrior(const sim::SimFrame& frame) {
+    if (frame.odometry.empty()) return;
+    double left = 0.0, right = 0.0;
+    for (const sim::OdometrySample& o : frame.odometry) left += o.left_m_s, right += o.right_m_s;
+    const double n = static_cast<double>(frame.odometry.size());
+    const double dt = 1e-6 * static_cast<double>(frame.truth.utime - previous_utime_);
+    const double v = 0.5 * (left + right) / n, w = (right - left) / n / track_width_m_;
+    tracker_.SetMotionPrior({-w * dt, {0.0, -v * dt}}, wheel_psi_sd_rad_);
+  }
+
   void ScoreMatches(std::span<const Feature> features, const motion::FrameMotion& m,
                     const sim::SimFrame& frame, const geometry::CameraModel& camera,
                     const std::unordered_map<int, const sim::PlantTruth*>& by_instance,
@@ -164,6 +186,8 @@ class MethodRun {
   double tolerance_m_;
   std::unordered_map<int64_t, FeatureTruth> track_truth_;
   sim::Pose2 previous_pose_, first_pose_;
+  int64_t previous_utime_ = 0;
+  double track_width_m_ = 0.0, wheel_psi_sd_rad_ = 0.0;
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
 };
@@ -205,6 +229,7 @@ OptionErrors MotionEvalOptions::Validate() const {
   if (frames < 2) e.push_back({"frames", "must be >= 2"});
   RequirePositive(e, "match_tolerance_m", match_tolerance_m);
   RequirePositive(e, "mosaic_resolution_m", mosaic_resolution_m);
+  RequirePositive(e, "wheel_prior_psi_sd_rad", wheel_prior_psi_sd_rad);
   for (const auto& [name, m] : {std::pair{"paper", &paper}, std::pair{"ours", &ours}}) {
     const std::string prefix = name;
     auto f = Prefixed(prefix + ".features", m->features.Validate());
@@ -253,6 +278,7 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   out.preset = options.sim.preset;
   out.frames = options.frames;
   out.true_row_spacing_m = options.sim.field.row_spacing_m;
+  out.wheel_prior = options.wheel_prior;
   const double step_m = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Totals paper, ours;
   vision::SegmenterOptions seg_options = options.segmenter;
@@ -285,7 +311,11 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
     MotionMethodOptions paper_o = options.paper, ours_o = options.ours;
     for (MotionMethodOptions* m : {&paper_o, &ours_o}) m->tracker.initial_motion.t_m = {0.0, -step_m};
     MethodRun paper_run(paper_o, camera, mosaic, options.match_tolerance_m);
+    if (options.wheel_prior) motion::UsePriorSearch(ours_o.tracker, ours_o.features);
     MethodRun ours_run(ours_o, camera, mosaic, options.match_tolerance_m);
+    if (options.wheel_prior) {
+      ours_run.UseWheelPrior(so.vehicle.track_width_m, options.wheel_prior_psi_sd_rad);
+    }
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;
     for (int k = 0; k < options.frames && simulator.Next(frame); ++k) {

@@ -33,6 +33,13 @@ struct MotionEvalOptions {
   vision::SegmenterOptions segmenter;
   MotionMethodOptions paper, ours;  // defaults: PaperMethod(), OursMethod()
   motion::RowFitOptions rows;
+  // Ours searches each frame around the motion the wheel odometry reports
+  // since the previous frame (as the vehicle's pipeline does, with the
+  // simulator's faulty wheels: scale error, slip) instead of around the
+  // smoothed previous motion; the pose still composes the camera's motion
+  // only. σ of that prior's rotation per frame:
+  bool wheel_prior = false;
+  double wheel_prior_psi_sd_rad = 0.15 * M_PI / 180.0;
 
   OptionErrors Validate() const;
 };
@@ -70,6 +77,7 @@ struct MotionEvaluation {
   int seeds = 0, frames = 0;
   double distance_m = 0.0;  // per sequence, mean
   double true_row_spacing_m = 0.0;
+  bool wheel_prior = false;
   MotionMethodEvaluation paper, ours;
 };
 

@@ -369,6 +369,14 @@ pipeline::PipelineOptions ProductPipelineOptions(const Profiles& p) {
   return o;
 }
 
+pipeline::MotionFusionOptions VisualMotionOptions(const Profiles& p) {
+  pipeline::MotionFusionOptions o;
+  o.enabled = true;
+  o.visual = motion::VisualOdometryFor(p.crop.leaf_radius_m, p.crop.leaf_height_m);
+  o.wheel_sd_fraction = ProductTrackerOptions(p).wheel_sd_fraction;
+  return o;
+}
+
 tracking::TrackerOptions ThesisTrackerOptions(const Profiles& p) {
   tracking::TrackerOptions o;
   o.estimate_spacing = false;

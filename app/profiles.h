@@ -109,6 +109,10 @@ void RequireImageSize(const VehicleProfile& vehicle, int width_px, int height_px
 // The product's options, from the two profiles only.
 tracking::TrackerOptions ProductTrackerOptions(const Profiles& profiles);
 treatment::TreatmentOptions ProductTreatmentOptions(const Profiles& profiles);
+// The camera's motion as the pipeline's second motion source
+// (pipeline/motion_fusion.h), its features on the crop's leaf-tip plane;
+// enabled.
+pipeline::MotionFusionOptions VisualMotionOptions(const Profiles& p);
 pipeline::PipelineOptions ProductPipelineOptions(const Profiles& profiles);
 // The thesis's tracker (§4.6, ch. 8) with its noise settings, on the same
 // profiles (rows, nominal spacings, track width).

@@ -26,6 +26,7 @@ struct TrackingArgs {
   std::string trace_csv;
   bool json = false;
   std::string reference = "grid";  // or "plant-lines" (thesis §8.1)
+  OdometryFaultArgs fault;
 };
 
 // With the plant-lines reference the lateral figures are those scored at
@@ -150,6 +151,8 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
   o.spacing_offset_m = a.spacing_offset_mm / 1000.0;
   o.baseline_thesis = a.baseline == "thesis";
   o.centroids_on_virtual_plane = a.virtual_plane;
+  o.odometry_fault = ToOdometryFault(a.fault);
+  o.visual_motion = a.fault.visual_motion;
   std::ofstream trace;
   if (!a.trace_csv.empty()) {
     trace.open(a.trace_csv);
@@ -180,6 +183,17 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
     j["crop"] = o.profiles->crop.name;
     j["vehicle"] = o.profiles->vehicle.name;
     j["calibration_error"] = CalibrationErrorJson(o.calibration_error);
+    j["visual_motion"] = o.visual_motion;
+    j["camera_substitutions"] = e.ours.camera_substitutions;
+    if (o.odometry_fault.kind != OdometryFaultKind::kNone) {
+      nlohmann::json f = OdometryFaultJson(o.odometry_fault);
+      f["frames"] = e.ours.fault_frames;
+      f["frames_tracking"] = e.ours.fault_frames_tracking;
+      f["losses"] = e.ours.fault_losses;
+      f["lateral_rmse_m"] = e.ours.fault_lateral_rmse_m;
+      f["forward_rmse_m"] = e.ours.fault_forward_rmse_m;
+      j["odometry_fault"] = f;
+    }
     if (e.thesis) {
       j["baseline_thesis"] = MetricsJson(*e.thesis);
       add_reference(j["baseline_thesis"], *e.thesis, grid_thesis);
@@ -194,6 +208,15 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
                             " lines)"
                       : " (the planted grid, every frame)")
               << '\n';
+    if (o.odometry_fault.kind != OdometryFaultKind::kNone) {
+      std::cout << "  odometry fault " << Name(o.odometry_fault.kind) << " from "
+                << o.odometry_fault.start_m << " m for " << o.odometry_fault.length_m
+                << " m: " << e.ours.fault_frames_tracking << " of " << e.ours.fault_frames
+                << " frames tracking, " << e.ours.fault_losses << " losses, lateral RMSE "
+                << 1000.0 * e.ours.fault_lateral_rmse_m << " mm, forward RMSE "
+                << 1000.0 * e.ours.fault_forward_rmse_m << " mm"
+                << (o.visual_motion ? " (visual motion on)" : " (wheels only)") << '\n';
+    }
     std::cout << "  engine: crop " << o.profiles->crop.name << ", vehicle " << o.profiles->vehicle.name
               << ", calibration error " << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error)
               << '\n';
@@ -228,6 +251,7 @@ void AddTrackingCommands(CommandRegistry& registry) {
                   "position of that line's plants)")
       ->check(CLI::IsMember({"grid", "plant-lines"}))
       ->capture_default_str();
+  AddOdometryFaultOptions(cmd, args.fault);
   cmd->add_flag("--json", args.json, "print one JSON object");
 }
 

@@ -72,22 +72,39 @@ struct Scorer {
   int lines_scored = 0;
   std::vector<double> init_frames;
   int init_trials = 0, init_successes = 0;
+  int fault_frames = 0, fault_tracking = 0, fault_losses = 0;
+  double fault_lat2 = 0.0, fault_fwd2 = 0.0;
 
   Scorer(const geometry::CameraOptions& camera_options,
          const tracking::TrackerOptions& tracker_options,
-         const vision::SegmenterOptions& segmenter_options, const TrackingEvalOptions& o)
+         const vision::SegmenterOptions& segmenter_options, const TrackingEvalOptions& o,
+         bool visual)
       : camera(camera_options),
-        pipe(camera, Options(segmenter_options, tracker_options)),
+        pipe(camera, Options(segmenter_options, tracker_options, o, visual)),
         tracker(pipe.tracker()),
         options(o) {}
 
   static pipeline::PipelineOptions Options(const vision::SegmenterOptions& segmenter,
-                                           const tracking::TrackerOptions& tracker) {
+                                           const tracking::TrackerOptions& tracker,
+                                           const TrackingEvalOptions& o, bool visual) {
     pipeline::PipelineOptions p;
     p.segmenter = segmenter;
     p.tracker = tracker;
     p.treat = false;
+    if (visual) p.motion = VisualMotionOptions(*o.profiles);
     return p;
+  }
+
+  // Over the faulty stretch: tracking or not, lost, errors.
+  void ScoreFault(const sim::SimFrame& frame, bool was_tracking, const geometry::GridState& est) {
+    if (!options.odometry_fault.Active(frame.truth.distance_m)) return;
+    ++fault_frames;
+    if (was_tracking && tracker.mode() == tracking::TrackerMode::kLost) ++fault_losses;
+    if (tracker.mode() != tracking::TrackerMode::kTracking) return;
+    ++fault_tracking;
+    const GridErrors g = ScoreGrid(est, tracker.covariance().topLeftCorner<3, 3>(), frame.truth.grid);
+    fault_lat2 += g.lateral_m * g.lateral_m;
+    fault_fwd2 += g.forward_m * g.forward_m;
   }
 
   void AddOdometry(const sim::OdometrySample& o) {
@@ -110,6 +127,7 @@ struct Scorer {
       if (InitCorrect(est, truth)) ++init_successes;
     }
     if (was_tracking && tracker.mode() == tracking::TrackerMode::kLost) ++losses;
+    ScoreFault(frame, was_tracking, est);
     if (tracker.mode() != tracking::TrackerMode::kTracking) return;
     ++tracking_frames;
     if (r.updated) ++updates;
@@ -214,6 +232,12 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   init_frames.insert(init_frames.end(), s.init_frames.begin(), s.init_frames.end());
   init_trials += s.init_trials;
   init_successes += s.init_successes;
+  m.fault_frames += s.fault_frames;
+  m.fault_frames_tracking += s.fault_tracking;
+  m.fault_losses += s.fault_losses;
+  m.fault_lateral_rmse_m += s.fault_lat2;  // sums until Finish
+  m.fault_forward_rmse_m += s.fault_fwd2;
+  m.camera_substitutions += s.pipe.camera_substitutions();
 }
 
 }  // namespace
@@ -251,6 +275,8 @@ void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
   m.init_trials = init_trials;
   m.init_success_rate = init_trials > 0 ? static_cast<double>(init_successes) / init_trials : 0.0;
   m.init_frames_p95 = Percentile(init_frames, 0.95);
+  m.fault_lateral_rmse_m = std::sqrt(m.fault_lateral_rmse_m / std::max(1, m.fault_frames_tracking));
+  m.fault_forward_rmse_m = std::sqrt(m.fault_forward_rmse_m / std::max(1, m.fault_frames_tracking));
 }
 
 GridErrors ScoreGrid(const geometry::GridState& est, const Eigen::Matrix3d& p,
@@ -320,7 +346,7 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
                      so.camera.image_height_px);
     const TrackingEngine engine = TrackingEngineOf(options, so.seed);
     const PlantLineReference plant_lines = PlantLines(simulator.field());
-    Scorer ours(engine.camera, engine.ours, ours_seg, options);
+    Scorer ours(engine.camera, engine.ours, ours_seg, options, options.visual_motion);
     ours.lines = &plant_lines;
     ours.trace = options.trace;
     ours.seed = so.seed;
@@ -332,7 +358,7 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     }
     std::optional<Scorer> thesis;
     if (options.baseline_thesis) {
-      thesis.emplace(engine.camera, engine.thesis, thesis_seg, options);
+      thesis.emplace(engine.camera, engine.thesis, thesis_seg, options, false);
       thesis->lines = &plant_lines;
     }
     InitProbe probe(engine.camera, engine.ours);
@@ -344,7 +370,8 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     // Odometry up to the frame's capture goes in before the frame, the rest
     // after it, so that the estimate is scored at the time of its truth.
     std::vector<sim::OdometrySample> later;
-    const auto add = [&](const sim::OdometrySample& o) {
+    const auto add = [&](sim::OdometrySample o) {
+      if (!ApplyOdometryFault(options.odometry_fault, frame.truth.distance_m, o)) return;
       ours.AddOdometry(o);
       if (thesis) thesis->AddOdometry(o);
       probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);

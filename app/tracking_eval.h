@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "app/odometry_fault.h"
 #include "app/profiles.h"
 #include "engine/sim/simulator.h"
 #include "engine/tracking/grid_tracker.h"
@@ -38,6 +39,10 @@ struct TrackingEvalOptions {
   double spacing_settle_m = 5.0;   // spacing errors count from this far
   double init_probe_interval_m = 5.0;  // a fresh initialisation is tried this often
   int init_probe_max_frames = 25;
+  // Faulty wheel odometry over one stretch (odometry_fault.h), and the
+  // camera's motion as the pipeline's second motion source.
+  OdometryFault odometry_fault;
+  bool visual_motion = false;
 
   OptionErrors Validate() const;
 };
@@ -86,6 +91,15 @@ struct TrackingMetrics {
   double plant_line_lateral_rmse_m = 0.0;
   double plant_line_lateral_mean_m = 0.0;
   std::vector<double> run_plant_line_lateral_rmse_m;
+  // Over the faulty stretch (with --odometry-fault): frames, of them those
+  // tracking, the lateral RMSE of those, the grid's losses (it was
+  // tracking, then lost) and the forward error's RMS (modulo l̄).
+  int fault_frames = 0;
+  int fault_frames_tracking = 0;
+  int fault_losses = 0;
+  double fault_lateral_rmse_m = 0.0;
+  double fault_forward_rmse_m = 0.0;
+  int camera_substitutions = 0;  // odometry samples the camera stood in for
 };
 
 struct TrackingEvaluation {

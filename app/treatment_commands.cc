@@ -51,6 +51,7 @@ struct TreatmentArgs {
   std::optional<double> size_edge_loss_mm;
   std::optional<double> forward_sd_mm;
   bool no_slip_guard = false;
+  OdometryFaultArgs fault;
   bool mrroc = false;
   bool no_split_merged = false;
   bool footprint_per_blob = false;
@@ -237,9 +238,21 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
     o.treatment.uncertainty_margin_along_m = *a.uncertainty_margin_mm * 1e-3;
   }
   o.costs_ratio = a.costs_ratio;
+  o.odometry_fault = ToOdometryFault(a.fault);
+  o.visual_motion = a.fault.visual_motion;
   const TreatmentEvaluation e = EvaluateTreatment(o);
   if (!a.json) {
     PrintTable(e, std::cout);
+    if (e.fault_stretch) {
+      const TreatmentMetrics& f = *e.fault_stretch;
+      std::cout << "  odometry fault " << Name(o.odometry_fault.kind) << " from "
+                << o.odometry_fault.start_m << " m for " << o.odometry_fault.length_m
+                << " m: " << f.crop_hits << " of " << f.crop_plants
+                << " crops hit, placement RMS " << 1000.0 * f.placement_rms_m << " mm (along "
+                << 1000.0 * f.placement_rms_along_m << ", across "
+                << 1000.0 * f.placement_rms_across_m << ")"
+                << (o.visual_motion ? " (visual motion on)" : " (wheels only)") << '\n';
+    }
     std::cout << "  engine: crop " << o.profiles->crop.name << ", vehicle "
               << o.profiles->vehicle.name << ", calibration error "
               << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error)
@@ -266,6 +279,13 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   }
   j["missed_crops"] = missed;
   if (e.thesis) j["baseline_thesis"] = MetricsJson(*e.thesis);
+  j["visual_motion"] = o.visual_motion;
+  j["camera_substitutions"] = e.camera_substitutions;
+  if (e.fault_stretch) {
+    nlohmann::json f = OdometryFaultJson(o.odometry_fault);
+    f["stretch"] = MetricsJson(*e.fault_stretch);
+    j["odometry_fault"] = f;
+  }
   if (e.mrroc) {
     nlohmann::json hull = nlohmann::json::array();
     for (const auto& p : e.mrroc->hull) hull.push_back(PointJson(p));
@@ -431,6 +451,7 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--no-split-merged", args.no_split_merged,
                 "map and label merged blobs whole (no split among predicted crops)");
+  AddOdometryFaultOptions(cmd, args.fault);
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");
   cmd->add_option("--costs-ratio", args.costs_ratio, "cost ratio for the MRROC operating point")
       ->check(CLI::PositiveNumber)->capture_default_str();

@@ -51,14 +51,26 @@ struct Chain {
 
   Chain(const geometry::CameraOptions& engine_camera, const vision::SegmenterOptions& seg,
         const tracking::TrackerOptions& track, const treatment::TreatmentOptions& treat,
-        double true_latency_s)
+        double true_latency_s, const pipeline::MotionFusionOptions& motion = {})
       : bar(treat.scheduler.bar, true_latency_s, treat.scheduler.tick_s),
         camera(engine_camera),
-        pipe(camera, pipeline::PipelineOptions{seg, track, treat}) {
+        pipe(camera, Options(seg, track, treat, motion)) {
     pipe.set_sink(bar.Sink());
   }
 
   const treatment::TreatmentSystem& system() const { return *pipe.treatment(); }
+
+  static pipeline::PipelineOptions Options(const vision::SegmenterOptions& seg,
+                                           const tracking::TrackerOptions& track,
+                                           const treatment::TreatmentOptions& treat,
+                                           const pipeline::MotionFusionOptions& motion) {
+    pipeline::PipelineOptions o;
+    o.segmenter = seg;
+    o.tracker = track;
+    o.treatment = treat;
+    o.motion = motion;
+    return o;
+  }
 
   void Count(std::span<const treatment::TickResult> results) {
     for (const treatment::TickResult& r : results) {
@@ -325,7 +337,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
   const double latency = options.true_valve_latency_s >= 0.0
                              ? options.true_valve_latency_s
                              : options.treatment.scheduler.bar.valve_latency_s;
-  Sums ours_sums, thesis_sums;
+  Sums ours_sums, thesis_sums, fault_sums;
   std::vector<classify::ClassifierSample> samples;
   double crop_pixels = 0.0, weed_pixels = 0.0;
   for (int k = 0; k < options.seeds; ++k) {
@@ -340,7 +352,9 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     if (options.adjust_tracker) options.adjust_tracker(our_tracker);
     Chain ours(engine_camera,
                treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
-               our_tracker, options.treatment, latency);
+               our_tracker, options.treatment, latency,
+               options.visual_motion ? VisualMotionOptions(*options.profiles)
+                                     : pipeline::MotionFusionOptions{});
     ours.collect_samples = options.mrroc;
     std::optional<Chain> thesis;
     treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so.preset, engine_camera);
@@ -365,17 +379,31 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
       pending.pop_front();
     };
     sim::SimFrame frame;
+    double fault_begin_y = std::nan(""), fault_end_y = std::nan("");
     while (simulator.Next(frame)) {
       track.push_back({frame.truth.utime, frame.truth.pose.x_m, frame.truth.pose.y_m,
                        frame.truth.pose.heading_rad});
       result.distance_m = frame.truth.distance_m;
+      const double distance = frame.truth.distance_m;
+      if (options.odometry_fault.Active(distance)) {
+        if (std::isnan(fault_begin_y)) fault_begin_y = frame.truth.pose.y_m;
+        fault_end_y = frame.truth.pose.y_m;
+      }
       std::vector<sim::OdometrySample> odometry = std::move(frame.odometry);
+      std::erase_if(odometry, [&](sim::OdometrySample& o) {
+        return !ApplyOdometryFault(options.odometry_fault, distance, o);
+      });
       pending.push_back(std::move(frame));
       frame = sim::SimFrame{};
       for (const sim::OdometrySample& o : odometry) {
         while (!pending.empty() && pending.front().truth.utime + lag_us < o.utime) process();
         ours.Odometry(o);
         if (thesis) thesis->Odometry(o);
+      }
+      // Odometry that stopped passes no frame: the next frame's capture does.
+      while (options.odometry_fault.kind == OdometryFaultKind::kStop && pending.size() > 1 &&
+             pending.front().truth.utime + lag_us < pending.back().truth.utime) {
+        process();
       }
     }
     while (!pending.empty()) process();
@@ -387,6 +415,17 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
       Accumulate(c, s, static_cast<int>(shots.size()), sums);
     };
     score(ours, options.treatment, ours_sums);
+    result.camera_substitutions += ours.pipe.camera_substitutions();
+    if (!std::isnan(fault_begin_y)) {
+      // The plants the bar passed over while the fault lasted.
+      SprayScoreRegion r = Region(simulator, ours, last_y, options.treatment);
+      const double bar = options.treatment.scheduler.bar.bar_offset_m;
+      r.y_begin_m = std::max(r.y_begin_m, fault_begin_y - bar);
+      r.y_end_m = std::min(r.y_end_m, fault_end_y - bar);
+      const std::vector<treatment::Shot> shots = ours.bar.Shots(track);
+      Accumulate(ours, ScoreSpray(simulator.field(), shots, r), static_cast<int>(shots.size()),
+                 fault_sums);
+    }
     if (thesis) score(*thesis, thesis_options, thesis_sums);
     if (k == 0) {
       ours.pipe.treatment()->Explain();
@@ -404,6 +443,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
   result.ours = Finish(ours_sums);
   result.missed_crops = ours_sums.spray.missed;
   if (thesis_sums.ticks > 0) result.thesis = Finish(thesis_sums);
+  if (fault_sums.ticks > 0) result.fault_stretch = SprayMetrics(fault_sums.spray);
   if (options.mrroc) {
     const std::vector<double> areas = {0.0,   0.0005, 0.001, 0.002, 0.003, 0.004, 0.005,
                                        0.006, 0.008,  0.01,  0.015, 0.02,  0.03};

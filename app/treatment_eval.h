@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "app/odometry_fault.h"
 #include "app/profiles.h"
 #include "app/treatment_score.h"
 #include "engine/classify/mrroc.h"
@@ -45,6 +46,10 @@ struct TreatmentEvalOptions {
   // Changes to our tracker's options (ProductTrackerOptions of the
   // profiles), for trying them; none: the product's.
   std::function<void(tracking::TrackerOptions&)> adjust_tracker;
+  // Faulty wheel odometry over one stretch (odometry_fault.h), and the
+  // camera's motion as the pipeline's second motion source (ours only).
+  OdometryFault odometry_fault;
+  bool visual_motion = false;
 
   OptionErrors Validate() const;
 };
@@ -104,6 +109,11 @@ struct TreatmentEvaluation {
   classify::MrrocPoint nearest_corner;   // thesis table 7.2
   std::vector<std::string> example_why;  // a few plant records' `why`
   std::vector<MissedCrop> missed_crops;  // ours, every seed (seed_index: 0-based run)
+  // Ours over the faulty stretch (with an odometry fault): the spray of the
+  // plants the bar passed while the fault lasted, and the odometry samples
+  // the camera stood in for over the run.
+  std::optional<TreatmentMetrics> fault_stretch;
+  int camera_substitutions = 0;
 };
 
 TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options);

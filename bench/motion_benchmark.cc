@@ -11,6 +11,7 @@
 
 #include "engine/motion/feature_tracker.h"
 #include "engine/motion/test_scenes.h"
+#include "engine/motion/visual_odometry.h"
 
 namespace plantscale::motion {
 namespace {
@@ -60,6 +61,36 @@ void BM_TrackerUpdate(benchmark::State& state) {
 }
 // Args: method (0 paper, 1 ours), features per frame.
 BENCHMARK(BM_TrackerUpdate)->Args({0, 50})->Args({1, 50})->Args({1, 100})->Unit(benchmark::kMicrosecond);
+
+// The pipeline's visual motion source per frame (issue 38): the tracker
+// update searched around a prior (here the wheels reading 10 % fast, 1 cm
+// over the frame: inside the default 15 mm prior gate), and
+// the speed, turn rate and their σ.
+void BM_VisualOdometry(benchmark::State& state) {
+  const auto& frames = Frames(static_cast<int>(state.range(0)));
+  const geometry::CameraModel camera(testing::SanchizPlaCamera());
+  VisualOdometryOptions o;
+  o.tracker.fit_row_heading = false;
+  auto vo = std::make_unique<VisualOdometry>(camera, o);
+  size_t k = 0, valid = 0, updates = 0;
+  int64_t utime = 0;
+  for (auto _ : state) {
+    if (k == frames.size()) {
+      state.PauseTiming();
+      vo = std::make_unique<VisualOdometry>(camera, o);
+      k = 0;
+      state.ResumeTiming();
+    }
+    utime += 80000;  // 0.1 m per frame at 1.25 m/s
+    const VisualMotion& m = vo->UpdateFeatures(utime, frames[k], 1.1 * 1.25, 0.0);
+    benchmark::DoNotOptimize(m.speed_m_s);
+    valid += m.valid ? 1 : 0;
+    ++updates;
+    ++k;
+  }
+  state.counters["valid"] = static_cast<double>(valid) / static_cast<double>(updates);
+}
+BENCHMARK(BM_VisualOdometry)->Arg(50)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace plantscale::motion

@@ -33,4 +33,20 @@ set +e
 "$bin" evaluate tracking --preset testbed --seeds 0 >/dev/null 2>&1; rc=$?
 set -e
 [[ $rc -ne 0 ]] || fail "--seeds 0 accepted"
+# --odometry-fault (issue 38): a bad kind exits 2 naming the option; a stop
+# over 4 m reports the stretch under "odometry_fault".
+set +e
+"$bin" evaluate tracking --preset testbed --odometry-fault bogus >/dev/null 2>"$work/fault.err"; rc=$?
+set -e
+[[ $rc -eq 2 ]] || fail "--odometry-fault bogus exited $rc, expected 2"
+grep -q -- "--odometry-fault" "$work/fault.err" || fail "--odometry-fault bogus: message does not name the option"
+"$bin" evaluate tracking --preset field --seeds 1 --length-m 14 --odometry-fault stop \
+  --fault-start-m 6 --fault-length-m 4 --visual-motion --json >"$work/fault.json" \
+  || fail "evaluate tracking --odometry-fault stop failed"
+for key in kind start_m length_m frames frames_tracking losses lateral_rmse_m forward_rmse_m; do
+  grep -q "\"$key\"" "$work/fault.json" || fail "odometry_fault lacks $key"
+done
+frames=$(num frames "$work/fault.json")
+awk -v f="$frames" 'BEGIN { exit !(f >= 40) }' || fail "a 4 m stretch at 12.5 Hz scored $frames frames (>= 40 expected)"
+grep -q '"visual_motion": true' "$work/fault.json" || fail "visual_motion not reported"
 finish "evaluate tracking CLI"

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/common/check.h"
+
 namespace plantscale::motion {
 namespace {
 
@@ -53,6 +55,7 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "hough.join_m", hough.join_m);
   if (hough.open_m < hough.join_m) e.push_back({"hough.open_m", "must be >= hough.join_m"});
   RequirePositive(e, "residual_gate_m", residual_gate_m);
+  RequirePositive(e, "prior_gate_m", prior_gate_m);
   for (OptionError& r : Prefixed("row_heading", row_heading.Validate())) e.push_back(std::move(r));
   RequireNonNegative(e, "similarity_weight_m", similarity_weight_m);
   if (min_matches < 2) e.push_back({"min_matches", "must be >= 2"});
@@ -84,8 +87,16 @@ FeatureTracker::FeatureTracker(const TrackerOptions& options, const geometry::Ca
   smoothed_t_m_ = options.initial_motion.t_m;
 }
 
+void FeatureTracker::SetMotionPrior(const PlanarMotion& prior, double psi_sd_rad) {
+  PLANTSCALE_CHECK(psi_sd_rad > 0.0, "the prior's rotation needs a positive σ");
+  if (options_.method == MotionMethod::kPaper) return;
+  frame_prior_ = prior;
+  frame_prior_psi_sd_rad_ = psi_sd_rad;
+}
+
 double FeatureTracker::PriorPsi() const {
   if (options_.method == MotionMethod::kPaper) return last_motion_.psi_rad;
+  if (frame_prior_) return frame_prior_->psi_rad;
   return options_.heading_return_per_frame * WrapAngle(result_.pose.heading_rad - row_heading_rad_);
 }
 
@@ -119,6 +130,7 @@ void FeatureTracker::MapRows(std::span<const Feature> features, double driven_m)
 
 PlanarMotion FeatureTracker::CoastingMotion() const {
   if (options_.method == MotionMethod::kPaper) return last_motion_;
+  if (frame_prior_) return *frame_prior_;
   return {PriorPsi(), smoothed_t_m_};
 }
 
@@ -138,7 +150,8 @@ bool FeatureTracker::IsDuplicate(std::span<const Feature> features) const {
 
 const FrameMotion& FeatureTracker::Update(std::span<const Feature> features) {
   result_.track_of_feature.assign(features.size(), -1);
-  result_.candidates = result_.coherent = 0;
+  result_.candidates = result_.coherent = result_.matched = 0;
+  result_.residual_rms_m = 0.0;
   if (first_) {
     first_ = false;
     Coast(features, LockLoss::kFirstFrame, true);
@@ -163,6 +176,7 @@ const FrameMotion& FeatureTracker::Update(std::span<const Feature> features) {
   }
   last_positions_.clear();
   for (const Feature& f : features) last_positions_.push_back(f.position_m);
+  frame_prior_.reset();
   return result_;
 }
 
@@ -179,7 +193,11 @@ std::vector<Match> FeatureTracker::Correspond(std::span<const Feature> features,
       const Track& t = tracks_[visible[v]];
       if (!region.Contains(t.filter.position_m())) continue;
       const double d = SimilarityDistance(Of(features[i]), t.characteristics);
-      if (paper || d <= options_.max_similarity_distance) dm(i, v) = d;
+      if (paper) {
+        dm(i, v) = d;
+      } else if (d <= options_.max_similarity_distance) {
+        dm(i, v) = frame_prior_ ? PriorCost(features[i], t, d) : d;
+      }
     }
   }
   const std::vector<Match> candidates = TwoWayMatches(dm);
@@ -211,6 +229,11 @@ std::vector<Match> FeatureTracker::Correspond(std::span<const Feature> features,
   motion = Fit(features, visible, matches);
   // Step 5: the rest of the matching.
   return FinalMatches(features, visible, std::move(matches), motion);
+}
+
+double FeatureTracker::PriorCost(const Feature& f, const Track& t, double similarity) const {
+  const double r = (f.position_m - frame_prior_->Apply(t.filter.position_m())).norm();
+  return r <= options_.prior_gate_m ? r + options_.similarity_weight_m * similarity : kNoMatch;
 }
 
 std::vector<Match> FeatureTracker::KeepWithinGate(std::span<const Feature> features,
@@ -273,7 +296,7 @@ PlanarMotion FeatureTracker::Fit(std::span<const Feature> features, const std::v
   double s = 0.0;
   for (const Eigen::Vector2d& p : prev) s += (p - mean_prev).squaredNorm();
   const double data = s / (options_.measurement_sigma_m * options_.measurement_sigma_m);
-  const double sigma_psi = options_.rotation_prior_sigma_rad;
+  const double sigma_psi = frame_prior_ ? frame_prior_psi_sd_rad_ : options_.rotation_prior_sigma_rad;
   const double prior = 1.0 / (sigma_psi * sigma_psi);
   const double psi0 = PriorPsi();
   fit.psi_rad = psi0 + data * WrapAngle(fit.psi_rad - psi0) / (data + prior);
@@ -317,6 +340,13 @@ void FeatureTracker::Advance(std::span<const Feature> features, const std::vecto
     return;
   }
   std::vector<uint8_t> matched(features.size(), 0);
+  double residual2 = 0.0;
+  for (const Match& m : matches) {
+    residual2 += (features[m.first].position_m -
+                  motion.Apply(tracks_[visible[m.second]].filter.position_m())).squaredNorm();
+  }
+  result_.matched = static_cast<int>(matches.size());
+  result_.residual_rms_m = std::sqrt(residual2 / static_cast<double>(matches.size()));
   for (Track& t : tracks_) t.filter.Predict(motion, r1_), ++t.misses;
   for (const Match& m : matches) {
     Track& t = tracks_[visible[m.second]];

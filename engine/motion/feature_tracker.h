@@ -26,6 +26,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -49,6 +50,10 @@ struct TrackerOptions {
   double search_margin_m = 0.03;                         // widening of the search ellipse
   HoughOptions hough;
   double residual_gate_m = 0.012;   // kOurs: match residual against the fitted motion
+  // kOurs with a motion prior (SetMotionPrior): candidates farther than this
+  // from where the prior puts the track are not matches, and the nearer
+  // and more similar the better (distance plus similarity_weight_m × eq. 6).
+  double prior_gate_m = 0.015;
   double similarity_weight_m = 0.01;   // kOurs: metres of residual worth one radian of eq. 6
   int min_matches = 3;              // fewer final matches lose lock
   // kOurs: candidates less similar than this are not matches (eq. 6, rad),
@@ -102,6 +107,8 @@ struct FrameMotion {
   VehiclePose2 pose;    // R_k, T_k in the first frame's vehicle frame
   int candidates = 0;   // two-way matches (step 1)
   int coherent = 0;     // after the Hough selection (step 2)
+  int matched = 0;      // final matches (0 when not locked)
+  double residual_rms_m = 0.0;  // of the final matches against the motion
   std::vector<int64_t> track_of_feature;  // matched track id, or −1 (new track)
   std::vector<int64_t> new_track_of_feature;  // track id each feature now feeds
 };
@@ -112,6 +119,12 @@ class FeatureTracker {
                  double plane_height_m);
 
   const FrameMotion& Update(std::span<const Feature> features);
+  // The motion expected for the next frame from another source (the
+  // wheels, the grid tracker's prediction): for that one Update, the search
+  // regions, the clustering's ψ range, the rotation prior and the coasting
+  // use it instead of the smoothed motion and the rows' heading; its
+  // rotation weighs σ = psi_sd_rad against the fit's. kOurs only.
+  void SetMotionPrior(const PlanarMotion& prior, double psi_sd_rad);
   const std::vector<Track>& tracks() const { return tracks_; }
   const VehiclePose2& pose() const { return result_.pose; }
   // The rows' heading the rotation prior returns to (0 for kPaper or
@@ -132,6 +145,9 @@ class FeatureTracker {
                                     const std::vector<int>& visible, std::vector<Match> matches,
                                     const PlanarMotion& motion) const;
   bool SmoothContinuation(const PlanarMotion& motion) const;
+  // Step 1's dissimilarity with a motion prior: distance from where the
+  // prior puts the track plus the weighted similarity (kNoMatch beyond the gate).
+  double PriorCost(const Feature& f, const Track& t, double similarity) const;
   // The rotation expected before looking at the frame.
   double PriorPsi() const;
   // The motion to coast on when not locked.
@@ -151,6 +167,8 @@ class FeatureTracker {
   std::vector<Track> tracks_;
   std::vector<Eigen::Vector2d> last_positions_;
   PlanarMotion last_motion_;
+  std::optional<PlanarMotion> frame_prior_;  // SetMotionPrior, for one Update
+  double frame_prior_psi_sd_rad_ = 0.0;
   Eigen::Vector2d smoothed_t_m_{0.0, 0.0};
   FrameMotion result_;
   double view_along_m_;           // the image's footprint along y on the feature plane

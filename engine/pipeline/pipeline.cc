@@ -30,6 +30,8 @@ OptionErrors PipelineOptions::Validate() const {
   }
   RequirePositive(e, "max_odometry_age_s", max_odometry_age_s);
   RequireFinite(e, "map_keep_behind_bar_m", map_keep_behind_bar_m);
+  for (OptionError& m : Prefixed("motion", motion.Validate())) e.push_back(std::move(m));
+  if (motion.enabled && !track) e.push_back({"motion.enabled", "needs track on"});
   if (treat && !track) e.push_back({"track", "must be on when treat is (treatment needs the grid)"});
   return e;
 }
@@ -45,6 +47,7 @@ PipelineOptions WithCropMargins(PipelineOptions o) {
     t.uncertainty_margin_across_m = margin.x();
     t.uncertainty_margin_along_m = margin.y();
   }
+  if (o.motion.enabled) o.segmenter.blobs.trace_contours = true;  // the features' contours
   ThrowIfInvalid("pipeline options", o.Validate());
   return o;
 }
@@ -60,6 +63,7 @@ Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& o
   if (options_.treat) {
     system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
   }
+  if (options_.motion.enabled) visual_.emplace(camera, options_.motion.visual);
 }
 
 void Pipeline::set_sink(treatment::NozzleSink sink) {
@@ -91,8 +95,40 @@ void Pipeline::KeepTicks(std::span<const treatment::TickResult> ticks) {
   if (!ticks.empty()) last_tick_ = ticks.back();
 }
 
+OdometrySample Pipeline::Fused(const OdometrySample& o) {
+  const double scale = tracker_.odometry_scale();
+  const double width = options_.tracker.track_width_m;
+  const PlanarSpeed wheels = WheelSpeed(o.left_m_s, o.right_m_s, scale, width, options_.motion);
+  const motion::VisualMotion* v = visual_->last().valid ? &visual_->last() : nullptr;
+  if (v && (o.utime - v->utime) * 1e-6 > options_.motion.max_visual_age_s) v = nullptr;
+  const PlanarSpeed camera = v ? VisualSpeed(*v) : PlanarSpeed{};
+  const bool finite = std::isfinite(o.left_m_s) && std::isfinite(o.right_m_s);
+  const FusedSpeed f = Fuse(wheels, v && finite ? &camera : nullptr, options_.motion.gate_chi2);
+  last_source_ = f.source;
+  if (f.source == FusedSource::kWheels) {
+    driven_ = wheels;
+    return o;
+  }
+  if (f.source == FusedSource::kCamera) ++camera_substitutions_;
+  driven_ = f.speed;
+  OdometrySample out = o;
+  ToWheels(f.speed, scale, width, out.left_m_s, out.right_m_s);
+  return out;
+}
+
 const PoseResult& Pipeline::AddOdometry(const OdometrySample& o) {
-  pose_.input = tracker_.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+  if (o.utime > last_wheel_utime_) last_wheel_utime_ = o.utime;
+  if (!visual_) return DeadReckon(o, options_.tracker.wheel_sd_fraction);
+  const OdometrySample s = Fused(o);
+  // The camera's own σ when it stands in.
+  const double sd = last_source_ == FusedSource::kCamera
+                        ? WheelSdFraction(driven_, options_.tracker.track_width_m)
+                        : options_.tracker.wheel_sd_fraction;
+  return DeadReckon(s, sd);
+}
+
+const PoseResult& Pipeline::DeadReckon(const OdometrySample& o, double sd_fraction) {
+  pose_.input = tracker_.AddOdometry(o.utime, o.left_m_s, o.right_m_s, sd_fraction);
   pose_.ticks = {};
   if (o.utime > last_odometry_utime_) last_odometry_utime_ = o.utime;
   if (!system_) return pose_;
@@ -125,6 +161,8 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   frame_.blob_of_feature = {};
   frame_.treatment = nullptr;
   frame_.ticks = {};
+  frame_.visual = {};
+  frame_.visual_substituted = false;
   frame_ticks_.clear();
   if (image.empty()) {
     Refuse("camera: frame " + std::to_string(frame_index) + " has no image");
@@ -149,6 +187,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
     frame_.mode = tracker_.mode();
     return frame_;
   }
+  if (frame_.accepted) UpdateVisualMotion();
   if (frame_.accepted) {
     tracking::FeaturesFromBlobs(frame_.track_blobs, image.cols, image.rows, track_features_,
                                 tracker_.centroid_heights());
@@ -180,6 +219,42 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   CloseIfOdometryStopped();
   frame_.ticks = frame_ticks_;
   return frame_;
+}
+
+// The camera's motion since the previous frame; fed to the tracker as the
+// odometry of the frame's capture when the wheels have gone silent.
+void Pipeline::UpdateVisualMotion() {
+  if (!visual_) return;
+  frame_.visual = visual_->Update(frame_.utime, frame_.blobs, driven_.speed_m_s,
+                                  driven_.yaw_rate_rad_s);
+  if (!frame_.visual.valid) frame_.faults.push_back("camera motion: " + frame_.visual.reason);
+  const bool silent = last_wheel_utime_ >= 0 &&
+                      (frame_.utime - last_wheel_utime_) * 1e-6 > options_.motion.substitute_after_s;
+  if (!silent || frame_.utime <= tracker_.utime()) return;
+  // The wheels are silent: the camera's motion, or when it gave none the
+  // speeds last driven with (as the tracker would dead-reckon on its own,
+  // without the wide bridge of an odometry gap).
+  double sd = options_.tracker.wheel_sd_fraction;
+  if (frame_.visual.valid) {
+    driven_ = VisualSpeed(frame_.visual);
+    sd = WheelSdFraction(driven_, options_.tracker.track_width_m);
+    last_source_ = FusedSource::kCamera;
+    ++camera_substitutions_;
+    frame_.visual_substituted = true;
+  }
+  OdometrySample s;
+  s.utime = frame_.utime;
+  ToWheels(driven_, tracker_.odometry_scale(), options_.tracker.track_width_m, s.left_m_s,
+           s.right_m_s);
+  if (!frame_.visual.valid) {
+    // Dead reckoning only: no odometry stands behind it, so the bar still
+    // closes on the stopped odometry (CloseIfOdometryStopped).
+    tracker_.AddOdometry(s.utime, s.left_m_s, s.right_m_s, sd);
+    return;
+  }
+  const PoseResult& p = DeadReckon(s, sd);
+  frame_ticks_.insert(frame_ticks_.end(), p.ticks.begin(), p.ticks.end());
+  frame_.faults.push_back("odometry: silent; the camera's motion stands in");
 }
 
 // Classification and mapping with the grid at capture (the tracker holds it

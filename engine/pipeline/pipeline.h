@@ -24,6 +24,8 @@
 
 #include "engine/common/options.h"
 #include "engine/geometry/camera_model.h"
+#include "engine/motion/visual_odometry.h"
+#include "engine/pipeline/motion_fusion.h"
 #include "engine/tracking/grid_tracker.h"
 #include "engine/treatment/treatment_system.h"
 #include "engine/vision/segmenter.h"
@@ -46,6 +48,10 @@ struct PipelineOptions {
   // (rows behind the bar are final: sprayed or not, and published); <= 0
   // keeps the whole run (at most 1.3 km of it, TreatmentMap).
   double map_keep_behind_bar_m = 2.0;
+  // The camera's own motion as a second motion source (motion_fusion.h).
+  // On: the segmenter traces contours, each frame's motion is weighed
+  // against the wheels, and it stands in for odometry that stopped.
+  MotionFusionOptions motion;
 
   OptionErrors Validate() const;
 };
@@ -93,6 +99,12 @@ struct FrameResult {
   // Ticks the frame itself made: the bar commanded closed when the odometry
   // has stopped (no odometry sample would tick otherwise).
   std::span<const treatment::TickResult> ticks;
+  // The camera's motion since the previous frame (valid: false, with the
+  // reason, when it gave none or the source is off).
+  motion::VisualMotion visual;
+  // The camera's motion was fed to the tracker as this frame's odometry
+  // (the wheels had gone silent).
+  bool visual_substituted = false;
 };
 
 class Pipeline {
@@ -129,6 +141,10 @@ class Pipeline {
   // The newest tick (fail-safe state, open mask), when there was one.
   const std::optional<treatment::TickResult>& last_tick() const { return last_tick_; }
   int64_t last_odometry_utime() const { return last_odometry_utime_; }
+  // Which source the last odometry sample was dead-reckoned with, and how
+  // many samples the camera stood in for the wheels (disagreeing or silent).
+  FusedSource last_motion_source() const { return last_source_; }
+  int camera_substitutions() const { return camera_substitutions_; }
 
  private:
   treatment::SafetyInputs Safety(int64_t pose_utime, bool odometry_ok) const;
@@ -136,6 +152,10 @@ class Pipeline {
   void Treat();
   void CloseIfOdometryStopped();
   void KeepTicks(std::span<const treatment::TickResult> ticks);
+  // The speeds the tracker dead-reckons with for a wheel sample.
+  OdometrySample Fused(const OdometrySample& wheels);
+  const PoseResult& DeadReckon(const OdometrySample& s, double sd_fraction);
+  void UpdateVisualMotion();
 
   const geometry::CameraModel& camera_;
   PipelineOptions options_;
@@ -152,6 +172,11 @@ class Pipeline {
   std::vector<tracking::Feature> track_features_, features_;
   std::vector<int> blob_of_feature_;
   std::vector<treatment::TickResult> frame_ticks_;
+  std::optional<motion::VisualOdometry> visual_;
+  PlanarSpeed driven_;  // what the tracker last dead-reckoned with (ground)
+  FusedSource last_source_ = FusedSource::kWheels;
+  int camera_substitutions_ = 0;
+  int64_t last_wheel_utime_ = -1;  // newest sample from the wheels themselves
 };
 
 }  // namespace plantscale::pipeline

@@ -9,10 +9,13 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <limits>
 
 #include "engine/geometry/test_cameras.h"
 #include "engine/sim/simulator.h"
+
+#include <opencv2/imgproc.hpp>
 
 namespace plantscale::pipeline {
 namespace {
@@ -348,6 +351,84 @@ TEST(PipelineOptionsTest, InvalidOptionsNameTheirKey) {
   }
   EXPECT_TRUE(age);
   EXPECT_TRUE(coast);
+}
+
+}  // namespace
+}  // namespace plantscale::pipeline
+
+namespace plantscale::pipeline {
+namespace {
+
+// The camera's motion as the second motion source: each bad frame makes it
+// invalid with its reason, and the wheels carry on alone.
+class PipelineVisualMotion : public ::testing::Test {
+ protected:
+  static PipelineOptions WithMotion() {
+    const sim::SimulatorOptions so = Pass(20.0);
+    PipelineOptions o = OptionsFor(so);
+    o.motion.enabled = true;
+    o.motion.visual = motion::VisualOdometryFor(so.field.crop_radius_m,
+                                                so.field.crop_radius_m * so.field.crop_height_ratio);
+    return o;
+  }
+  PipelineVisualMotion() : simulator_(Pass(20.0)), p_(simulator_.camera(), WithMotion()) {}
+
+  // The next frame (its image changed by `spoil`) between its odometry.
+  const FrameResult& Next(const std::function<void(cv::Mat&)>& spoil = {}) {
+    EXPECT_TRUE(simulator_.Next(frame_));
+    for (const sim::OdometrySample& o : frame_.odometry) {
+      if (o.utime <= frame_.truth.utime) p_.AddOdometry(Sample(o));
+    }
+    if (spoil) spoil(frame_.rendered.image);
+    const FrameResult& r = p_.ProcessFrame(frame_.truth.utime, frame_.truth.index,
+                                           frame_.rendered.image);
+    for (const sim::OdometrySample& o : frame_.odometry) {
+      if (o.utime > frame_.truth.utime) p_.AddOdometry(Sample(o));
+    }
+    return r;
+  }
+  // A bad frame: the camera's motion is invalid, the next wheel samples are
+  // the wheels' alone, and the grid keeps tracking.
+  void ExpectWheelsCarryOn(const std::function<void(cv::Mat&)>& spoil) {
+    for (int i = 0; i < 15; ++i) Next();
+    ASSERT_EQ(p_.tracker().mode(), tracking::TrackerMode::kTracking);
+    const FrameResult& r = Next(spoil);
+    EXPECT_FALSE(r.visual.valid);
+    EXPECT_FALSE(r.visual.reason.empty());
+    EXPECT_EQ(p_.last_motion_source(), FusedSource::kWheels);
+    EXPECT_EQ(p_.tracker().mode(), tracking::TrackerMode::kTracking);
+  }
+
+  sim::Simulator simulator_;
+  Pipeline p_;
+  sim::SimFrame frame_;
+};
+
+TEST_F(PipelineVisualMotion, GoodFramesGiveTheCameraSMotion) {
+  int valid = 0;
+  for (int i = 0; i < 20; ++i) {
+    const FrameResult& r = Next();
+    if (!r.visual.valid) continue;
+    ++valid;
+    EXPECT_NEAR(r.visual.speed_m_s, 0.7, 0.15) << "frame " << i;  // sim speed 0.7 m/s
+  }
+  EXPECT_GE(valid, 10);
+}
+
+TEST_F(PipelineVisualMotion, CoveredCameraIsInvalidAndTheWheelsCarryOn) {
+  ExpectWheelsCarryOn([](cv::Mat& image) { image.setTo(cv::Scalar::all(0)); });
+}
+
+TEST_F(PipelineVisualMotion, BlurredFrameIsInvalidAndTheWheelsCarryOn) {
+  ExpectWheelsCarryOn([](cv::Mat& image) { cv::GaussianBlur(image, image, cv::Size(0, 0), 12.0); });
+}
+
+TEST_F(PipelineVisualMotion, FrameOfAnotherPlaceIsInvalidAndTheWheelsCarryOn) {
+  // All features new: the frame 4 m further on.
+  sim::Simulator ahead(Pass(20.0));
+  sim::SimFrame far;
+  for (int i = 0; i < 75; ++i) ahead.Next(far);
+  ExpectWheelsCarryOn([&](cv::Mat& image) { far.rendered.image.copyTo(image); });
 }
 
 }  // namespace

@@ -215,6 +215,11 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
 }
 
 InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double right_m_s) {
+  return AddOdometry(utime, left_m_s, right_m_s, options_.wheel_sd_fraction);
+}
+
+InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double right_m_s,
+                                     double sd_fraction) {
   CatchUp();
   InputStatus status;
   std::string problem;
@@ -267,8 +272,7 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
   right_m_s_ = w.right_m_s;
   have_speeds_ = true;
   const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
-  Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
-          options_.wheel_sd_fraction * std::abs(u.right_m), dt);
+  Predict(u, sd_fraction * std::abs(u.left_m), sd_fraction * std::abs(u.right_m), dt);
   utime_ = utime;
   return status;
 }

@@ -265,6 +265,10 @@ class GridTracker {
 
   // Dead reckoning: measured wheel speeds over the period ending at utime.
   InputStatus AddOdometry(int64_t utime, double left_m_s, double right_m_s);
+  // The same with each wheel speed's σ as a fraction of it (another
+  // source's, e.g. the camera's motion standing in for the wheels;
+  // AddOdometry uses wheel_sd_fraction).
+  InputStatus AddOdometry(int64_t utime, double left_m_s, double right_m_s, double sd_fraction);
   // Vision: the features of a frame captured at utime with this image size.
   // UpdateAtCapture then CatchUp.
   FrameReport ProcessFrame(int64_t utime, int image_width_px, int image_height_px,
