@@ -665,36 +665,57 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   const GridState s = state();
   const std::vector<geometry::GridPlant> in_view = model_.PlantsInView(s);
   report.predicted = static_cast<int>(in_view.size());
-
-  // Process noise on r̄ and l̄ only when plant lines enter or leave the view.
-  if (!in_view.empty()) {
-    int first = in_view.front().m;
-    int last = in_view.front().m;
-    for (const auto& g : in_view) {
-      first = std::min(first, g.m);
-      last = std::max(last, g.m);
-    }
-    first += lines_passed_;
-    last += lines_passed_;
-    if (lines_in_view_ >= 0) {
-      AddSpacingNoise(std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_));
-    }
-    first_line_in_view_ = first;
-    lines_in_view_ = last;
-  }
+  NoteLinesInView(in_view);
   DropOffsetsOutOfView(in_view);
-
-  ObservationModel h(camera_, options_, centroid_heights());
+  const ObservationModel h(camera_, options_, centroid_heights());
   const Eigen::Vector3d bounce_prior = BouncePrior();
-  struct Candidate {
-    int plant;
-    int feature;
-    double gamma2;
-  };
-  std::vector<Candidate> candidates;
-  // Blobs not taken for a plant's centroid: merged plants and weed-sized
-  // blobs, unless too few others are left (touching plants everywhere, as
-  // on preset A, where the merged blobs are what there is to track).
+  MarkSkippedFeatures(features, in_view);
+  const std::vector<Candidate> matches =
+      Associate(Gate(h, s, features, in_view, bounce_prior), in_view.size(), features.size());
+  report.matched = static_cast<int>(matches.size());
+  for (const Candidate& c : matches) {
+    const auto& g = in_view[static_cast<size_t>(c.plant)];
+    report.associations.push_back({c.feature, g.m, g.n, c.gamma2});
+  }
+  if (!Observable(matches, in_view, report)) return;
+  WhitenedUpdate(h, s, features, in_view, matches, bounce_prior, report);
+  if (options_.HeightFromSize()) {
+    // The matches hold no merged or weed-sized blob (skipped_).
+    std::vector<SizeMatch> sized;
+    for (const Candidate& c : matches) {
+      const auto& g = in_view[static_cast<size_t>(c.plant)];
+      sized.push_back({g.m, g.n, c.feature});
+    }
+    ObserveHeightsFromSize(features, sized);
+  }
+  report.updated = true;
+  last_update_utime_ = utime_;
+}
+
+// Process noise on r̄ and l̄ only when plant lines enter or leave the view.
+void GridTracker::NoteLinesInView(const std::vector<geometry::GridPlant>& in_view) {
+  if (in_view.empty()) return;
+  int first = in_view.front().m;
+  int last = in_view.front().m;
+  for (const auto& g : in_view) {
+    first = std::min(first, g.m);
+    last = std::max(last, g.m);
+  }
+  first += lines_passed_;
+  last += lines_passed_;
+  if (lines_in_view_ >= 0) {
+    AddSpacingNoise(std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_));
+  }
+  first_line_in_view_ = first;
+  lines_in_view_ = last;
+}
+
+// Blobs not taken for a plant's centroid (skipped_): merged plants and
+// weed-sized blobs, unless too few others are left (touching plants
+// everywhere, as on preset A, where the merged blobs are what there is to
+// track).
+void GridTracker::MarkSkippedFeatures(std::span<const Feature> features,
+                                      const std::vector<geometry::GridPlant>& in_view) {
   skipped_.assign(features.size(), false);
   const double min_area_m2 = options_.min_feature_area_fraction * std::numbers::pi *
                              options_.crop_radius_m * options_.crop_radius_m;
@@ -709,28 +730,44 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     usable += !skipped_[j] && !f.clipped;
   }
   if (2 * usable < in_view.size()) skipped_.assign(features.size(), false);
+}
+
+// Covariance of a plant's predicted measurement: the filter's, plus the
+// prior of a new plant's offset and of a bounce that does not persist. H
+// touches only the grid states, the bounce and this plant's own states, so
+// only that block of P is needed.
+Eigen::Matrix2d GridTracker::PredictionCovariance(const Prediction& pred, int offset,
+                                                  const Eigen::Vector3d& bounce_prior) const {
+  std::vector<int> used;
+  for (int i = 0; i < core(); ++i) used.push_back(i);
+  for (int i = BounceIndex(); i < head(); ++i) used.push_back(i);
+  if (offset >= 0) {
+    for (int i = 0; i < PlantStates(); ++i) used.push_back(offset + i);
+  }
+  const Eigen::MatrixXd hs = pred.jacobian(Eigen::all, used);
+  Eigen::Matrix2d hph = hs * p_(used, used) * hs.transpose();
+  if (offset < 0 && options_.plant_offsets) {
+    hph += pred.offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
+           pred.offset_jacobian.transpose();
+  }
+  if (options_.model_bounce && !PersistentBounce()) {
+    hph += pred.bounce_jacobian * bounce_prior.asDiagonal() * pred.bounce_jacobian.transpose();
+  }
+  return hph;
+}
+
+// Parallel validation (§6.2.2): every feature within 0.4 m of a plant's
+// predicted ground position whose innovation γ² passes the gate, each gate
+// from the one prediction.
+std::vector<GridTracker::Candidate> GridTracker::Gate(const ObservationModel& h, const GridState& s,
+                                                      std::span<const Feature> features,
+                                                      const std::vector<geometry::GridPlant>& in_view,
+                                                      const Eigen::Vector3d& bounce_prior) const {
+  std::vector<Candidate> candidates;
   for (int i = 0; i < static_cast<int>(in_view.size()); ++i) {
     const auto& g = in_view[static_cast<size_t>(i)];
-    const int offset = OffsetIndex(g.m, g.n);
     const Prediction pred = PredictPlant(h, s, g.m, g.n);
-    // Covariance of the prediction: the filter's, plus the prior of a new
-    // plant's offset. H touches only the grid states, the bounce and this
-    // plant's own states, so only that block of P is needed.
-    std::vector<int> used;
-    for (int i2 = 0; i2 < core(); ++i2) used.push_back(i2);
-    for (int i2 = BounceIndex(); i2 < head(); ++i2) used.push_back(i2);
-    if (offset >= 0) {
-      for (int i2 = 0; i2 < PlantStates(); ++i2) used.push_back(offset + i2);
-    }
-    const Eigen::MatrixXd hs = pred.jacobian(Eigen::all, used);
-    Eigen::Matrix2d hph = hs * p_(used, used) * hs.transpose();
-    if (offset < 0 && options_.plant_offsets) {
-      hph += pred.offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
-             pred.offset_jacobian.transpose();
-    }
-    if (options_.model_bounce && !PersistentBounce()) {
-      hph += pred.bounce_jacobian * bounce_prior.asDiagonal() * pred.bounce_jacobian.transpose();
-    }
+    const Eigen::Matrix2d hph = PredictionCovariance(pred, OffsetIndex(g.m, g.n), bounce_prior);
     for (int j = 0; j < static_cast<int>(features.size()); ++j) {
       const Feature& f = features[static_cast<size_t>(j)];
       if (f.clipped || skipped_[static_cast<size_t>(j)] ||
@@ -744,12 +781,17 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
       if (gamma2 <= options_.gate_chi2) candidates.push_back({i, j, gamma2});
     }
   }
-  // Parallel validation (§6.2.2): every gate comes from the one prediction;
-  // then nearest neighbours, one feature per plant and one plant per feature.
+  return candidates;
+}
+
+// Nearest neighbours among the gated pairs: one feature per plant and one
+// plant per feature, the smallest γ² first.
+std::vector<GridTracker::Candidate> GridTracker::Associate(std::vector<Candidate> candidates,
+                                                           size_t plants, size_t features) {
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.gamma2 < b.gamma2; });
-  std::vector<bool> plant_taken(in_view.size(), false);
-  std::vector<bool> feature_taken(features.size(), false);
+  std::vector<bool> plant_taken(plants, false);
+  std::vector<bool> feature_taken(features, false);
   std::vector<Candidate> matches;
   for (const Candidate& c : candidates) {
     if (plant_taken[static_cast<size_t>(c.plant)] || feature_taken[static_cast<size_t>(c.feature)]) {
@@ -759,14 +801,14 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     feature_taken[static_cast<size_t>(c.feature)] = true;
     matches.push_back(c);
   }
-  report.matched = static_cast<int>(matches.size());
-  for (const Candidate& c : matches) {
-    const auto& g = in_view[static_cast<size_t>(c.plant)];
-    report.associations.push_back({c.feature, g.m, g.n, c.gamma2});
-  }
+  return matches;
+}
 
-  // Observability (§4.5): two features fix (t_x, Y, Ψ); the spacings need a
-  // third that is not on the same row or the same line as the others.
+// Observability (§4.5): two features fix (t_x, Y, Ψ); the spacings need a
+// third that is not on the same row or the same line as the others. False,
+// with the reason in `report`, when the matches do not suffice.
+bool GridTracker::Observable(const std::vector<Candidate>& matches,
+                             const std::vector<geometry::GridPlant>& in_view, FrameReport& report) const {
   std::vector<int> rows;
   std::vector<int> lines;
   for (const Candidate& c : matches) {
@@ -779,29 +821,36 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   const int distinct_lines =
       static_cast<int>(std::unique(lines.begin(), lines.end()) - lines.begin());
   const int needed = options_.estimate_spacing ? 3 : 2;
-  if (report.matched < needed ||
-      (options_.estimate_spacing && (distinct_rows < 2 || distinct_lines < 2))) {
-    std::ostringstream out;
-    out << "not observable: " << report.matched << " matched feature(s) of "
-        << report.predicted << " predicted plants";
-    if (options_.estimate_spacing && report.matched >= needed) {
-      out << ", all on one " << (distinct_rows < 2 ? "row" : "plant line");
-    } else {
-      out << " (" << needed << " needed)";
-    }
-    report.skipped_reason = out.str();
-    return;
+  if (report.matched >= needed &&
+      !(options_.estimate_spacing && (distinct_rows < 2 || distinct_lines < 2))) {
+    return true;
   }
+  std::ostringstream out;
+  out << "not observable: " << report.matched << " matched feature(s) of " << report.predicted
+      << " predicted plants";
+  if (options_.estimate_spacing && report.matched >= needed) {
+    out << ", all on one " << (distinct_rows < 2 ? "row" : "plant line");
+  } else {
+    out << " (" << needed << " needed)";
+  }
+  report.skipped_reason = out.str();
+  return false;
+}
 
-  // New plants get their offset states before the update.
+// The update on every match at once, whitened (eqs. 4.77–4.78): new plants
+// get their offset states first; a bounce that does not persist is a
+// nuisance state, appended for the update and marginalised after it.
+void GridTracker::WhitenedUpdate(const ObservationModel& h, const GridState& s,
+                                 std::span<const Feature> features,
+                                 const std::vector<geometry::GridPlant>& in_view,
+                                 const std::vector<Candidate>& matches,
+                                 const Eigen::Vector3d& bounce_prior, FrameReport& report) {
   if (options_.plant_offsets) {
     for (const Candidate& c : matches) {
       const auto& g = in_view[static_cast<size_t>(c.plant)];
       if (OffsetIndex(g.m, g.n) < 0) AddOffset(g.m, g.n);
     }
   }
-  // This frame's camera bounce, when it does not persist: a nuisance
-  // state, appended for the update and marginalised after it.
   const int persistent = static_cast<int>(x_.size());
   const bool nuisance = options_.model_bounce && !PersistentBounce();
   if (nuisance) {
@@ -843,17 +892,6 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     x_.conservativeResize(persistent);
     p_.conservativeResize(persistent, persistent);
   }
-  if (options_.HeightFromSize()) {
-    // The matches hold no merged or weed-sized blob (skipped_ above).
-    std::vector<SizeMatch> sized;
-    for (const Candidate& c : matches) {
-      const auto& g = in_view[static_cast<size_t>(c.plant)];
-      sized.push_back({g.m, g.n, c.feature});
-    }
-    ObserveHeightsFromSize(features, sized);
-  }
-  report.updated = true;
-  last_update_utime_ = utime_;
 }
 
 void GridTracker::ObserveHeightsFromSize(std::span<const Feature> features,

@@ -388,6 +388,31 @@ class GridTracker {
   void ShiftReference(FrameReport& report);
   void AddSpacingNoise(int lines_changed);
   void Update(std::span<const Feature> features, FrameReport& report);
+  // Update's steps: a plant of the view (index into it) and a feature
+  // gated together, with the innovation's γ².
+  struct Candidate {
+    int plant;
+    int feature;
+    double gamma2;
+  };
+  void NoteLinesInView(const std::vector<geometry::GridPlant>& in_view);
+  void MarkSkippedFeatures(std::span<const Feature> features,
+                           const std::vector<geometry::GridPlant>& in_view);
+  Eigen::Matrix2d PredictionCovariance(const Prediction& pred, int offset,
+                                       const Eigen::Vector3d& bounce_prior) const;
+  std::vector<Candidate> Gate(const ObservationModel& h, const geometry::GridState& s,
+                              std::span<const Feature> features,
+                              const std::vector<geometry::GridPlant>& in_view,
+                              const Eigen::Vector3d& bounce_prior) const;
+  static std::vector<Candidate> Associate(std::vector<Candidate> candidates, size_t plants,
+                                          size_t features);
+  bool Observable(const std::vector<Candidate>& matches,
+                  const std::vector<geometry::GridPlant>& in_view, FrameReport& report) const;
+  void WhitenedUpdate(const ObservationModel& h, const geometry::GridState& s,
+                      std::span<const Feature> features,
+                      const std::vector<geometry::GridPlant>& in_view,
+                      const std::vector<Candidate>& matches, const Eigen::Vector3d& bounce_prior,
+                      FrameReport& report);
   // Applies z (eqs. 4.73–4.74); returns the normalised innovation squared.
   double Apply(const PseudoObservation& z);
   // TrackerOptions::height_from_size: observes the δh of the plants matched

@@ -281,22 +281,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                                                std::span<const tracking::Feature> features,
                                                std::span<const int> blob_of_feature,
                                                const cv::Mat& mask) {
-  last_frame_utime_ = utime;
-  ++frames_;
-  heights_ = tracker.centroid_heights();
-  frame_.classified = false;
-  frame_.map_reset = false;
-  frame_.decisions.clear();
-  frame_.split.clear();
-  frame_.plant_ids.assign(features.size(), -1);
-  if (report.initialised_now) {
-    // A new bed frame: what was mapped before cannot be placed in it.
-    map_.Clear();
-    registry_.Clear();
-    followed_.clear();
-    frame_.map_reset = true;
-    ++map_resets_;
-  }
+  StartFrame(utime, tracker, report, features.size());
   if (tracker.mode() != tracking::TrackerMode::kTracking) return frame_;
   const geometry::GridState state = tracker.state();
   const std::vector<classify::PredictedCrop> crops =
@@ -312,78 +297,11 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     map_.MarkObserved(bed);
     seen = bed;
   }
-  struct PlantFootprint {
-    int m, n;
-    double area_px;
-    Eigen::Vector2d moment_px;
-    cv::Rect box;
-  };
   std::vector<PlantFootprint> plants;
-  // Pixels of plant (m, n): one footprint per plant and frame.
-  const auto add_to_plant = [&](int m, int n, double area_px, const Eigen::Vector2d& moment_px,
-                                const cv::Rect& box) {
-    auto it = std::find_if(plants.begin(), plants.end(),
-                           [&](const PlantFootprint& p) { return p.m == m && p.n == n; });
-    if (it == plants.end()) {
-      plants.push_back({m, n, 0.0, Eigen::Vector2d::Zero(), box});
-      it = plants.end() - 1;
-    }
-    it->area_px += area_px;
-    it->moment_px += moment_px;
-    it->box |= box;
-  };
   for (size_t i = 0; i < features.size(); ++i) {
     const classify::BlobDecision& d = frame_.decisions[i];
     const vision::Blob& blob = blobs[static_cast<size_t>(blob_of_feature[i])];
-    const bool maybe_merged = !d.crop && !d.associated &&
-                              (d.clipped || d.area_m2 >= d.size_filter_m2);
-    if (d.crop && d.associated && options_.crop_footprint_per_plant) {
-      add_to_plant(d.m, d.n, blob.area_px, blob.area_px * blob.centroid_px, blob.bbox_px);
-    } else if (maybe_merged && options_.split_merged && !mask.empty() &&
-               SplitMergedBlob(static_cast<int>(i), blob, d, crops, tracker.covariance(), mask)) {
-      // Parts: crop ones join their plant's footprint, weed ones vote weed.
-      const SplitBlob& split = frame_.split.back();
-      const std::vector<int>& part = split_part_;
-      std::vector<cv::Rect> box(crops.size() + 1);
-      std::vector<double> area(crops.size() + 1, 0.0);
-      std::vector<Eigen::Vector2d> moment(crops.size() + 1, Eigen::Vector2d::Zero());
-      for (size_t q = 0; q < split.pixels.size(); ++q) {
-        const size_t k = static_cast<size_t>(part[q] + 1);  // 0: beyond every radius
-        const cv::Point& p = split.pixels[q];
-        box[k] |= cv::Rect(p.x, p.y, 1, 1);
-        area[k] += 1.0;
-        moment[k] += Eigen::Vector2d(p.x + 0.5, p.y + 0.5);
-      }
-      for (size_t k = 1; k < box.size(); ++k) {
-        if (!(area[k] > 0.0) || !split_part_crop_[k - 1]) continue;
-        if (options_.crop_footprint_per_plant) {
-          add_to_plant(crops[k - 1].m, crops[k - 1].n, area[k], moment[k], box[k]);
-        } else {
-          AddFootprint(pose, moment[k] / area[k], box[k], true);
-        }
-      }
-      if (VotesWeed(d, blob, crops)) {
-        if (options_.merged_weed_parts_only) {
-          // Only plant matter beyond every predicted crop's split radius:
-          // a part near a prediction that failed its tests is most likely
-          // that crop's leaves cut off-centre, not a weed.
-          beyond_.resize(part.size());
-          for (size_t q = 0; q < part.size(); ++q) beyond_[q] = part[q] < 0 ? 1 : 0;
-          VoteWeedParts(pose, split.pixels, beyond_,
-                        d.area_m2 / static_cast<double>(split.pixels.size()));
-          AddDoubt(pose, blob);
-        } else {
-          AddFootprint(pose, blob, false);
-        }
-      }
-    } else if (options_.abstain_merged && maybe_merged && CoversAPrediction(blob, crops)) {
-      // Possibly merged plants: no votes either way.
-    } else if (!d.crop || d.associated) {
-      // Crop by size alone (merged plants): its centroid is no plant's
-      // centre, so it marks no cells; the plants in it are mapped from other
-      // frames.
-      if (d.crop || VotesWeed(d, blob, crops)) AddFootprint(pose, blob, d.crop);
-    }
+    MapBlob(static_cast<int>(i), blob, d, crops, tracker, mask, pose, plants);
     const std::optional<Eigen::Vector2d> low =
         d.crop ? std::nullopt : camera_.ImageToPlane(blob.centroid_px, options_.weed_height_m);
     frame_.plant_ids[i] = registry_.Observe(
@@ -392,6 +310,112 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                      : std::nullopt);
   }
   if (seen) registry_.CountView(*seen);
+  PlacePlantFootprints(plants, tracker, pose);
+  // Plants long out of view stay where they were last placed.
+  std::erase_if(followed_,
+                [&](const auto& f) { return frames_ - f.second.last_frame > kFollowFrames; });
+  return frame_;
+}
+
+void TreatmentSystem::StartFrame(int64_t utime, const tracking::GridTracker& tracker,
+                                 const tracking::FrameReport& report, size_t features) {
+  last_frame_utime_ = utime;
+  ++frames_;
+  heights_ = tracker.centroid_heights();
+  frame_.classified = false;
+  frame_.map_reset = false;
+  frame_.decisions.clear();
+  frame_.split.clear();
+  frame_.plant_ids.assign(features, -1);
+  if (report.initialised_now) {
+    // A new bed frame: what was mapped before cannot be placed in it.
+    map_.Clear();
+    registry_.Clear();
+    followed_.clear();
+    frame_.map_reset = true;
+    ++map_resets_;
+  }
+}
+
+// Pixels of plant (m, n): one footprint per plant and frame.
+void TreatmentSystem::AddToPlant(std::vector<PlantFootprint>& plants, int m, int n, double area_px,
+                                 const Eigen::Vector2d& moment_px, const cv::Rect& box) {
+  auto it = std::find_if(plants.begin(), plants.end(),
+                         [&](const PlantFootprint& p) { return p.m == m && p.n == n; });
+  if (it == plants.end()) {
+    plants.push_back({m, n, 0.0, Eigen::Vector2d::Zero(), box});
+    it = plants.end() - 1;
+  }
+  it->area_px += area_px;
+  it->moment_px += moment_px;
+  it->box |= box;
+}
+
+// One blob's votes on the map: a crop joins its plant's footprint (or marks
+// its own), a merged blob is split among the predicted crops, a weed votes.
+void TreatmentSystem::MapBlob(int feature, const vision::Blob& blob, const classify::BlobDecision& d,
+                              const std::vector<classify::PredictedCrop>& crops,
+                              const tracking::GridTracker& tracker, const cv::Mat& mask,
+                              const BedPose& pose, std::vector<PlantFootprint>& plants) {
+  const bool maybe_merged = !d.crop && !d.associated && (d.clipped || d.area_m2 >= d.size_filter_m2);
+  if (d.crop && d.associated && options_.crop_footprint_per_plant) {
+    AddToPlant(plants, d.m, d.n, blob.area_px, blob.area_px * blob.centroid_px, blob.bbox_px);
+  } else if (maybe_merged && options_.split_merged && !mask.empty() &&
+             SplitMergedBlob(feature, blob, d, crops, tracker.covariance(), mask)) {
+    MapSplitParts(blob, d, crops, pose, plants);
+  } else if (options_.abstain_merged && maybe_merged && CoversAPrediction(blob, crops)) {
+    // Possibly merged plants: no votes either way.
+  } else if (!d.crop || d.associated) {
+    // Crop by size alone (merged plants): its centroid is no plant's
+    // centre, so it marks no cells; the plants in it are mapped from other
+    // frames.
+    if (d.crop || VotesWeed(d, blob, crops)) AddFootprint(pose, blob, d.crop);
+  }
+}
+
+// The parts of a split blob (frame_.split.back(), split_part_): crop ones
+// join their plant's footprint, weed ones vote weed.
+void TreatmentSystem::MapSplitParts(const vision::Blob& blob, const classify::BlobDecision& d,
+                                    const std::vector<classify::PredictedCrop>& crops,
+                                    const BedPose& pose, std::vector<PlantFootprint>& plants) {
+  const SplitBlob& split = frame_.split.back();
+  const std::vector<int>& part = split_part_;
+  std::vector<cv::Rect> box(crops.size() + 1);
+  std::vector<double> area(crops.size() + 1, 0.0);
+  std::vector<Eigen::Vector2d> moment(crops.size() + 1, Eigen::Vector2d::Zero());
+  for (size_t q = 0; q < split.pixels.size(); ++q) {
+    const size_t k = static_cast<size_t>(part[q] + 1);  // 0: beyond every radius
+    const cv::Point& p = split.pixels[q];
+    box[k] |= cv::Rect(p.x, p.y, 1, 1);
+    area[k] += 1.0;
+    moment[k] += Eigen::Vector2d(p.x + 0.5, p.y + 0.5);
+  }
+  for (size_t k = 1; k < box.size(); ++k) {
+    if (!(area[k] > 0.0) || !split_part_crop_[k - 1]) continue;
+    if (options_.crop_footprint_per_plant) {
+      AddToPlant(plants, crops[k - 1].m, crops[k - 1].n, area[k], moment[k], box[k]);
+    } else {
+      AddFootprint(pose, moment[k] / area[k], box[k], true);
+    }
+  }
+  if (!VotesWeed(d, blob, crops)) return;
+  if (!options_.merged_weed_parts_only) {
+    AddFootprint(pose, blob, false);
+    return;
+  }
+  // Only plant matter beyond every predicted crop's split radius: a part
+  // near a prediction that failed its tests is most likely that crop's
+  // leaves cut off-centre, not a weed.
+  beyond_.resize(part.size());
+  for (size_t q = 0; q < part.size(); ++q) beyond_[q] = part[q] < 0 ? 1 : 0;
+  VoteWeedParts(pose, split.pixels, beyond_, d.area_m2 / static_cast<double>(split.pixels.size()));
+  AddDoubt(pose, blob);
+}
+
+// Each crop plant's footprint of this frame, at its tracked position (or
+// where its pixels are), following the plant when so configured.
+void TreatmentSystem::PlacePlantFootprints(const std::vector<PlantFootprint>& plants,
+                                           const tracking::GridTracker& tracker, const BedPose& pose) {
   const bool follow =
       options_.crop_footprint_at_tracked_plant && options_.crop_footprint_follows_plant;
   const Eigen::Vector2d own_offset_weight(options_.own_offset_fraction_across,
@@ -411,10 +435,6 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
                      tracker.PlantOffsetCovariance(p.m, p.n).has_value());
     }
   }
-  // Plants long out of view stay where they were last placed.
-  std::erase_if(followed_,
-                [&](const auto& f) { return frames_ - f.second.last_frame > kFollowFrames; });
-  return frame_;
 }
 
 void TreatmentSystem::ForgetBehind(double bed_y_m) {

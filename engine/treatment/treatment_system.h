@@ -258,6 +258,27 @@ class TreatmentSystem {
   int map_resets() const { return map_resets_; }
 
  private:
+  // OnFrame's steps. A crop plant's pixels of this frame (image), gathered
+  // from its blobs and split parts.
+  struct PlantFootprint {
+    int m, n;
+    double area_px;
+    Eigen::Vector2d moment_px;
+    cv::Rect box;
+  };
+  void StartFrame(int64_t utime, const tracking::GridTracker& tracker,
+                  const tracking::FrameReport& report, size_t features);
+  static void AddToPlant(std::vector<PlantFootprint>& plants, int m, int n, double area_px,
+                         const Eigen::Vector2d& moment_px, const cv::Rect& box);
+  void MapBlob(int feature, const vision::Blob& blob, const classify::BlobDecision& d,
+               const std::vector<classify::PredictedCrop>& crops,
+               const tracking::GridTracker& tracker, const cv::Mat& mask, const BedPose& pose,
+               std::vector<PlantFootprint>& plants);
+  void MapSplitParts(const vision::Blob& blob, const classify::BlobDecision& d,
+                     const std::vector<classify::PredictedCrop>& crops, const BedPose& pose,
+                     std::vector<PlantFootprint>& plants);
+  void PlacePlantFootprints(const std::vector<PlantFootprint>& plants,
+                            const tracking::GridTracker& tracker, const BedPose& pose);
   void AddFootprint(const BedPose& pose, const vision::Blob& blob, bool crop);
   // False for a clipped blob covering a predicted crop (clipped_on_crop_votes_weed).
   bool VotesWeed(const classify::BlobDecision& d, const vision::Blob& b,
