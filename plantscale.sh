@@ -6,6 +6,8 @@
 #   ./plantscale.sh soak                             build, then the 5 km soak run (bounded memory, the last 100 m sprayed)
 #   ./plantscale.sh fuzz [SECONDS]                   build the fuzz targets (clang), run each SECONDS
 #   ./plantscale.sh sanitize                         the unit tests under ASan + UBSan only
+#   ./plantscale.sh complexity [FILE...]             clang-tidy's function size and cognitive complexity
+#                                                    checks (thresholds in .clang-tidy) on the product's sources
 # With PLANTSCALE_SANITIZED=1, `test` also runs the unit tests under ASan +
 # UBSan (build-asan/) and each fuzz target for 10 s (build-fuzz/).
 # Each installs the Debian packages it needs when they are missing (apt is
@@ -116,8 +118,21 @@ run_fuzzers() {
   return "$failed"
 }
 
+# The two checks that keep functions readable as their steps, as errors, on
+# the given files or every product source (not tests, benchmarks or fuzz
+# targets); the thresholds are in .clang-tidy.
+run_complexity() {
+  local files=("$@")
+  if ((${#files[@]} == 0)); then
+    mapfile -t files < <(find engine app maps telemetry ui tools -name '*.cc' ! -name '*_test.cc' | sort)
+  fi
+  local checks='-*,readability-function-cognitive-complexity,readability-function-size'
+  printf '%s\n' "${files[@]}" | xargs -P "$(nproc)" -n 8 clang-tidy -p build --quiet \
+    --checks="$checks" --warnings-as-errors="$checks"
+}
+
 usage() {
-  echo "usage: $0 demo [options for 'plantscale demo'] | test [--fast] | soak | fuzz [SECONDS] | sanitize" >&2
+  echo "usage: $0 demo [options for 'plantscale demo'] | test [--fast] | soak | fuzz [SECONDS] | sanitize | complexity [FILE...]" >&2
   exit 2
 }
 
@@ -158,6 +173,11 @@ case "$command" in
   sanitize)
     ensure_packages
     run_sanitized_tests
+    ;;
+  complexity)
+    ensure_packages clang-tidy
+    build
+    run_complexity "$@"
     ;;
   fuzz)
     seconds="${1:-60}"

@@ -1,6 +1,8 @@
 #include "app/treatment_commands.h"
 
+#include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -170,7 +172,72 @@ void PrintTable(const TreatmentEvaluation& e, std::ostream& out) {
   for (const std::string& why : e.example_why) out << "  plant: " << why << '\n';
 }
 
-int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global) {
+// The treatment options the command line changes (each flag only when given).
+void ApplyTreatmentArgs(const TreatmentArgs& a, treatment::TreatmentOptions& t) {
+  treatment::ParseSprayMode(a.mode, t.scheduler.mode);
+  if (a.latency_ms) t.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
+  if (a.tick_ms) t.scheduler.tick_s = *a.tick_ms / 1000.0;
+  if (a.footprint_scale) t.crop_footprint_scale = *a.footprint_scale;
+  if (a.weed_footprint_scale) t.weed_footprint_scale = *a.weed_footprint_scale;
+  if (a.footprint_min_half_mm) t.crop_footprint_min_half_m = 1e-3 * *a.footprint_min_half_mm;
+  if (a.weed_height_mm) t.weed_height_m = 1e-3 * *a.weed_height_mm;
+  if (a.cell_mm) t.map.cell_m = *a.cell_mm / 1000.0;
+  if (a.majority) t.map.majority_threshold = *a.majority;
+  if (a.weed_majority) t.map.weed_majority_threshold = *a.weed_majority;
+  if (a.no_split_merged) t.split_merged = false;
+  if (a.footprint_per_blob) t.crop_footprint_per_plant = false;
+  if (a.footprint_at_centroid) t.crop_footprint_at_tracked_plant = false;
+  if (a.footprints_stay) t.crop_footprint_follows_plant = false;
+  if (a.abstain_merged) t.abstain_merged = true;
+  if (a.weed_whole_box) t.merged_weed_parts_only = false;
+  if (a.own_offset_along) t.own_offset_fraction_along = *a.own_offset_along;
+  if (a.own_offset_across) t.own_offset_fraction_across = *a.own_offset_across;
+  if (a.min_weed_part_mm2) t.min_weed_part_m2 = *a.min_weed_part_mm2 * 1e-6;
+  if (a.clipped_on_crop_votes_weed) t.clipped_on_crop_votes_weed = true;
+  t.close_on_uncertainty = a.uncertainty_fail_safe;
+  if (a.uncertainty_margin_mm) {
+    t.uncertainty_margin_across_m = *a.uncertainty_margin_mm * 1e-3;
+    t.uncertainty_margin_along_m = *a.uncertainty_margin_mm * 1e-3;
+  }
+}
+
+void ApplyClassifierArgs(const TreatmentArgs& a, classify::ClassifierOptions& c) {
+  if (a.min_crop_area_m2) c.min_crop_area_m2 = *a.min_crop_area_m2;
+  if (a.crop_size_fraction) c.crop_size_fraction = *a.crop_size_fraction;
+  if (a.assoc_chi2) c.assoc_chi2 = *a.assoc_chi2;
+  if (a.sure_crop_area_m2) c.sure_crop_area_m2 = *a.sure_crop_area_m2;
+  if (a.split_radius_m) c.split_radius_m = *a.split_radius_m;
+  if (a.split_chi2) c.split_assoc_chi2 = *a.split_chi2;
+  if (a.split_cover_m) c.split_cover_m = *a.split_cover_m;
+  if (a.split_clipped_reach) c.split_clipped_reach = *a.split_clipped_reach;
+  if (a.fragment_reach) c.fragment_reach = *a.fragment_reach;
+  if (a.lone_crop_fraction) c.lone_crop_fraction = *a.lone_crop_fraction;
+}
+
+void ApplySegmenterArgs(const TreatmentArgs& a, vision::SegmenterOptions& s) {
+  if (a.fill_holes_max_fraction) s.fill_holes_max_fraction = *a.fill_holes_max_fraction;
+  if (a.close_notches_px) s.close_notches_px = *a.close_notches_px;
+  if (a.hull_gain) s.hull_gain = *a.hull_gain;
+  if (a.soil_growth_z) s.soil_growth.z = *a.soil_growth_z;
+  if (a.soil_growth_join_min_area_px) s.soil_growth.join_min_area_px = *a.soil_growth_join_min_area_px;
+  if (a.soil_growth_trim_z) s.soil_growth.trim_z = *a.soil_growth_trim_z;
+}
+
+// The tracker options the command line changes; empty when it changes none.
+std::function<void(tracking::TrackerOptions&)> TrackerAdjustment(const TreatmentArgs& a) {
+  if (!(a.size_height_sd_mm || a.size_edge_loss_mm || a.forward_sd_mm || a.no_slip_guard)) return {};
+  return [a](tracking::TrackerOptions& t) {
+    if (const auto& sd = a.size_height_sd_mm) {
+      t.height_from_size = *sd > 0.0;
+      if (*sd > 0.0) t.size_height_sd_m = *sd * 1e-3;
+    }
+    if (a.size_edge_loss_mm) t.size_edge_loss_m = *a.size_edge_loss_mm * 1e-3;
+    if (a.no_slip_guard) t.slip_guard.enabled = false;
+    if (a.forward_sd_mm) t.forward_sd_per_sqrt_m = *a.forward_sd_mm * 1e-3;
+  };
+}
+
+TreatmentEvalOptions TreatmentEvalOptionsFrom(const TreatmentArgs& a, const GlobalOptions& global) {
   TreatmentEvalOptions o;
   o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
   if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
@@ -179,86 +246,40 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
   o.profiles = LoadProfiles(a.profiles.crop, a.profiles.vehicle, o.sim.preset, global.ConfigDir());
   o.calibration_error = ParseCalibrationError(a.profiles.calibration_error, "--calibration-error");
   o.treatment = ProductTreatmentOptions(*o.profiles);
-  treatment::ParseSprayMode(a.mode, o.treatment.scheduler.mode);
-  if (a.latency_ms) o.treatment.scheduler.bar.valve_latency_s = *a.latency_ms / 1000.0;
+  ApplyTreatmentArgs(a, o.treatment);
+  ApplyClassifierArgs(a, o.treatment.classifier);
+  ApplySegmenterArgs(a, o.segmenter);
   if (a.true_latency_ms) o.true_valve_latency_s = *a.true_latency_ms / 1000.0;
   o.frame_lag_s = a.frame_lag_ms / 1000.0;
-  if (a.tick_ms) o.treatment.scheduler.tick_s = *a.tick_ms / 1000.0;
-  if (a.footprint_scale) o.treatment.crop_footprint_scale = *a.footprint_scale;
-  if (a.weed_footprint_scale) o.treatment.weed_footprint_scale = *a.weed_footprint_scale;
-  if (a.footprint_min_half_mm) o.treatment.crop_footprint_min_half_m = 1e-3 * *a.footprint_min_half_mm;
-  if (a.weed_height_mm) o.treatment.weed_height_m = 1e-3 * *a.weed_height_mm;
-  if (a.cell_mm) o.treatment.map.cell_m = *a.cell_mm / 1000.0;
-  if (a.min_crop_area_m2) o.treatment.classifier.min_crop_area_m2 = *a.min_crop_area_m2;
-  if (a.crop_size_fraction) o.treatment.classifier.crop_size_fraction = *a.crop_size_fraction;
-  if (a.assoc_chi2) o.treatment.classifier.assoc_chi2 = *a.assoc_chi2;
-  if (a.sure_crop_area_m2) o.treatment.classifier.sure_crop_area_m2 = *a.sure_crop_area_m2;
-  if (a.majority) o.treatment.map.majority_threshold = *a.majority;
-  if (a.weed_majority) o.treatment.map.weed_majority_threshold = *a.weed_majority;
-  if (a.split_radius_m) o.treatment.classifier.split_radius_m = *a.split_radius_m;
-  if (a.split_chi2) o.treatment.classifier.split_assoc_chi2 = *a.split_chi2;
-  if (a.split_cover_m) o.treatment.classifier.split_cover_m = *a.split_cover_m;
-  if (a.split_clipped_reach) o.treatment.classifier.split_clipped_reach = *a.split_clipped_reach;
-  if (a.fragment_reach) o.treatment.classifier.fragment_reach = *a.fragment_reach;
-  if (a.fill_holes_max_fraction) o.segmenter.fill_holes_max_fraction = *a.fill_holes_max_fraction;
-  if (a.close_notches_px) o.segmenter.close_notches_px = *a.close_notches_px;
-  if (a.hull_gain) o.segmenter.hull_gain = *a.hull_gain;
-  if (a.soil_growth_z) o.segmenter.soil_growth.z = *a.soil_growth_z;
-  if (a.soil_growth_join_min_area_px) {
-    o.segmenter.soil_growth.join_min_area_px = *a.soil_growth_join_min_area_px;
-  }
-  if (a.soil_growth_trim_z) o.segmenter.soil_growth.trim_z = *a.soil_growth_trim_z;
   o.baseline_thesis = a.baseline == "thesis";
   o.mrroc = a.mrroc;
-  if (a.no_split_merged) o.treatment.split_merged = false;
-  if (a.size_height_sd_mm || a.size_edge_loss_mm || a.forward_sd_mm || a.no_slip_guard) {
-    o.adjust_tracker = [a](tracking::TrackerOptions& t) {
-      if (const auto& sd = a.size_height_sd_mm) {
-        t.height_from_size = *sd > 0.0;
-        if (*sd > 0.0) t.size_height_sd_m = *sd * 1e-3;
-      }
-      if (a.size_edge_loss_mm) t.size_edge_loss_m = *a.size_edge_loss_mm * 1e-3;
-      if (a.no_slip_guard) t.slip_guard.enabled = false;
-      if (a.forward_sd_mm) t.forward_sd_per_sqrt_m = *a.forward_sd_mm * 1e-3;
-    };
-  }
-  if (a.footprint_per_blob) o.treatment.crop_footprint_per_plant = false;
-  if (a.footprint_at_centroid) o.treatment.crop_footprint_at_tracked_plant = false;
-  if (a.footprints_stay) o.treatment.crop_footprint_follows_plant = false;
-  if (a.abstain_merged) o.treatment.abstain_merged = true;
-  if (a.weed_whole_box) o.treatment.merged_weed_parts_only = false;
-  if (a.lone_crop_fraction) o.treatment.classifier.lone_crop_fraction = *a.lone_crop_fraction;
-  if (a.own_offset_along) o.treatment.own_offset_fraction_along = *a.own_offset_along;
-  if (a.own_offset_across) o.treatment.own_offset_fraction_across = *a.own_offset_across;
-  if (a.min_weed_part_mm2) o.treatment.min_weed_part_m2 = *a.min_weed_part_mm2 * 1e-6;
-  if (a.clipped_on_crop_votes_weed) o.treatment.clipped_on_crop_votes_weed = true;
-  o.treatment.close_on_uncertainty = a.uncertainty_fail_safe;
-  if (a.uncertainty_margin_mm) {
-    o.treatment.uncertainty_margin_across_m = *a.uncertainty_margin_mm * 1e-3;
-    o.treatment.uncertainty_margin_along_m = *a.uncertainty_margin_mm * 1e-3;
-  }
+  o.adjust_tracker = TrackerAdjustment(a);
   o.costs_ratio = a.costs_ratio;
   o.odometry_fault = ToOdometryFault(a.fault);
   o.visual_motion = a.fault.visual_motion;
-  const TreatmentEvaluation e = EvaluateTreatment(o);
-  if (!a.json) {
-    PrintTable(e, std::cout);
-    if (e.fault_stretch) {
-      const TreatmentMetrics& f = *e.fault_stretch;
-      std::cout << "  odometry fault " << Name(o.odometry_fault.kind) << " from "
-                << o.odometry_fault.start_m << " m for " << o.odometry_fault.length_m
-                << " m: " << f.crop_hits << " of " << f.crop_plants
-                << " crops hit, placement RMS " << 1000.0 * f.placement_rms_m << " mm (along "
-                << 1000.0 * f.placement_rms_along_m << ", across "
-                << 1000.0 * f.placement_rms_across_m << ")"
-                << (o.visual_motion ? " (visual motion on)" : " (wheels only)") << '\n';
-    }
-    std::cout << "  engine: crop " << o.profiles->crop.name << ", vehicle "
-              << o.profiles->vehicle.name << ", calibration error "
-              << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error)
-              << '\n';
-    return 0;
+  return o;
+}
+
+void PrintTreatmentText(const TreatmentEvaluation& e, const TreatmentEvalOptions& o,
+                        const TreatmentArgs& a) {
+  PrintTable(e, std::cout);
+  if (e.fault_stretch) {
+    const TreatmentMetrics& f = *e.fault_stretch;
+    std::cout << "  odometry fault " << Name(o.odometry_fault.kind) << " from "
+              << o.odometry_fault.start_m << " m for " << o.odometry_fault.length_m
+              << " m: " << f.crop_hits << " of " << f.crop_plants
+              << " crops hit, placement RMS " << 1000.0 * f.placement_rms_m << " mm (along "
+              << 1000.0 * f.placement_rms_along_m << ", across "
+              << 1000.0 * f.placement_rms_across_m << ")"
+              << (o.visual_motion ? " (visual motion on)" : " (wheels only)") << '\n';
   }
+  std::cout << "  engine: crop " << o.profiles->crop.name << ", vehicle "
+            << o.profiles->vehicle.name << ", calibration error "
+            << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error)
+            << '\n';
+}
+
+nlohmann::json TreatmentJson(const TreatmentEvaluation& e, const TreatmentEvalOptions& o) {
   nlohmann::json j = MetricsJson(e.ours);
   j["preset"] = e.preset;
   j["crop"] = o.profiles->crop.name;
@@ -295,7 +316,17 @@ int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global
                   {"nearest_corner", PointJson(e.nearest_corner)},
                   {"hull", hull}};
   }
-  std::cout << j.dump(2) << '\n';
+  return j;
+}
+
+int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global) {
+  const TreatmentEvalOptions o = TreatmentEvalOptionsFrom(a, global);
+  const TreatmentEvaluation e = EvaluateTreatment(o);
+  if (a.json) {
+    std::cout << TreatmentJson(e, o).dump(2) << '\n';
+  } else {
+    PrintTreatmentText(e, o, a);
+  }
   return 0;
 }
 
