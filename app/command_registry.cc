@@ -1,5 +1,7 @@
 #include "app/command_registry.h"
 
+#include <cstdio>
+
 #include "app/config_loader.h"
 
 namespace plantscale::app {
@@ -53,6 +55,12 @@ void AddProfileOptions(CLI::App* cmd, ProfileArgs& a, bool calibration_error) {
                     "sign drawn per seed: height_m=H,tilt_deg=T,roll_deg=R,focal=F (focal: a "
                     "fraction); e.g. height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01");
   }
+}
+
+std::string HelpNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
 }
 
 }  // namespace plantscale::app

@@ -71,4 +71,7 @@ struct ProfileArgs {
 };
 void AddProfileOptions(CLI::App* cmd, ProfileArgs& args, bool calibration_error);
 
+// A default for a --help text, printed from the code's own value ("%g").
+std::string HelpNumber(double value);
+
 }  // namespace plantscale::app

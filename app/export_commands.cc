@@ -66,7 +66,7 @@ std::optional<maps::GeoAnchorOptions> StoredAnchor(const maps::CropMap& map) {
   maps::GeoAnchorOptions a;
   a.latitude_deg = std::stod(m.at("origin_lat_deg"));
   a.longitude_deg = std::stod(m.at("origin_lon_deg"));
-  a.heading_deg = m.count("heading_deg") ? std::stod(m.at("heading_deg")) : 0.0;
+  if (m.count("heading_deg")) a.heading_deg = std::stod(m.at("heading_deg"));
   return a;
 }
 
@@ -219,7 +219,7 @@ void AddExportCommands(CommandRegistry& registry) {
   cmd->add_option("--origin", args.origin, "WGS84 LAT,LON of the field-frame origin (degrees)");
   cmd->add_option("--heading", args.heading_deg,
                   "direction of the field +y axis (along the rows), degrees clockwise from "
-                  "true north (default 0)");
+                  "true north (default " + HelpNumber(maps::GeoAnchorOptions{}.heading_deg) + ")");
   cmd->add_option("--epsg", args.epsg, "projected CRS of the exports (default: UTM zone)");
   cmd->add_option("--resolution-m", args.resolution_m, "map cell size for simulator input")
       ->check(CLI::PositiveNumber)

@@ -345,12 +345,10 @@ tracking::TrackerOptions ProductTrackerOptions(const Profiles& p) {
   o.camera_bounce_correlation_s = v.bounce_correlation_s;
   // And how well its camera's roll was calibrated: a calibration state,
   // estimated. Tilt, height and focal are not carried: estimated, they cost
-  // placement along the rows (field, tuning seeds 1–2 with the issue's
-  // calibration error: 41 mm with bias +38 mm, crops hit 94.6 %; roll
-  // only: 18.9 mm, −6.6 mm, 100 %); as consider states
-  // (TrackerOptions::calibration_scale_consider) they make the field's
-  // NEES honest (0.95 against 0.65) but lost the grid's lateral on two of
-  // five lettuce-fast runs (23 and 30 mm; docs/results/2026-11-27-calibration.md).
+  // placement along the rows; as consider states
+  // (TrackerOptions::calibration_scale_consider) they make the NEES honest
+  // but lost the grid's lateral on some lettuce-fast runs
+  // (docs/results/2026-11-27-calibration.md).
   o.calibration_roll_sd_rad = v.calibration_roll_sd_rad;
   return o;
 }

@@ -140,7 +140,7 @@ void PrintTable(const TrackingEvaluation& e, std::ostream& out) {
       << ", mean matched " << e.ours.mean_matched << " per frame\n";
 }
 
-int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) {
+TrackingEvalOptions TrackingOptionsOf(const TrackingArgs& a, const GlobalOptions& global) {
   TrackingEvalOptions o;
   o.sim = LoadSimulatorPreset(a.preset, global.ConfigDir());
   if (a.seed) o.sim.seed = static_cast<uint64_t>(*a.seed);
@@ -153,6 +153,77 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
   o.centroids_on_virtual_plane = a.virtual_plane;
   o.odometry_fault = ToOdometryFault(a.fault);
   o.visual_motion = a.fault.visual_motion;
+  return o;
+}
+
+// The lateral RMSE against the planted grid, kept before AtReference
+// rescores it against the chosen reference.
+struct GridLateral {
+  double ours = 0.0, thesis = 0.0;
+};
+
+void AddReference(nlohmann::json& j, const std::string& reference, const TrackingMetrics& m,
+                  double grid) {
+  j["reference"] = reference;
+  j["grid_lateral_rmse_m"] = grid;
+  j["plant_line_lateral_rmse_m"] = m.plant_line_lateral_rmse_m;
+  j["plant_lines_scored"] = m.plant_lines_scored;
+}
+
+nlohmann::json TrackingJson(const TrackingArgs& a, const TrackingEvalOptions& o,
+                            const TrackingEvaluation& e, const GridLateral& grid) {
+  nlohmann::json j = MetricsJson(e.ours);
+  AddReference(j, a.reference, e.ours, grid.ours);
+  j["preset"] = e.preset;
+  j["seeds"] = e.seeds;
+  j["distance_m"] = e.distance_m;
+  j["spacing_offset_m"] = o.spacing_offset_m;
+  j["crop"] = o.profiles->crop.name;
+  j["vehicle"] = o.profiles->vehicle.name;
+  j["calibration_error"] = CalibrationErrorJson(o.calibration_error);
+  j["visual_motion"] = o.visual_motion;
+  j["camera_substitutions"] = e.ours.camera_substitutions;
+  if (o.odometry_fault.kind != OdometryFaultKind::kNone) {
+    nlohmann::json f = OdometryFaultJson(o.odometry_fault);
+    f["frames"] = e.ours.fault_frames;
+    f["frames_tracking"] = e.ours.fault_frames_tracking;
+    f["losses"] = e.ours.fault_losses;
+    f["lateral_rmse_m"] = e.ours.fault_lateral_rmse_m;
+    f["forward_rmse_m"] = e.ours.fault_forward_rmse_m;
+    j["odometry_fault"] = f;
+  }
+  if (e.thesis) {
+    j["baseline_thesis"] = MetricsJson(*e.thesis);
+    AddReference(j["baseline_thesis"], a.reference, *e.thesis, grid.thesis);
+  }
+  return j;
+}
+
+void PrintTrackingText(const TrackingArgs& a, const TrackingEvalOptions& o,
+                       const TrackingEvaluation& e, std::ostream& out) {
+  PrintTable(e, out);
+  out << "  reference " << a.reference
+      << (a.reference == "plant-lines"
+              ? " (lateral scored at each line of plants against its mean root "
+                "position, thesis §8.1; " + std::to_string(e.ours.plant_lines_scored) + " lines)"
+              : " (the planted grid, every frame)")
+      << '\n';
+  if (o.odometry_fault.kind != OdometryFaultKind::kNone) {
+    out << "  odometry fault " << Name(o.odometry_fault.kind) << " from "
+        << o.odometry_fault.start_m << " m for " << o.odometry_fault.length_m
+        << " m: " << e.ours.fault_frames_tracking << " of " << e.ours.fault_frames
+        << " frames tracking, " << e.ours.fault_losses << " losses, lateral RMSE "
+        << 1000.0 * e.ours.fault_lateral_rmse_m << " mm, forward RMSE "
+        << 1000.0 * e.ours.fault_forward_rmse_m << " mm"
+        << (o.visual_motion ? " (visual motion on)" : " (wheels only)") << '\n';
+  }
+  out << "  engine: crop " << o.profiles->crop.name << ", vehicle " << o.profiles->vehicle.name
+      << ", calibration error "
+      << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error) << '\n';
+}
+
+int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) {
+  TrackingEvalOptions o = TrackingOptionsOf(a, global);
   std::ofstream trace;
   if (!a.trace_csv.empty()) {
     trace.open(a.trace_csv);
@@ -163,63 +234,13 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
     o.trace = &trace;
   }
   TrackingEvaluation e = EvaluateTracking(o);
-  const double grid_ours = e.ours.lateral_rmse_m;
-  const double grid_thesis = e.thesis ? e.thesis->lateral_rmse_m : 0.0;
+  const GridLateral grid{e.ours.lateral_rmse_m, e.thesis ? e.thesis->lateral_rmse_m : 0.0};
   e.ours = AtReference(e.ours, a.reference);
   if (e.thesis) e.thesis = AtReference(*e.thesis, a.reference);
-  const auto add_reference = [&](nlohmann::json& j, const TrackingMetrics& m, double grid) {
-    j["reference"] = a.reference;
-    j["grid_lateral_rmse_m"] = grid;
-    j["plant_line_lateral_rmse_m"] = m.plant_line_lateral_rmse_m;
-    j["plant_lines_scored"] = m.plant_lines_scored;
-  };
   if (a.json) {
-    nlohmann::json j = MetricsJson(e.ours);
-    add_reference(j, e.ours, grid_ours);
-    j["preset"] = e.preset;
-    j["seeds"] = e.seeds;
-    j["distance_m"] = e.distance_m;
-    j["spacing_offset_m"] = o.spacing_offset_m;
-    j["crop"] = o.profiles->crop.name;
-    j["vehicle"] = o.profiles->vehicle.name;
-    j["calibration_error"] = CalibrationErrorJson(o.calibration_error);
-    j["visual_motion"] = o.visual_motion;
-    j["camera_substitutions"] = e.ours.camera_substitutions;
-    if (o.odometry_fault.kind != OdometryFaultKind::kNone) {
-      nlohmann::json f = OdometryFaultJson(o.odometry_fault);
-      f["frames"] = e.ours.fault_frames;
-      f["frames_tracking"] = e.ours.fault_frames_tracking;
-      f["losses"] = e.ours.fault_losses;
-      f["lateral_rmse_m"] = e.ours.fault_lateral_rmse_m;
-      f["forward_rmse_m"] = e.ours.fault_forward_rmse_m;
-      j["odometry_fault"] = f;
-    }
-    if (e.thesis) {
-      j["baseline_thesis"] = MetricsJson(*e.thesis);
-      add_reference(j["baseline_thesis"], *e.thesis, grid_thesis);
-    }
-    std::cout << j.dump(2) << '\n';
+    std::cout << TrackingJson(a, o, e, grid).dump(2) << '\n';
   } else {
-    PrintTable(e, std::cout);
-    std::cout << "  reference " << a.reference
-              << (a.reference == "plant-lines"
-                      ? " (lateral scored at each line of plants against its mean root "
-                        "position, thesis §8.1; " + std::to_string(e.ours.plant_lines_scored) +
-                            " lines)"
-                      : " (the planted grid, every frame)")
-              << '\n';
-    if (o.odometry_fault.kind != OdometryFaultKind::kNone) {
-      std::cout << "  odometry fault " << Name(o.odometry_fault.kind) << " from "
-                << o.odometry_fault.start_m << " m for " << o.odometry_fault.length_m
-                << " m: " << e.ours.fault_frames_tracking << " of " << e.ours.fault_frames
-                << " frames tracking, " << e.ours.fault_losses << " losses, lateral RMSE "
-                << 1000.0 * e.ours.fault_lateral_rmse_m << " mm, forward RMSE "
-                << 1000.0 * e.ours.fault_forward_rmse_m << " mm"
-                << (o.visual_motion ? " (visual motion on)" : " (wheels only)") << '\n';
-    }
-    std::cout << "  engine: crop " << o.profiles->crop.name << ", vehicle " << o.profiles->vehicle.name
-              << ", calibration error " << (a.profiles.calibration_error.empty() ? "none" : a.profiles.calibration_error)
-              << '\n';
+    PrintTrackingText(a, o, e, std::cout);
   }
   return 0;
 }

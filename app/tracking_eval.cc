@@ -326,18 +326,99 @@ TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t see
   return e;
 }
 
+namespace {
+
+// One chain's figures over the seeds, before FinishTrackingMetrics.
+struct ChainTally {
+  TrackingMetrics metrics;
+  std::vector<double> init_frames;
+  int init_trials = 0, init_successes = 0, spacing_frames = 0;
+
+  void Add(const Scorer& s, double last_distance_m) {
+    Accumulate(s, last_distance_m - s.init_distance_m, s.tracker.forward_distance_m(), metrics,
+               init_frames, init_trials, init_successes);
+    spacing_frames += s.spacing_scored;
+  }
+  void Finish() {
+    FinishTrackingMetrics(metrics, spacing_frames, init_frames, init_trials, init_successes);
+  }
+};
+
+const char* const kTraceHeader =
+    "seed,frame,distance_m,offset_error_m,forward_error_m,bearing_error_rad,"
+    "offset_sd_m,forward_sd_m,bearing_sd_rad,row_spacing_m,true_row_spacing_m,"
+    "plant_spacing_m,true_plant_spacing_m,matched,odometry_scale,nees,"
+    "forward_distance_m,true_distance_m\n";
+
+// The initialisation probe: every init_probe_interval_m a fresh tracker
+// starts from ours's features of the frame, and counts a trial when it
+// initialises (a success when it is right) or runs out of frames.
+void StepProbe(InitProbe& probe, const sim::SimFrame& frame, int index, const Scorer& ours,
+               const TrackingEvalOptions& options, ChainTally& tally) {
+  if (!probe.active && frame.truth.distance_m >= probe.next_at_m) {
+    probe.tracker.Reset();
+    probe.active = true;
+    probe.start = index;
+    probe.next_at_m += options.init_probe_interval_m;
+  }
+  if (!probe.active) return;
+  const tracking::FrameReport r = probe.tracker.ProcessFrame(
+      frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, ours.features);
+  const int frames = index - probe.start + 1;
+  if (r.initialised_now) {
+    ++tally.init_trials;
+    tally.init_frames.push_back(frames);
+    if (Scorer::InitCorrect(probe.tracker.state(), frame.truth.grid)) ++tally.init_successes;
+    probe.active = false;
+  } else if (frames >= options.init_probe_max_frames) {
+    ++tally.init_trials;  // a failure
+    probe.active = false;
+  }
+}
+
+// Drives one seed through the scorers and the probe; returns the distance
+// driven. Odometry up to the frame's capture goes in before the frame, the
+// rest after it, so that the estimate is scored at the time of its truth.
+double DriveSeed(const TrackingEvalOptions& options, sim::Simulator& simulator, Scorer& ours,
+                 std::optional<Scorer>& thesis, InitProbe& probe, ChainTally& ours_tally) {
+  sim::SimFrame frame;
+  int index = 0;
+  double last_distance = 0.0;
+  std::vector<sim::OdometrySample> later;
+  const auto add = [&](sim::OdometrySample o) {
+    if (!ApplyOdometryFault(options.odometry_fault, frame.truth.distance_m, o)) return;
+    ours.AddOdometry(o);
+    if (thesis) thesis->AddOdometry(o);
+    probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
+  };
+  while (simulator.Next(frame)) {
+    for (const sim::OdometrySample& o : later) add(o);
+    later.clear();
+    for (const sim::OdometrySample& o : frame.odometry) {
+      if (o.utime <= frame.truth.utime) {
+        add(o);
+      } else {
+        later.push_back(o);
+      }
+    }
+    ours.Frame(frame, index);
+    if (thesis) thesis->Frame(frame, index);
+    StepProbe(probe, frame, index, ours, options, ours_tally);
+    last_distance = frame.truth.distance_m;
+    ++index;
+  }
+  return last_distance;
+}
+
+}  // namespace
+
 TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
   ThrowIfInvalid("evaluate tracking", options.Validate());
   TrackingEvaluation result;
   result.preset = options.sim.preset;
   result.seeds = options.seeds;
-  vision::SegmenterOptions ours_seg;
-  const vision::SegmenterOptions thesis_seg = vision::ThesisSegmenterOptions();
-
-  std::vector<double> init_frames_ours, init_frames_thesis;
-  int trials_ours = 0, successes_ours = 0, trials_thesis = 0, successes_thesis = 0;
-  int spacing_ours = 0, spacing_thesis = 0;
-  TrackingMetrics thesis_metrics;
+  const vision::SegmenterOptions ours_seg;
+  ChainTally ours_tally, thesis_tally;
   for (int k = 0; k < options.seeds; ++k) {
     sim::SimulatorOptions so = options.sim;
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
@@ -350,84 +431,24 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     ours.lines = &plant_lines;
     ours.trace = options.trace;
     ours.seed = so.seed;
-    if (options.trace && k == 0) {
-      *options.trace << "seed,frame,distance_m,offset_error_m,forward_error_m,bearing_error_rad,"
-                        "offset_sd_m,forward_sd_m,bearing_sd_rad,row_spacing_m,true_row_spacing_m,"
-                        "plant_spacing_m,true_plant_spacing_m,matched,odometry_scale,nees,"
-                        "forward_distance_m,true_distance_m\n";
-    }
+    if (options.trace && k == 0) *options.trace << kTraceHeader;
     std::optional<Scorer> thesis;
     if (options.baseline_thesis) {
-      thesis.emplace(engine.camera, engine.thesis, thesis_seg, options, false);
+      thesis.emplace(engine.camera, engine.thesis, vision::ThesisSegmenterOptions(), options,
+                     false);
       thesis->lines = &plant_lines;
     }
     InitProbe probe(engine.camera, engine.ours);
     probe.next_at_m = options.init_probe_interval_m;
-
-    sim::SimFrame frame;
-    int index = 0;
-    double last_distance = 0.0;
-    // Odometry up to the frame's capture goes in before the frame, the rest
-    // after it, so that the estimate is scored at the time of its truth.
-    std::vector<sim::OdometrySample> later;
-    const auto add = [&](sim::OdometrySample o) {
-      if (!ApplyOdometryFault(options.odometry_fault, frame.truth.distance_m, o)) return;
-      ours.AddOdometry(o);
-      if (thesis) thesis->AddOdometry(o);
-      probe.tracker.AddOdometry(o.utime, o.left_m_s, o.right_m_s);
-    };
-    while (simulator.Next(frame)) {
-      for (const sim::OdometrySample& o : later) add(o);
-      later.clear();
-      for (const sim::OdometrySample& o : frame.odometry) {
-        if (o.utime <= frame.truth.utime) {
-          add(o);
-        } else {
-          later.push_back(o);
-        }
-      }
-      ours.Frame(frame, index);
-      if (thesis) thesis->Frame(frame, index);
-      // The initialisation probe reuses ours's features of this frame.
-      if (!probe.active && frame.truth.distance_m >= probe.next_at_m) {
-        probe.tracker.Reset();
-        probe.active = true;
-        probe.start = index;
-        probe.next_at_m += options.init_probe_interval_m;
-      }
-      if (probe.active) {
-        const tracking::FrameReport r = probe.tracker.ProcessFrame(
-            frame.truth.utime, frame.rendered.image.cols, frame.rendered.image.rows, ours.features);
-        const int frames = index - probe.start + 1;
-        if (r.initialised_now) {
-          ++trials_ours;
-          init_frames_ours.push_back(frames);
-          if (Scorer::InitCorrect(probe.tracker.state(), frame.truth.grid)) ++successes_ours;
-          probe.active = false;
-        } else if (frames >= options.init_probe_max_frames) {
-          ++trials_ours;  // a failure
-          probe.active = false;
-        }
-      }
-      last_distance = frame.truth.distance_m;
-      ++index;
-    }
-    result.distance_m = last_distance;
-    Accumulate(ours, last_distance - ours.init_distance_m, ours.tracker.forward_distance_m(),
-               result.ours, init_frames_ours, trials_ours, successes_ours);
-    spacing_ours += ours.spacing_scored;
-    if (thesis) {
-      Accumulate(*thesis, last_distance - thesis->init_distance_m,
-                 thesis->tracker.forward_distance_m(), thesis_metrics, init_frames_thesis,
-                 trials_thesis, successes_thesis);
-      spacing_thesis += thesis->spacing_scored;
-    }
+    result.distance_m = DriveSeed(options, simulator, ours, thesis, probe, ours_tally);
+    ours_tally.Add(ours, result.distance_m);
+    if (thesis) thesis_tally.Add(*thesis, result.distance_m);
   }
-  FinishTrackingMetrics(result.ours, spacing_ours, init_frames_ours, trials_ours, successes_ours);
+  ours_tally.Finish();
+  result.ours = ours_tally.metrics;
   if (options.baseline_thesis) {
-    FinishTrackingMetrics(thesis_metrics, spacing_thesis, init_frames_thesis, trials_thesis,
-                          successes_thesis);
-    result.thesis = thesis_metrics;
+    thesis_tally.Finish();
+    result.thesis = thesis_tally.metrics;
   }
   return result;
 }

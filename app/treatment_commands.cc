@@ -337,24 +337,12 @@ namespace {
 // The defaults evaluate treatment keeps from TreatmentOptions (the crop and
 // vehicle profiles set the others), printed in --help from the code.
 const treatment::TreatmentOptions kDefaults{};
+// ProductTrackerOptions (profiles.cc) leaves these three at the tracker's own.
+const tracking::TrackerOptions kTrackerDefaults{};
 
-std::string Default(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", value);
-  return text;
-}
-
-}  // namespace
-
-void AddTreatmentCommands(CommandRegistry& registry) {
-  const GlobalOptions& global = registry.global();
-  TreatmentArgs& args = registry.Keep(TreatmentArgs{});
-  CLI::App* cmd = registry.Add(
-      "treatment", "crop/weed classification, treatment map and spraying against truth",
-      [&args, &global] { return EvaluateTreatmentCommand(args, global); },
-      EvaluateCommand(registry));
-  AddRunOptions(cmd, args.preset, args.seeds, args.seed, &args.length_m);
-  AddProfileOptions(cmd, args.profiles, true);
+// The bar: what is sprayed, valve timing and the fail-safe.
+void AddSprayingOptions(CLI::App* cmd, TreatmentArgs& args) {
+  cmd->option_defaults()->group("Spraying");
   cmd->add_option("--mode", args.mode, "what is sprayed: crop or weed")
       ->check(CLI::IsMember({"crop", "weed"}))->capture_default_str();
   cmd->add_option("--latency-ms", args.latency_ms, "valve latency the scheduler leads by")
@@ -368,23 +356,51 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0.0, 150.0))->capture_default_str();
   cmd->add_option("--tick-ms", args.tick_ms,
                   "spray bar command period, at most the 20 ms pose period (default " +
-                      Default(1e3 * kDefaults.scheduler.tick_s) + ")")
+                      HelpNumber(1e3 * kDefaults.scheduler.tick_s) + ")")
       ->check(CLI::Range(1.0, 20.0));
+  cmd->add_flag("--uncertainty-fail-safe,!--no-uncertainty-fail-safe", args.uncertainty_fail_safe,
+                "the bar closes on the plants' uncertain position at the bar (docs/fail-safe.md; on by default)");
+  cmd->add_option("--uncertainty-margin-mm", args.uncertainty_margin_mm,
+                  "the fail-safe on uncertainty's margin along and across (default: from the crop footprint)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+// Where a plant is sprayed: its footprint and the map cells.
+void AddFootprintOptions(CLI::App* cmd, TreatmentArgs& args) {
+  cmd->option_defaults()->group("Footprints");
   cmd->add_option("--footprint-scale", args.footprint_scale,
                   "crop footprint: bounding box scaled about the centroid (1: thesis)")
       ->check(CLI::Range(0.05, 2.0));
   cmd->add_option("--weed-footprint-scale", args.weed_footprint_scale,
                   "weed footprint: bounding box scaled about the centroid (default " +
-                      Default(kDefaults.weed_footprint_scale) + ")")
+                      HelpNumber(kDefaults.weed_footprint_scale) + ")")
       ->check(CLI::Range(0.05, 2.0));
   cmd->add_option("--footprint-min-half-mm", args.footprint_min_half_mm,
                   "crop footprint: stretched to at least this half size along and across")
       ->check(CLI::Range(0.0, 500.0));
   cmd->add_option("--weed-height-mm", args.weed_height_mm,
-                  "height at which weed blobs are located (default " + Default(1e3 * kDefaults.weed_height_m) + ")")
+                  "height at which weed blobs are located (default " + HelpNumber(1e3 * kDefaults.weed_height_m) + ")")
       ->check(CLI::Range(0.0, 500.0));
-  cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default " + Default(1e3 * kDefaults.map.cell_m) + ")")
+  cmd->add_option("--cell-mm", args.cell_mm, "treatment map cell size (default " + HelpNumber(1e3 * kDefaults.map.cell_m) + ")")
       ->check(CLI::Range(1.0, 500.0));
+  cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
+                "every crop blob its own footprint (not one per predicted plant)");
+  cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,
+                "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
+  cmd->add_option("--own-offset-along", args.own_offset_along,
+                  "crop footprint: at the plant's grid node plus this fraction of its own offset along the rows (default " +
+                      HelpNumber(kDefaults.own_offset_fraction_along) + ")")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--own-offset-across", args.own_offset_across,
+                  "... and across the rows (default " + HelpNumber(kDefaults.own_offset_fraction_across) + ")")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--footprints-stay", args.footprints_stay,
+                "a plant's footprints stay where each frame put them (not moved along with its latest position)");
+}
+
+// Crop or weed: the size filter, association and merged blobs.
+void AddClassifierOptions(CLI::App* cmd, TreatmentArgs& args) {
+  cmd->option_defaults()->group("Classifier");
   cmd->add_option("--min-crop-area-m2", args.min_crop_area_m2, "classifier size filter")
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--crop-size-fraction", args.crop_size_fraction,
@@ -399,13 +415,42 @@ void AddTreatmentCommands(CommandRegistry& registry) {
       ->check(CLI::Range(0, 10000));
   cmd->add_option("--majority", args.majority, "votes a map cell needs")
       ->check(CLI::Range(1, 10000));
-  cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
-      ->check(CLI::IsMember({"thesis"}));
   cmd->add_option("--split-radius-m", args.split_radius_m,
                   "merged blobs: a pixel joins the nearest predicted crop this close");
   cmd->add_option("--split-chi2", args.split_chi2,
                   "merged blobs: association gate of each part's centroid (chi2)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--split-cover-m", args.split_cover_m,
+                  "merged blobs: a part with plant matter this close to its predicted crop is "
+                  "that crop (0: the gate alone)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--fragment-reach", args.fragment_reach,
+                  "a blob under the size filter within this many crop radii of a crop found in "
+                  "the same frame is that crop's leaf (0: off, weed)")
+      ->check(CLI::Range(0.0, 5.0));
+  cmd->add_option("--split-clipped-reach", args.split_clipped_reach,
+                  "merged blobs cut by the image border: a part with plant matter within this "
+                  "many crop radii of its predicted crop is that crop (0: as an uncut blob)")
+      ->check(CLI::Range(0.0, 5.0));
+  cmd->add_flag("--weed-whole-box", args.weed_whole_box,
+                "merged blobs vote weed with their whole box (the old way), not only their weed parts");
+  cmd->add_option("--lone-crop-fraction", args.lone_crop_fraction,
+                  "a blob under the size filter but at least this fraction of it, alone in a predicted crop's region, is that crop (0: off)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--min-weed-part-mm2", args.min_weed_part_mm2,
+                  "smallest part of a blob (ground mm^2) that votes weed on its own")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_flag("--abstain-merged", args.abstain_merged,
+                "unassociated blobs covering a predicted crop cast no weed votes");
+  cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,
+                "blobs cut by the image border that cover a predicted crop vote weed (the old way)");
+  cmd->add_flag("--no-split-merged", args.no_split_merged,
+                "map and label merged blobs whole (no split among predicted crops)");
+}
+
+// Plant matter from soil before classification.
+void AddSegmentationOptions(CLI::App* cmd, TreatmentArgs& args) {
+  cmd->option_defaults()->group("Segmentation");
   cmd->add_option("--fill-holes-max-fraction", args.fill_holes_max_fraction,
                   "segmentation: holes up to this fraction of the image are filled (0: none)")
       ->check(CLI::Range(0.0, 1.0));
@@ -427,66 +472,50 @@ void AddTreatmentCommands(CommandRegistry& registry) {
                   "segmentation: soil growth leaves soil samples this many sds above the soil out "
                   "(0: keeps all)")
       ->check(CLI::Range(0.0, 20.0));
-  cmd->add_option("--split-cover-m", args.split_cover_m,
-                  "merged blobs: a part with plant matter this close to its predicted crop is "
-                  "that crop (0: the gate alone)")
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--fragment-reach", args.fragment_reach,
-                  "a blob under the size filter within this many crop radii of a crop found in "
-                  "the same frame is that crop's leaf (0: off, weed)")
-      ->check(CLI::Range(0.0, 5.0));
-  cmd->add_option("--split-clipped-reach", args.split_clipped_reach,
-                  "merged blobs cut by the image border: a part with plant matter within this "
-                  "many crop radii of its predicted crop is that crop (0: as an uncut blob)")
-      ->check(CLI::Range(0.0, 5.0));
-  cmd->add_flag("--footprint-per-blob", args.footprint_per_blob,
-                "every crop blob its own footprint (not one per predicted plant)");
-  cmd->add_flag("--footprint-at-centroid", args.footprint_at_centroid,
-                "centre a plant's footprint on this frame's centroid, not where the tracker holds it");
-  cmd->add_option("--own-offset-along", args.own_offset_along,
-                  "crop footprint: at the plant's grid node plus this fraction of its own offset along the rows (default " +
-                      Default(kDefaults.own_offset_fraction_along) + ")")
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--own-offset-across", args.own_offset_across,
-                  "... and across the rows (default " + Default(kDefaults.own_offset_fraction_across) + ")")
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_flag("--footprints-stay", args.footprints_stay,
-                "a plant's footprints stay where each frame put them (not moved along with its latest position)");
-  cmd->add_flag("--weed-whole-box", args.weed_whole_box,
-                "merged blobs vote weed with their whole box (the old way), not only their weed parts");
-  cmd->add_option("--lone-crop-fraction", args.lone_crop_fraction,
-                  "a blob under the size filter but at least this fraction of it, alone in a predicted crop's region, is that crop (0: off)")
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--min-weed-part-mm2", args.min_weed_part_mm2,
-                  "smallest part of a blob (ground mm^2) that votes weed on its own")
-      ->check(CLI::Range(0.0, 1e6));
-  cmd->add_flag("--abstain-merged", args.abstain_merged,
-                "unassociated blobs covering a predicted crop cast no weed votes");
-  cmd->add_flag("--clipped-on-crop-votes-weed", args.clipped_on_crop_votes_weed,
-                "blobs cut by the image border that cover a predicted crop vote weed (the old way)");
-  cmd->add_flag("--uncertainty-fail-safe,!--no-uncertainty-fail-safe", args.uncertainty_fail_safe,
-                "the bar closes on the plants' uncertain position at the bar (docs/fail-safe.md; on by default)");
-  cmd->add_option("--uncertainty-margin-mm", args.uncertainty_margin_mm,
-                  "the fail-safe on uncertainty's margin along and across (default: from the crop footprint)")
-      ->check(CLI::NonNegativeNumber);
+}
+
+// The product tracker's options the profiles leave at their defaults.
+void AddTrackerOptions(CLI::App* cmd, TreatmentArgs& args) {
+  cmd->option_defaults()->group("Tracker");
   cmd->add_option("--size-height-sd-mm", args.size_height_sd_mm,
-                  "tracker: sd per frame of a plant's centroid height read from its blob's size (0: not read; default 6)")
+                  "tracker: sd per frame of a plant's centroid height read from its blob's size (0: not read; default " +
+                      HelpNumber(1e3 * kTrackerDefaults.size_height_sd_m) + ")")
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_option("--size-edge-loss-mm", args.size_edge_loss_mm,
-                  "tracker: the rim a plant's blob loses, for its size (default 30)")
+                  "tracker: the rim a plant's blob loses, for its size (default " +
+                      HelpNumber(1e3 * kTrackerDefaults.size_edge_loss_m) + ")")
       ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--no-slip-guard", args.no_slip_guard,
                 "tracker: take the wheels' speeds as they come (no wheel spin or lock read from jumps)");
   cmd->add_option("--forward-sd-mm", args.forward_sd_mm,
-                  "tracker: forward process noise, mm per square-root metre driven (default 5)")
+                  "tracker: forward process noise, mm per square-root metre driven (default " +
+                      HelpNumber(1e3 * kTrackerDefaults.forward_sd_per_sqrt_m) + ")")
       ->check(CLI::Range(0.0, 1000.0));
-  cmd->add_flag("--no-split-merged", args.no_split_merged,
-                "map and label merged blobs whole (no split among predicted crops)");
-  AddOdometryFaultOptions(cmd, args.fault);
+}
+}  // namespace
+
+void AddTreatmentCommands(CommandRegistry& registry) {
+  const GlobalOptions& global = registry.global();
+  TreatmentArgs& args = registry.Keep(TreatmentArgs{});
+  CLI::App* cmd = registry.Add(
+      "treatment", "crop/weed classification, treatment map and spraying against truth",
+      [&args, &global] { return EvaluateTreatmentCommand(args, global); },
+      EvaluateCommand(registry));
+  AddRunOptions(cmd, args.preset, args.seeds, args.seed, &args.length_m);
+  AddProfileOptions(cmd, args.profiles, true);
+  cmd->add_option("--baseline", args.baseline, "also run the thesis's chain")
+      ->check(CLI::IsMember({"thesis"}));
   cmd->add_flag("--mrroc", args.mrroc, "sweep the classifier's two parameters (MRROC)");
   cmd->add_option("--costs-ratio", args.costs_ratio, "cost ratio for the MRROC operating point")
       ->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--json", args.json, "print one JSON object");
+  AddSprayingOptions(cmd, args);
+  AddFootprintOptions(cmd, args);
+  AddClassifierOptions(cmd, args);
+  AddSegmentationOptions(cmd, args);
+  AddTrackerOptions(cmd, args);
+  cmd->option_defaults()->group("Odometry faults");
+  AddOdometryFaultOptions(cmd, args.fault);
 }
 
 }  // namespace plantscale::app

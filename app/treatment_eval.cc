@@ -327,19 +327,165 @@ geometry::CameraOptions TreatmentEngineCamera(const TreatmentEvalOptions& option
                                SignedCalibrationError(options.calibration_error, seed));
 }
 
+namespace {
+
+// One seed's chains: ours, and the thesis's when the baseline is asked for.
+struct SeedChains {
+  Chain ours;
+  std::optional<Chain> thesis;
+  treatment::TreatmentOptions thesis_options;
+
+  SeedChains(const TreatmentEvalOptions& options, const sim::SimulatorOptions& so,
+             double true_latency_s)
+      : ours(TreatmentEngineCamera(options, so.seed),
+             treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
+             OurTracker(options), options.treatment, true_latency_s,
+             options.visual_motion ? VisualMotionOptions(*options.profiles)
+                                   : pipeline::MotionFusionOptions{}),
+        thesis_options(ThesisTreatmentOptions(so.preset, TreatmentEngineCamera(options, so.seed))) {
+    ours.collect_samples = options.mrroc;
+    thesis_options.scheduler = options.treatment.scheduler;
+    // The thesis's chain commands its bar at the pose rate, as it did before
+    // ours went to 200 Hz: the baseline stays where it was calibrated.
+    thesis_options.scheduler.tick_s = thesis_options.scheduler.pose_period_s;
+    if (options.baseline_thesis) {
+      thesis.emplace(TreatmentEngineCamera(options, so.seed), vision::ThesisSegmenterOptions(),
+                     ThesisTrackerOptions(*options.profiles), thesis_options, true_latency_s);
+    }
+  }
+
+  static tracking::TrackerOptions OurTracker(const TreatmentEvalOptions& options) {
+    tracking::TrackerOptions t = ProductTrackerOptions(*options.profiles);
+    if (options.adjust_tracker) options.adjust_tracker(t);
+    return t;
+  }
+};
+
+// What one seed's drive leaves to score: the true track, the distance, and
+// where the odometry fault lasted (NaN without one).
+struct SeedDrive {
+  std::vector<treatment::FieldPose> track;
+  double distance_m = 0.0;
+  double fault_begin_y = std::nan(""), fault_end_y = std::nan("");
+};
+
+// Drives the simulator through the chains. The odometry goes in in time
+// order; each frame goes in once the odometry has passed its capture by
+// frame_lag_s (the frame reaches the pipeline that much late: the camera's
+// latency and segmentation).
+SeedDrive DriveSeed(const TreatmentEvalOptions& options, sim::Simulator& simulator,
+                    SeedChains& chains, const cv::Mat& roi) {
+  SeedDrive drive;
+  const int64_t lag_us = std::llround(options.frame_lag_s * 1e6);
+  std::deque<sim::SimFrame> pending;
+  const auto process = [&] {
+    chains.ours.Frame(pending.front(), roi);
+    if (chains.thesis) chains.thesis->Frame(pending.front(), roi);
+    pending.pop_front();
+  };
+  sim::SimFrame frame;
+  while (simulator.Next(frame)) {
+    const sim::Pose2& pose = frame.truth.pose;
+    drive.track.push_back({frame.truth.utime, pose.x_m, pose.y_m, pose.heading_rad});
+    const double distance = drive.distance_m = frame.truth.distance_m;
+    if (options.odometry_fault.Active(distance)) {
+      if (std::isnan(drive.fault_begin_y)) drive.fault_begin_y = pose.y_m;
+      drive.fault_end_y = pose.y_m;
+    }
+    std::vector<sim::OdometrySample> odometry = std::move(frame.odometry);
+    std::erase_if(odometry, [&](sim::OdometrySample& o) {
+      return !ApplyOdometryFault(options.odometry_fault, distance, o);
+    });
+    pending.push_back(std::move(frame));
+    frame = sim::SimFrame{};
+    for (const sim::OdometrySample& o : odometry) {
+      while (!pending.empty() && pending.front().truth.utime + lag_us < o.utime) process();
+      chains.ours.Odometry(o);
+      if (chains.thesis) chains.thesis->Odometry(o);
+    }
+    // Odometry that stopped passes no frame: the next frame's capture does.
+    while (options.odometry_fault.kind == OdometryFaultKind::kStop && pending.size() > 1 &&
+           pending.front().truth.utime + lag_us < pending.back().truth.utime) {
+      process();
+    }
+  }
+  while (!pending.empty()) process();
+  return drive;
+}
+
+struct AllSums {
+  Sums ours, thesis, fault;
+  std::vector<classify::ClassifierSample> samples;
+  double crop_pixels = 0.0, weed_pixels = 0.0;
+};
+
+// Scores one seed's shots against the simulator's field: each chain's over
+// the scored region, and ours over the stretch the fault lasted.
+void ScoreSeed(const TreatmentEvalOptions& options, const sim::Simulator& simulator,
+               SeedChains& chains, const SeedDrive& drive, int seed_index, AllSums& sums) {
+  const double last_y = drive.track.empty() ? 0.0 : drive.track.back().y_m;
+  const auto score = [&](Chain& c, const treatment::TreatmentOptions& t, Sums& into) {
+    const std::vector<treatment::Shot> shots = c.bar.Shots(drive.track);
+    SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
+    for (MissedCrop& m : s.missed) m.seed_index = seed_index;
+    Accumulate(c, s, static_cast<int>(shots.size()), into);
+  };
+  score(chains.ours, options.treatment, sums.ours);
+  if (!std::isnan(drive.fault_begin_y)) {
+    // The plants the bar passed over while the fault lasted.
+    SprayScoreRegion r = Region(simulator, chains.ours, last_y, options.treatment);
+    const double bar = options.treatment.scheduler.bar.bar_offset_m;
+    r.y_begin_m = std::max(r.y_begin_m, drive.fault_begin_y - bar);
+    r.y_end_m = std::min(r.y_end_m, drive.fault_end_y - bar);
+    const std::vector<treatment::Shot> shots = chains.ours.bar.Shots(drive.track);
+    Accumulate(chains.ours, ScoreSpray(simulator.field(), shots, r),
+               static_cast<int>(shots.size()), sums.fault);
+  }
+  if (chains.thesis) score(*chains.thesis, chains.thesis_options, sums.thesis);
+}
+
+// What the classifier's sweep and the example records take from ours.
+void CollectSeed(Chain& ours, bool first_seed, AllSums& sums,
+                 TreatmentEvaluation& result) {
+  if (first_seed) {
+    ours.pipe.treatment()->Explain();
+    const auto& records = ours.system().registry().records();
+    for (size_t i = 0; i < records.size() && result.example_why.size() < 4; i += 37) {
+      result.example_why.push_back(records[i].why);
+    }
+  }
+  sums.samples.insert(sums.samples.end(), ours.samples.begin(), ours.samples.end());
+  for (int j = 0; j < 3; ++j) {
+    sums.crop_pixels += ours.confusion[1][j];
+    sums.weed_pixels += ours.confusion[2][j];
+  }
+}
+
+// The classifier's two parameters swept over the samples (MRROC, §7.3).
+void SweepMrroc(const TreatmentEvalOptions& options, const AllSums& sums,
+                TreatmentEvaluation& result) {
+  const std::vector<double> areas = {0.0,   0.0005, 0.001, 0.002, 0.003, 0.004, 0.005,
+                                     0.006, 0.008,  0.01,  0.015, 0.02,  0.03};
+  const std::vector<double> gates = {0.5, 1.0, 2.0, 4.0, 5.99, 9.21, 13.8, 20.0, 40.0, 100.0,
+                                     1e12};
+  result.mrroc = classify::SweepClassifier(sums.samples, areas, gates, sums.crop_pixels,
+                                           sums.weed_pixels);
+  result.operating_point = result.mrroc->OperatingPoint(options.costs_ratio);
+  result.nearest_corner = result.mrroc->NearestToCorner();
+}
+
+}  // namespace
+
 TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
   ThrowIfInvalid("evaluate treatment", options.Validate());
   TreatmentEvaluation result;
   result.preset = options.sim.preset;
   result.seeds = options.seeds;
   result.mode = treatment::ToString(options.treatment.scheduler.mode);
-  const vision::SegmenterOptions thesis_seg = vision::ThesisSegmenterOptions();
   const double latency = options.true_valve_latency_s >= 0.0
                              ? options.true_valve_latency_s
                              : options.treatment.scheduler.bar.valve_latency_s;
-  Sums ours_sums, thesis_sums, fault_sums;
-  std::vector<classify::ClassifierSample> samples;
-  double crop_pixels = 0.0, weed_pixels = 0.0;
+  AllSums sums;
   for (int k = 0; k < options.seeds; ++k) {
     sim::SimulatorOptions so = options.sim;
     so.seed = options.sim.seed + static_cast<uint64_t>(k);
@@ -347,112 +493,18 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);  // scoring
     RequireImageSize(options.profiles->vehicle, so.camera.image_width_px,
                      so.camera.image_height_px);
-    const geometry::CameraOptions engine_camera = TreatmentEngineCamera(options, so.seed);
-    tracking::TrackerOptions our_tracker = ProductTrackerOptions(*options.profiles);
-    if (options.adjust_tracker) options.adjust_tracker(our_tracker);
-    Chain ours(engine_camera,
-               treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
-               our_tracker, options.treatment, latency,
-               options.visual_motion ? VisualMotionOptions(*options.profiles)
-                                     : pipeline::MotionFusionOptions{});
-    ours.collect_samples = options.mrroc;
-    std::optional<Chain> thesis;
-    treatment::TreatmentOptions thesis_options = ThesisTreatmentOptions(so.preset, engine_camera);
-    thesis_options.scheduler = options.treatment.scheduler;
-    // The thesis's chain commands its bar at the pose rate, as it did before
-    // ours went to 200 Hz: the baseline stays where it was calibrated.
-    thesis_options.scheduler.tick_s = thesis_options.scheduler.pose_period_s;
-    if (options.baseline_thesis) {
-      thesis.emplace(engine_camera, thesis_seg, ThesisTrackerOptions(*options.profiles),
-                     thesis_options, latency);
-    }
-    std::vector<treatment::FieldPose> track;
-    // The odometry goes in in time order; each frame goes in once the
-    // odometry has passed its capture by frame_lag_s (the frame reaches the
-    // pipeline that much late: the camera's latency and segmentation).
-    const int64_t lag_us = std::llround(options.frame_lag_s * 1e6);
-    std::deque<sim::SimFrame> pending;
-    const auto process = [&] {
-      const sim::SimFrame& f = pending.front();
-      ours.Frame(f, roi);
-      if (thesis) thesis->Frame(f, roi);
-      pending.pop_front();
-    };
-    sim::SimFrame frame;
-    double fault_begin_y = std::nan(""), fault_end_y = std::nan("");
-    while (simulator.Next(frame)) {
-      track.push_back({frame.truth.utime, frame.truth.pose.x_m, frame.truth.pose.y_m,
-                       frame.truth.pose.heading_rad});
-      result.distance_m = frame.truth.distance_m;
-      const double distance = frame.truth.distance_m;
-      if (options.odometry_fault.Active(distance)) {
-        if (std::isnan(fault_begin_y)) fault_begin_y = frame.truth.pose.y_m;
-        fault_end_y = frame.truth.pose.y_m;
-      }
-      std::vector<sim::OdometrySample> odometry = std::move(frame.odometry);
-      std::erase_if(odometry, [&](sim::OdometrySample& o) {
-        return !ApplyOdometryFault(options.odometry_fault, distance, o);
-      });
-      pending.push_back(std::move(frame));
-      frame = sim::SimFrame{};
-      for (const sim::OdometrySample& o : odometry) {
-        while (!pending.empty() && pending.front().truth.utime + lag_us < o.utime) process();
-        ours.Odometry(o);
-        if (thesis) thesis->Odometry(o);
-      }
-      // Odometry that stopped passes no frame: the next frame's capture does.
-      while (options.odometry_fault.kind == OdometryFaultKind::kStop && pending.size() > 1 &&
-             pending.front().truth.utime + lag_us < pending.back().truth.utime) {
-        process();
-      }
-    }
-    while (!pending.empty()) process();
-    const double last_y = track.empty() ? 0.0 : track.back().y_m;
-    const auto score = [&](Chain& c, const treatment::TreatmentOptions& t, Sums& sums) {
-      const std::vector<treatment::Shot> shots = c.bar.Shots(track);
-      SprayScore s = ScoreSpray(simulator.field(), shots, Region(simulator, c, last_y, t));
-      for (MissedCrop& m : s.missed) m.seed_index = k;
-      Accumulate(c, s, static_cast<int>(shots.size()), sums);
-    };
-    score(ours, options.treatment, ours_sums);
-    result.camera_substitutions += ours.pipe.camera_substitutions();
-    if (!std::isnan(fault_begin_y)) {
-      // The plants the bar passed over while the fault lasted.
-      SprayScoreRegion r = Region(simulator, ours, last_y, options.treatment);
-      const double bar = options.treatment.scheduler.bar.bar_offset_m;
-      r.y_begin_m = std::max(r.y_begin_m, fault_begin_y - bar);
-      r.y_end_m = std::min(r.y_end_m, fault_end_y - bar);
-      const std::vector<treatment::Shot> shots = ours.bar.Shots(track);
-      Accumulate(ours, ScoreSpray(simulator.field(), shots, r), static_cast<int>(shots.size()),
-                 fault_sums);
-    }
-    if (thesis) score(*thesis, thesis_options, thesis_sums);
-    if (k == 0) {
-      ours.pipe.treatment()->Explain();
-      const auto& records = ours.system().registry().records();
-      for (size_t i = 0; i < records.size() && result.example_why.size() < 4; i += 37) {
-        result.example_why.push_back(records[i].why);
-      }
-    }
-    samples.insert(samples.end(), ours.samples.begin(), ours.samples.end());
-    for (int j = 0; j < 3; ++j) {
-      crop_pixels += ours.confusion[1][j];
-      weed_pixels += ours.confusion[2][j];
-    }
+    SeedChains chains(options, so, latency);
+    const SeedDrive drive = DriveSeed(options, simulator, chains, roi);
+    result.distance_m = drive.distance_m;
+    ScoreSeed(options, simulator, chains, drive, k, sums);
+    result.camera_substitutions += chains.ours.pipe.camera_substitutions();
+    CollectSeed(chains.ours, k == 0, sums, result);
   }
-  result.ours = Finish(ours_sums);
-  result.missed_crops = ours_sums.spray.missed;
-  if (thesis_sums.ticks > 0) result.thesis = Finish(thesis_sums);
-  if (fault_sums.ticks > 0) result.fault_stretch = SprayMetrics(fault_sums.spray);
-  if (options.mrroc) {
-    const std::vector<double> areas = {0.0,   0.0005, 0.001, 0.002, 0.003, 0.004, 0.005,
-                                       0.006, 0.008,  0.01,  0.015, 0.02,  0.03};
-    const std::vector<double> gates = {0.5, 1.0, 2.0, 4.0, 5.99, 9.21, 13.8, 20.0, 40.0, 100.0,
-                                       1e12};
-    result.mrroc = classify::SweepClassifier(samples, areas, gates, crop_pixels, weed_pixels);
-    result.operating_point = result.mrroc->OperatingPoint(options.costs_ratio);
-    result.nearest_corner = result.mrroc->NearestToCorner();
-  }
+  result.ours = Finish(sums.ours);
+  result.missed_crops = sums.ours.spray.missed;
+  if (sums.thesis.ticks > 0) result.thesis = Finish(sums.thesis);
+  if (sums.fault.ticks > 0) result.fault_stretch = SprayMetrics(sums.fault.spray);
+  if (options.mrroc) SweepMrroc(options, sums, result);
   return result;
 }
 

@@ -34,6 +34,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/rows/label_lines.h"
@@ -108,6 +109,52 @@ struct Score {
   int rows = 0;
 };
 
+// The central line: nearest the image's centre column, with a neighbour
+// each side (centres has at least 3).
+size_t CentralLine(const std::vector<double>& centres, double width) {
+  size_t c = 1;
+  for (size_t i = 1; i + 1 < centres.size(); ++i) {
+    if (std::abs(centres[i] - 0.5 * width) < std::abs(centres[c] - 0.5 * width)) c = i;
+  }
+  return c;
+}
+
+// The detected rows' columns at image row v, sorted (NaN: none there).
+std::vector<double> DetectedAt(const Detected& det, int v) {
+  std::vector<double> us;
+  if (const auto it = det.u.find(v); it != det.u.end()) {
+    for (const double u : it->second) {
+      if (!std::isnan(u)) us.push_back(u);
+    }
+  }
+  std::sort(us.begin(), us.end());
+  return us;
+}
+
+// One image row's CRDA summed over the central line and its neighbours:
+// ordered (the detection nearest the central line and its neighbours in
+// order) and nearest (each label line's nearest detection).
+std::pair<double, double> ScoreRow(const std::vector<double>& us,
+                                   const std::vector<double>& centres, size_t c, double d) {
+  double ordered = 0.0, nearest = 0.0;
+  if (us.empty()) return {ordered, nearest};
+  size_t j = 0;
+  for (size_t i = 0; i < us.size(); ++i) {
+    if (std::abs(us[i] - centres[c]) < std::abs(us[j] - centres[c])) j = i;
+  }
+  ordered += Crda(us[j], centres[c], d);
+  if (j > 0) ordered += Crda(us[j - 1], centres[c - 1], d);
+  if (j + 1 < us.size()) ordered += Crda(us[j + 1], centres[c + 1], d);
+  for (size_t k = c - 1; k <= c + 1; ++k) {
+    double best = us[0];
+    for (const double u : us) {
+      if (std::abs(u - centres[k]) < std::abs(best - centres[k])) best = u;
+    }
+    nearest += Crda(best, centres[k], d);
+  }
+  return {ordered, nearest};
+}
+
 Score ScoreImage(const cv::Mat& label, const Detected& det) {
   Score s;
   const double sx = static_cast<double>(det.width) / label.cols;
@@ -115,36 +162,10 @@ Score ScoreImage(const cv::Mat& label, const Detected& det) {
   for (int y = 0; y < label.rows; ++y) {
     const std::vector<double> centres = plantscale::rows::LabelLineCentres(label.ptr<uint8_t>(y), label.cols, sx);
     if (centres.size() < 3) continue;
-    size_t c = 1;  // the central line: nearest the image's centre column, with a neighbour each side
-    for (size_t i = 1; i + 1 < centres.size(); ++i) {
-      if (std::abs(centres[i] - 0.5 * det.width) < std::abs(centres[c] - 0.5 * det.width)) c = i;
-    }
+    const size_t c = CentralLine(centres, det.width);
     const double d = 0.5 * (centres[c + 1] - centres[c - 1]);
     const int v = std::clamp(static_cast<int>(std::floor((y + 0.5) * sy)), 0, det.height - 1);
-    std::vector<double> us;
-    if (const auto it = det.u.find(v); it != det.u.end()) {
-      for (const double u : it->second) {
-        if (!std::isnan(u)) us.push_back(u);
-      }
-    }
-    std::sort(us.begin(), us.end());
-    double ordered = 0.0, nearest = 0.0;
-    if (!us.empty()) {
-      size_t j = 0;
-      for (size_t i = 0; i < us.size(); ++i) {
-        if (std::abs(us[i] - centres[c]) < std::abs(us[j] - centres[c])) j = i;
-      }
-      ordered += Crda(us[j], centres[c], d);
-      if (j > 0) ordered += Crda(us[j - 1], centres[c - 1], d);
-      if (j + 1 < us.size()) ordered += Crda(us[j + 1], centres[c + 1], d);
-      for (size_t k = c - 1; k <= c + 1; ++k) {
-        double best = us[0];
-        for (const double u : us) {
-          if (std::abs(u - centres[k]) < std::abs(best - centres[k])) best = u;
-        }
-        nearest += Crda(best, centres[k], d);
-      }
-    }
+    const auto [ordered, nearest] = ScoreRow(DetectedAt(det, v), centres, c, d);
     s.ordered += ordered / 3.0;
     s.nearest += nearest / 3.0;
     ++s.rows;

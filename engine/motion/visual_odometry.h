@@ -53,8 +53,7 @@ struct VisualOdometryOptions {
 // `leaf_height_m` high at radius `leaf_radius_m` (the crop profile's).
 VisualOdometryOptions VisualOdometryFor(double leaf_radius_m, double leaf_height_m);
 
-// The search around a prior as the vehicle's camera needs it (field
-// preset, seeds 1–2: correct correspondences 52 → 88 %): the prior's gate
+// The search around a prior as the vehicle's camera needs it: the prior's gate
 // and the residual gate a few millimetres (5–6 cm of travel per frame, the
 // wheels' prior good to a few per cent), blunter dominant points kept
 // (more features; the gate, not the sharpness, keeps them apart), and 5 %

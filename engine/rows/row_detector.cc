@@ -195,6 +195,78 @@ struct CurveTally {
   double on_sum = 0.0, between_sum = 0.0;
 };
 
+// A band of the fit image's rows [r0, r1): its column sums, cumulated, read
+// as the mean plant matter in a window of image columns.
+class BandProfile {
+ public:
+  BandProfile(const cv::Mat& fit, double kfw)
+      : fit_(fit),
+        kfw_(kfw),
+        profile_(static_cast<size_t>(fit.cols)),
+        cum_(static_cast<size_t>(fit.cols) + 1) {}
+
+  void Load(int r0, int r1) {
+    r0_ = r0;
+    r1_ = r1;
+    const int fw = fit_.cols;
+    std::fill(profile_.begin(), profile_.end(), 0.0);
+    for (int r = r0; r < r1; ++r) {
+      const float* row = fit_.ptr<float>(r);
+      for (int x = 0; x < fw; ++x) profile_[static_cast<size_t>(x)] += static_cast<double>(row[x]);
+    }
+    for (int x = 0; x < fw; ++x) {
+      cum_[static_cast<size_t>(x) + 1] = cum_[static_cast<size_t>(x)] + profile_[static_cast<size_t>(x)];
+    }
+  }
+
+  // Mean over the columns within `half` of image column u; −1 when none.
+  double Window(double u, double half) const {
+    const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kfw_ - 0.5)));
+    const int x1 = std::min(fit_.cols - 1, static_cast<int>(std::floor((u + half) / kfw_ - 0.5)));
+    if (x1 < x0) return -1.0;
+    return (cum_[static_cast<size_t>(x1) + 1] - cum_[static_cast<size_t>(x0)]) /
+           ((x1 - x0 + 1) * (r1_ - r0_));
+  }
+
+ private:
+  const cv::Mat& fit_;
+  double kfw_;
+  std::vector<double> profile_, cum_;
+  int r0_ = 0, r1_ = 0;
+};
+
+// One band at image row v, spacing d: each row's matter (density, −1 out of
+// the image) against the matter half-way between the rows, into the tally.
+void TallyBand(const BandProfile& band, const RowDetection& det, double v, double half, double d,
+               int n_lo, std::vector<double>& density, CurveTally& t) {
+  const double W = det.width_px;
+  const size_t n_rows = density.size();
+  double background = 0.0;
+  int n_background = 0;
+  for (size_t i = 0; i < n_rows; ++i) {
+    const int n = n_lo + static_cast<int>(i);
+    const double u = det.U(n, v);
+    density[i] = (u >= 0.0 && u <= W) ? band.Window(u, half) : -1.0;
+    const double m = u + 0.5 * d;
+    const double between = (m >= 0.0 && m <= W) ? band.Window(m, half) : -1.0;
+    if (between >= 0.0) {
+      background += between;
+      ++n_background;
+    }
+  }
+  for (size_t i = 0; i < n_rows; ++i) {
+    if (density[i] >= 0.0) t.on_sum += density[i];
+  }
+  t.between_sum += background;
+  background = n_background > 0 ? background / n_background : 0.0;
+  const double level = std::max(0.02, 1.3 * background);
+  for (size_t i = 0; i < n_rows; ++i) {
+    if (density[i] < 0.0) continue;
+    ++t.in_image[i];
+    if (density[i] >= level) ++t.occupied[i];
+  }
+}
+
 CurveTally TallyCurveRows(const cv::Mat& fit, const RowDetection& det, double hw,
                           double min_visible_spacing_px, int n_lo, size_t n_rows) {
   const double W = det.width_px, H = det.height_px;
@@ -202,8 +274,7 @@ CurveTally TallyCurveRows(const cv::Mat& fit, const RowDetection& det, double hw
   const double kfw = W / fw, kfh = H / fh;
   const int n_bands = std::min(24, fh);
   CurveTally t{std::vector<int>(n_rows, 0), std::vector<int>(n_rows, 0)};
-  std::vector<double> profile(static_cast<size_t>(fw));
-  std::vector<double> cum(static_cast<size_t>(fw) + 1);
+  BandProfile band(fit, kfw);
   std::vector<double> density(n_rows);
   for (int k = 0; k < n_bands; ++k) {
     const int r0 = fh - (k + 1) * fh / n_bands, r1 = fh - k * fh / n_bands;
@@ -212,43 +283,8 @@ CurveTally TallyCurveRows(const cv::Mat& fit, const RowDetection& det, double hw
     const double d = det.SpacingAt(v);
     if (d < min_visible_spacing_px) break;
     ++t.visible_bands;
-    std::fill(profile.begin(), profile.end(), 0.0);
-    for (int r = r0; r < r1; ++r) {
-      const float* row = fit.ptr<float>(r);
-      for (int x = 0; x < fw; ++x) profile[static_cast<size_t>(x)] += static_cast<double>(row[x]);
-    }
-    for (int x = 0; x < fw; ++x) cum[static_cast<size_t>(x) + 1] = cum[static_cast<size_t>(x)] + profile[static_cast<size_t>(x)];
-    const auto window = [&](double u, double half) {
-      const int x0 = std::max(0, static_cast<int>(std::ceil((u - half) / kfw - 0.5)));
-      const int x1 = std::min(fw - 1, static_cast<int>(std::floor((u + half) / kfw - 0.5)));
-      if (x1 < x0) return -1.0;
-      return (cum[static_cast<size_t>(x1) + 1] - cum[static_cast<size_t>(x0)]) / ((x1 - x0 + 1) * (r1 - r0));
-    };
-    const double half = std::max(0.5 * kfw, hw * d);
-    double background = 0.0;
-    int n_background = 0;
-    for (size_t i = 0; i < n_rows; ++i) {
-      const int n = n_lo + static_cast<int>(i);
-      const double u = det.U(n, v);
-      density[i] = (u >= 0.0 && u <= W) ? window(u, half) : -1.0;
-      const double m = u + 0.5 * d;
-      const double between = (m >= 0.0 && m <= W) ? window(m, half) : -1.0;
-      if (between >= 0.0) {
-        background += between;
-        ++n_background;
-      }
-    }
-    for (size_t i = 0; i < n_rows; ++i) {
-      if (density[i] >= 0.0) t.on_sum += density[i];
-    }
-    t.between_sum += background;
-    background = n_background > 0 ? background / n_background : 0.0;
-    const double level = std::max(0.02, 1.3 * background);
-    for (size_t i = 0; i < n_rows; ++i) {
-      if (density[i] < 0.0) continue;
-      ++t.in_image[i];
-      if (density[i] >= level) ++t.occupied[i];
-    }
+    band.Load(r0, r1);
+    TallyBand(band, det, v, std::max(0.5 * kfw, hw * d), d, n_lo, density, t);
   }
   return t;
 }

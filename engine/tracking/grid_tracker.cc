@@ -573,25 +573,70 @@ void GridTracker::CatchUp() {
   if (mode_ == TrackerMode::kTracking) x_.head<3>() = caught_up_;
 }
 
-FrameReport GridTracker::UpdateAtCapture(int64_t utime, int width, int height,
-                                         std::span<const Feature> features) {
-  CatchUp();
-  FrameReport report;
-  report.mode = mode_;
+bool GridTracker::RefuseFrame(int64_t utime, int width, int height, FrameReport& report) const {
   if (width != camera_.width() || height != camera_.height()) {
     report.input = {false, "frame refused: it is " + std::to_string(width) + "x" +
                                std::to_string(height) + " px, the camera model is " +
                                std::to_string(camera_.width()) + "x" +
                                std::to_string(camera_.height()) + " px"};
-    report.skipped_reason = report.input.reason;
-    return report;
-  }
-  if (utime_ >= 0 && (utime_ - utime) * 1e-6 > options_.max_frame_lag_s) {
+  } else if (utime_ >= 0 && (utime_ - utime) * 1e-6 > options_.max_frame_lag_s) {
     report.input = {false, "frame refused: captured " + Seconds((utime_ - utime) * 1e-6) +
                                " before the state's time"};
-    report.skipped_reason = report.input.reason;
-    return report;
+  } else {
+    return false;
   }
+  report.skipped_reason = report.input.reason;
+  return true;
+}
+
+std::vector<Feature> GridTracker::ValidFeatures(std::span<const Feature> features,
+                                                FrameReport& report) const {
+  std::vector<Feature> valid;
+  valid.reserve(features.size());
+  int invalid = 0;
+  for (const Feature& f : features) {
+    if (!Finite(f)) {
+      ++invalid;
+      continue;
+    }
+    valid.push_back(f);
+    if (heights_) {
+      const auto located = heights_->Locate(f.image_px);
+      if (located) valid.back().ground_m = *located;
+    }
+  }
+  if (invalid > 0) {
+    report.input.reason = std::to_string(invalid) + " feature(s) with non-finite values ignored";
+  }
+  return valid;
+}
+
+bool GridTracker::InitialiseFrom(int64_t utime, const std::vector<Feature>& valid,
+                                 FrameReport& report) {
+  const InitialiserResult init = initialiser_.Offer(valid, since_frame_);
+  since_frame_ = {};
+  if (!init.state) {
+    report.skipped_reason = "initialising: " + init.reason;
+    report.mode = mode_;
+    return false;
+  }
+  Matrix5d p0 = Matrix5d::Zero();
+  p0(0, 0) = std::pow(options_.init.offset_sd_m, 2);
+  p0(1, 1) = std::pow(options_.init.forward_sd_m, 2);
+  p0(2, 2) = std::pow(options_.init.bearing_sd_rad, 2);
+  p0(3, 3) = std::pow(options_.row_spacing_sd_m, 2);
+  p0(4, 4) = std::pow(options_.plant_spacing_sd_m, 2);
+  Initialise(utime, *init.state, p0);
+  report.initialised_now = true;
+  return true;
+}
+
+FrameReport GridTracker::UpdateAtCapture(int64_t utime, int width, int height,
+                                         std::span<const Feature> features) {
+  CatchUp();
+  FrameReport report;
+  report.mode = mode_;
+  if (RefuseFrame(utime, width, height, report)) return report;
   PredictTo(utime);
   // A frame captured before the newest odometry (the camera's latency, or
   // odometry that arrived while the frame was being segmented) is compared
@@ -601,42 +646,8 @@ FrameReport GridTracker::UpdateAtCapture(int64_t utime, int width, int height,
   // process noise.
   const double lag_s = utime_ > utime ? (utime_ - utime) * 1e-6 : 0.0;
   const WheelIncrement lag{left_m_s_ * lag_s, right_m_s_ * lag_s};
-
-  std::vector<Feature> valid;
-  valid.reserve(features.size());
-  int invalid = 0;
-  for (const Feature& f : features) {
-    if (Finite(f)) {
-      valid.push_back(f);
-      if (heights_) {
-        const auto located = heights_->Locate(f.image_px);
-        if (located) valid.back().ground_m = *located;
-      }
-    } else {
-      ++invalid;
-    }
-  }
-  if (invalid > 0) {
-    report.input.reason = std::to_string(invalid) + " feature(s) with non-finite values ignored";
-  }
-
-  if (mode_ != TrackerMode::kTracking) {
-    const InitialiserResult init = initialiser_.Offer(valid, since_frame_);
-    since_frame_ = {};
-    if (!init.state) {
-      report.skipped_reason = "initialising: " + init.reason;
-      report.mode = mode_;
-      return report;
-    }
-    Matrix5d p0 = Matrix5d::Zero();
-    p0(0, 0) = std::pow(options_.init.offset_sd_m, 2);
-    p0(1, 1) = std::pow(options_.init.forward_sd_m, 2);
-    p0(2, 2) = std::pow(options_.init.bearing_sd_rad, 2);
-    p0(3, 3) = std::pow(options_.row_spacing_sd_m, 2);
-    p0(4, 4) = std::pow(options_.plant_spacing_sd_m, 2);
-    Initialise(utime, *init.state, p0);
-    report.initialised_now = true;
-  }
+  const std::vector<Feature> valid = ValidFeatures(features, report);
+  if (mode_ != TrackerMode::kTracking && !InitialiseFrom(utime, valid, report)) return report;
   since_frame_ = {};
 
   // Thesis eq. 4.2: constant process noise per frame.

@@ -72,8 +72,8 @@ struct TrackerOptions {
   double calibration_focal_sd = 0.0;
   // Tilt, height and focal length scale the vision's distances, which
   // trade against the wheels' scale k and the spacings: estimated, they
-  // drift along that direction (field, tuning seeds 1–2 with the issue's
-  // calibration error: placement along 41 mm, bias +38 mm). As consider
+  // drift along that direction (docs/results/2026-11-27-calibration.md).
+  // As consider
   // states (Schmidt) they are never updated, so the grid's mean is as if
   // the calibration were exact, but their uncertainty and its correlation
   // with the grid stay in the covariance: σ covers their error. The roll is
@@ -349,6 +349,17 @@ class GridTracker {
     int index = 0;  // of δx in the state; δy, then δh (plant_heights), follow
   };
   int PlantStates() const { return options_.PlantHeightStates() ? 3 : 2; }
+
+  // The frame's refusal (a size not the camera model's, or captured longer
+  // before the state than max_frame_lag_s), noted in the report.
+  bool RefuseFrame(int64_t utime, int width, int height, FrameReport& report) const;
+  // The features with finite values, located on the height map when there
+  // is one; the number ignored goes into the report.
+  std::vector<Feature> ValidFeatures(std::span<const Feature> features,
+                                     FrameReport& report) const;
+  // Offers the frame to the initialiser; on success the state starts
+  // there with the initial covariance. False while still initialising.
+  bool InitialiseFrom(int64_t utime, const std::vector<Feature>& valid, FrameReport& report);
 
   int core() const { return options_.estimate_spacing ? 5 : 3; }
   // The core grid state, then k when the odometry scale is estimated, then

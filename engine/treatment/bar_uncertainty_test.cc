@@ -12,6 +12,7 @@
 
 #include "engine/geometry/test_cameras.h"
 #include "engine/treatment/nozzle_scheduler.h"
+#include "engine/treatment/test_bar.h"
 #include "engine/treatment/treatment_map.h"
 #include "engine/treatment/treatment_system.h"
 
@@ -149,23 +150,16 @@ TEST(PlantReachAtBar, GrowsWithTheGridsCovarianceTheBarsOffsetAndTheDistanceDead
   EXPECT_GT(near.along_m, std::sqrt(5.991) * 0.002);
 }
 
+// The shared test bar, its valves at the default latency, with the
+// fail-safe's reach limits this file's plants are judged against.
 SchedulerOptions Bar() {
-  SchedulerOptions o;
-  o.bar.nozzles = 8;
-  o.bar.nozzle_spacing_m = 0.05;
-  o.bar.bar_offset_m = 0.5;
+  SchedulerOptions o = testing::TestBar(SprayBarOptions{}.valve_latency_s);
   o.fail_safe.max_reach_across_m = 0.036;
   o.fail_safe.max_reach_along_m = 0.025;
   return o;
 }
 
-SafetyInputs Healthy(int64_t now) {
-  SafetyInputs s;
-  s.pose_utime = now;
-  s.last_frame_utime = now;
-  s.tracking = true;
-  return s;
-}
+using testing::Healthy;
 
 TEST(NozzleScheduler, ClosesWhileThePlantsPositionAtTheBarIsUncertainAndSaysWhy) {
   TreatmentMapOptions mo;

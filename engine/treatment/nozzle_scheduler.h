@@ -63,7 +63,6 @@ struct SchedulerOptions {
   // edge: at 50 Hz and 0.7 m/s that is 14 mm, and the sprayed patch's
   // centre moves by sd 2.9 mm. Commands run at 200 Hz (3.5 mm, sd 0.7 mm),
   // four per 50 Hz pose, each led from the pose by the time since it.
-  // Field, 5 seeds, placement RMS along: 50 Hz 10.33 mm, 200 Hz 10.03 mm.
   // On the CAN bus, 64 nozzles at 200 Hz are 400 commands and 400
   // acknowledgements a second, about 42 % of a 250 kbit/s bus.
   double tick_s = 0.005;

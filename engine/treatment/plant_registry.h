@@ -45,10 +45,8 @@ struct PlantRecord {
   bool crop() const { return crop_votes >= weed_votes && crop_votes > 0; }
   // A plant rather than a passing detection (a speck, a stone's glint, a leaf
   // cut off for a frame or two): seen in at least 3 frames and in at least
-  // 40 % of the (8 or more) frames that looked at its place. Measured on
-  // field seed 1: crop records are seen in 100 % of their frames (median),
-  // weed records seen 20 times or more in 76 %, while the 1 532 records
-  // seen once or twice were seen in 11–17 % of theirs.
+  // 40 % of the (8 or more) frames that looked at its place: crops are seen
+  // in nearly every frame that looks at them, passing detections in few.
   bool confirmed() const {
     return observations >= 3 && frames_in_view >= 8 && observations >= 0.4 * frames_in_view;
   }

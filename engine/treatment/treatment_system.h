@@ -33,28 +33,20 @@ struct TreatmentOptions {
   // Crop blobs mark the map only when associated with a predicted crop. A
   // crop footprint is its blob's bounding box scaled about the centroid by
   // this (1: the thesis's whole box); weeds always use the whole box. The
-  // spray must cover the root despite the placement error: on the field
-  // (plants about 0.28 m across, along RMS 15 mm with footprints at the
-  // tracked plant) 0.30 reaches 42 mm each side of the plant, about 3σ.
-  // Field, 5 seeds: 0.30 hits all 1103 crops and 12.1 % of the weeds on
-  // 6.6 % of the bed; 0.40 all, 18.5 %, 10.7 %; 0.25 1102, 9.1 %, 4.9 %;
-  // 0.20 1097, 7.0 %, 3.5 %. With footprints following their plants
-  // (along RMS 12.7 mm): 0.30 all, 12.4 %, 6.9 %; 0.25 1101 (missed by 3
-  // and 10 mm), 9.7 %, 5.0 %; 0.20 1095, 6.9 %, 3.5 %.
+  // spray must cover the root despite the placement error: on a crop some
+  // 0.28 m across, 0.30 reaches about 3σ of the placement each side of the
+  // plant (docs/results/2026-11-27-option-choices.md).
   double crop_footprint_scale = 0.30;
   // Scaled footprints of small crops are stretched to at least this half
   // size along and across (vehicle frame): 0.30 of a 3-week crop's box is
-  // some ±15 mm, under 2σ of the placement, and most crops missed on B and
-  // D were missed by 3–10 mm. 5 seeds, crops hit (bed treated): B 95.8 ->
-  // 98.3 % (1.5 -> 2.0 %), D 94.4 -> 97.4 % (1.5 -> 2.0 %); 20 mm: D 96.7 %
-  // (1.7 %). The field's crops (±42 mm) are untouched.
+  // under 2σ of the placement, and the crops missed on the small-crop
+  // presets were missed by a few millimetres.
   double crop_footprint_min_half_m = 0.025;
   double weed_footprint_scale = 1.0;
-  // Weeds are low (the field preset's: 25 mm median radius, 9 mm tall), so
-  // a weed blob's record and footprint are located at this height rather
-  // than on the crop's plane: on the 0.1 m plane a weed 3 m ahead of a camera
-  // at 1.5 m lands 20 cm beyond where it is, and slides towards the camera
-  // as it nears, leaving a trail of records.
+  // Weeds are low, so a weed blob's record and footprint are located at
+  // this height rather than on the crop's plane: on the 0.1 m plane a weed
+  // 3 m ahead of a camera at 1.5 m lands 20 cm beyond where it is, and
+  // slides towards the camera as it nears, leaving a trail of records.
   double weed_height_m = 0.005;
   // Crop blobs of one frame associated with the same predicted plant are
   // its leaves, cut apart by segmentation: they mark one footprint, their
@@ -74,14 +66,10 @@ struct TreatmentOptions {
   // where the tracker now holds the plant along, so its cells stand at its
   // latest (nearest) estimate instead of being smeared over the estimates
   // of every frame, the far ones carrying the parallax of the plant's own
-  // height (on the field preset, per-plant along RMS 15 mm over the view
-  // against 11 mm at the last view). Across, where that error is wander
-  // about the plant, each footprint stays where its frame put it: their
-  // spread averages it (latest across 9.7 mm, mean 9.1). Beyond the view's
-  // border the tracker drops the plant's own offset, so footprints of
-  // those frames join the others where they stand. Field, 5 seeds, with
-  // the tracker's merged and weed-sized blob rules: along RMS 16.5 -> 12.7
-  // mm, across 10.0 -> 9.8 mm, bed treated 7.3 -> 6.9 %.
+  // height. Across, where that error is wander about the plant, each
+  // footprint stays where its frame put it: their spread averages it.
+  // Beyond the view's border the tracker drops the plant's own offset, so
+  // footprints of those frames join the others where they stand.
   // Needs crop_footprint_at_tracked_plant.
   bool crop_footprint_follows_plant = true;
   // The spray is aimed at the root, which the camera does not see: what the
@@ -92,39 +80,29 @@ struct TreatmentOptions {
   // rim, neighbours touching it). The grid node shares none of these, so
   // the footprint stands at the node plus this fraction of the plant's own
   // offset (across, along the rows), the weight of the root's own scatter
-  // in the offset. Field, 5 seeds, along (placement RMS along): 1.0 → 11.5
-  // mm, 0.8 → 11.0, 0.7 → 10.8, 0.6 → 11.1, 0.5 → 11.3. Across, where the
-  // located centroid is better, less than the whole offset is worse: 0.85
-  // → 9.7 mm against 9.6 (0.6 on both axes, before the along walk was
-  // lowered: 9.8 → 10.2 mm). Needs crop_footprint_at_tracked_plant.
+  // in the offset. Across, where the located centroid is better, the whole
+  // offset. Needs crop_footprint_at_tracked_plant.
   double own_offset_fraction_across = 1.0;
   double own_offset_fraction_along = 0.7;
   // A blob that passed the size filter but missed every association region
   // while its bounding box covers a predicted crop position may be touching
   // plants merged (its centroid between them): it casts no weed votes, which
   // would otherwise outvote the crop cells those plants marked in other
-  // frames. Off by default: field, 5 seeds, it hits every crop (99.27 ->
-  // 100 %) but treats 17.0 % of the bed (14.6 %), the along bias grows to
-  // 4.0 mm and weeds clear of crop hit to 5.2 % (2.6 %).
+  // frames. Off by default: it hits the last crops at the cost of more than
+  // twice the treated area and the weeds under it.
   bool abstain_merged = false;
   // A blob that passed the size filter but missed every association region
   // may be touching plants merged, its centroid between them (thesis fig.
   // 2.17): when OnFrame has the mask, its pixels are split among the
   // predicted crops (CropClassifier::SplitMerged) and each crop part marks
   // its plant's footprint; what votes weed is merged_weed_parts_only's.
-  // Field, 5 seeds: all 1103 crops hit (99.27 % unsplit) at the same
-  // treated area.
   bool split_merged = true;
   // A blob cut by the image border whose box covers a predicted crop is most
   // likely that crop entering or leaving the view: its centroid is biased
   // inward, it misses the association region, and its whole box voted weed
   // for the 5–10 frames it took to cross the border, so every crop stood in
-  // a band of weed cells. Off: it casts no weed votes. Field, 3 seeds:
-  // spray-weed mode hits 78.0 % of the weeds clear of crop on 23.5 % of the
-  // bed (81.9 % on 34.1 % with the votes); spray-crop treats 7.2 % (6.7 %)
-  // and hits 12.1 % of the weeds, all under crop leaves (11.0 %). Preset A
-  // (touching plants, 5 seeds), where those votes held merged plants' crop
-  // cells in check: 93.4 % of crops hit (82.6 %) on 22.2 % of the bed (13.0 %).
+  // a band of weed cells. Off: it casts no weed votes. On suits touching
+  // plants, where those votes hold merged plants' crop cells in check.
   bool clipped_on_crop_votes_weed = false;
   // A merged blob split among the predicted crops (split_merged) votes
   // weed only with its plant matter beyond every prediction's split radius,
@@ -135,18 +113,7 @@ struct TreatmentOptions {
   // cell. Off: the whole box votes weed on the weeds' plane (as the thesis's
   // unassociated blobs). That box, as wide as two crops and projected on
   // the weeds' low plane (far beyond the crops when they are far ahead),
-  // left blocks of weed cells beside the crops on the map: on the field
-  // preset, seed 1, 3.8 m² of weed footprints in 1405 merged blobs held no
-  // weed, against 0.25 m² in 796 that did. Field, 5 seeds, spray-weed mode:
-  // 4.2 % of the bed treated for 71.8 % of the weeds clear of crop (whole
-  // boxes: 22.2 % for 75.3 % with three votes a weed cell). Spray-crop
-  // mode: along RMS 12.7 -> 11.9 mm (the box on the weeds' plane, beyond
-  // the crops, had eaten into their cells on the far side), bed treated
-  // 6.9 -> 6.8 %, weeds hit 12.4 -> 12.2 %. Without the doubt votes: 11.9
-  // mm too, but the crop cells spread (bed 7.2 %, weeds hit 12.9 %; on
-  // preset A 25.1 % of the bed against 22.8). Parts of a
-  // prediction that failed its tests voting weed too: 77.3 % of the weeds
-  // for 10.7 % of the bed, and blocks of weed cells beside the crops again.
+  // left blocks of weed cells beside the crops on the map.
   bool merged_weed_parts_only = true;
   double min_weed_part_m2 = 0.0003;  // a disk of 10 mm radius: the field's smallest weeds
   // Fail-safe on uncertainty (bar_uncertainty.h): the bar closes while the
@@ -154,9 +121,8 @@ struct TreatmentOptions {
   // now and dead-reckoned until the spray lands, reaches further from them
   // than the sprayed footprint does, across or along the rows
   // (kPositionUncertain). The margins (0: derived, UncertaintyMargin) set
-  // scheduler.fail_safe.max_reach_*. On by default
-  // (docs/results/2026-11-27-failsafe.md: no figure of presets A–D or the
-  // field changes in normal tracking; coasting closes the bar).
+  // scheduler.fail_safe.max_reach_*. On by default: in normal tracking it
+  // stays open, and a coasting tracker closes the bar (docs/fail-safe.md).
   bool close_on_uncertainty = true;
   double uncertainty_margin_across_m = 0.0;
   double uncertainty_margin_along_m = 0.0;
@@ -165,8 +131,8 @@ struct TreatmentOptions {
   // for a crop of `crop_radius_m` (TrackerOptions::crop_radius_m; 0:
   // unknown) some crop_footprint_scale × crop_radius_m each way, and at
   // least crop_footprint_min_half_m; across, the nozzles whose strips touch
-  // it spray on past its edge, by half a nozzle's width on average. Field
-  // (0.14 m crops): 42 mm along, 53 mm across. Infinite when
+  // it spray on past its edge, by half a nozzle's width on average (a
+  // 0.14 m crop: 42 mm along, 53 mm across). Infinite when
   // close_on_uncertainty is off. The vehicle pipeline sets the margins so.
   Eigen::Vector2d UncertaintyMargin(double crop_radius_m = 0.0) const;
 
@@ -194,11 +160,9 @@ struct FrameTreatment {
 BedPose TrackerPose(const tracking::GridTracker& tracker, int64_t utime, bool speed_known);
 
 // The segmentation a spray mode wants, from `base`: in spray-weed mode soil
-// growth (vision/soil_growth.h) joins no blobs. A weed against a crop's rim
-// would join the crop's blob and be spared with it: field, 5 seeds, weeds
-// clear of crop hit 65.0 % with joins, 72.6 % without, 73.0 % with no soil
-// growth at all (spray-crop mode keeps the joins: they reunite plants that
-// shade split, preset B plant recall 0.977 against 0.950).
+// growth (vision/soil_growth.h) joins no blobs, since a weed against a
+// crop's rim would join the crop's blob and be spared with it; spray-crop
+// mode keeps the joins, which reunite plants that shade split.
 vision::SegmenterOptions SegmenterOptionsFor(SprayMode mode, vision::SegmenterOptions base = {});
 
 

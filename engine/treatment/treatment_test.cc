@@ -13,6 +13,7 @@
 #include "engine/treatment/nozzle_scheduler.h"
 #include "engine/treatment/plant_registry.h"
 #include "engine/treatment/simulated_bar.h"
+#include "engine/treatment/test_bar.h"
 #include "engine/treatment/treatment_map.h"
 #include "engine/treatment/treatment_system.h"
 
@@ -250,22 +251,8 @@ TEST(TreatmentMap, BadOptionsAreNamed) {
   }
 }
 
-SchedulerOptions Bar() {
-  SchedulerOptions o;
-  o.bar.nozzles = 8;
-  o.bar.nozzle_spacing_m = 0.05;
-  o.bar.bar_offset_m = 0.5;
-  o.bar.valve_latency_s = 0.05;
-  return o;
-}
-
-SafetyInputs Healthy(int64_t now) {
-  SafetyInputs s;
-  s.pose_utime = now;
-  s.last_frame_utime = now;
-  s.tracking = true;
-  return s;
-}
+SchedulerOptions Bar() { return testing::TestBar(0.05); }
+using testing::Healthy;
 
 TEST(NozzleScheduler, OpensAheadByTheLatencyOverCropCells) {
   TreatmentMapOptions mo;
