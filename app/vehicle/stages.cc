@@ -362,6 +362,12 @@ void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
                             "): dead reckoning with the ground speed from before it");
     slip_bursts_ = slip.bursts();
   }
+  if (slip.faulty_wheel() != 0) {
+    status.faults.push_back(std::string("odometry: ") +
+                            (slip.faulty_wheel() == 1 ? "left" : "right") +
+                            " wheel disagrees with the other (encoder stalled or wheel spinning "
+                            "alone): read from the other wheel, turn rate held");
+  }
   if (r.accepted) PublishGrid(r, publisher);
   if (!pipeline_.treatment()) return;
   ReportTicks(status);

@@ -12,6 +12,8 @@ OptionErrors SlipGuardOptions::Validate() const {
   RequirePositive(e, "min_speed_m_s", min_speed_m_s);
   RequirePositive(e, "reference_time_s", reference_time_s);
   RequirePositive(e, "max_slip_s", max_slip_s);
+  RequireInRange(e, "wheel_fault_factor", wheel_fault_factor, 1.0, 100.0);
+  RequirePositive(e, "max_wheel_fault_s", max_wheel_fault_s);
   return e;
 }
 
@@ -25,6 +27,11 @@ void SlipGuard::Reset() {
   reference_m_s_ = 0.0;
   slip_s_ = 0.0;
   bursts_ = 0;
+  wheel_reference_ = {};
+  held_difference_m_s_ = 0.0;
+  wheel_fault_s_ = 0.0;
+  faulty_wheel_ = 0;
+  wheel_faults_ = 0;
 }
 
 double SlipGuard::Threshold(double speed, double span_s) const {
@@ -32,14 +39,58 @@ double SlipGuard::Threshold(double speed, double span_s) const {
          options_.max_acceleration_m_s2 * span_s;
 }
 
-WheelSpeeds SlipGuard::Filter(const WheelSpeeds& measured, double dt_s) {
-  const double v = 0.5 * (measured.left_m_s + measured.right_m_s);
-  if (!options_.enabled) return measured;
+WheelSpeeds SlipGuard::CheckWheels(const WheelSpeeds& measured, double dt_s) {
+  const double span = dt_s + options_.reference_time_s;
+  WheelSpeeds& ref = wheel_reference_;
+  if (faulty_wheel_ != 0) {
+    wheel_fault_s_ += dt_s;
+    const bool left = faulty_wheel_ == 1;
+    const double good = left ? measured.right_m_s : measured.left_m_s;
+    const double bad = left ? measured.left_m_s : measured.right_m_s;
+    const double expected = good + (left ? held_difference_m_s_ : -held_difference_m_s_);
+    if (std::abs(bad - expected) <= Threshold(expected, span) ||
+        wheel_fault_s_ > options_.max_wheel_fault_s) {
+      faulty_wheel_ = 0;  // back, or a real change that vision corrects
+      ref = measured;
+      return measured;
+    }
+    (left ? ref.right_m_s : ref.left_m_s) = good;
+    return left ? WheelSpeeds{expected, good} : WheelSpeeds{good, expected};
+  }
+  if (!slipping_) {
+    const double wide = options_.wheel_fault_factor;
+    const bool left_jumped =
+        std::abs(measured.left_m_s - ref.left_m_s) > wide * Threshold(ref.left_m_s, span);
+    const bool right_jumped =
+        std::abs(measured.right_m_s - ref.right_m_s) > wide * Threshold(ref.right_m_s, span);
+    const bool left_kept = std::abs(measured.left_m_s - ref.left_m_s) <=
+                           std::sqrt(2.0) * Threshold(ref.left_m_s, span);
+    const bool right_kept = std::abs(measured.right_m_s - ref.right_m_s) <=
+                            std::sqrt(2.0) * Threshold(ref.right_m_s, span);
+    if ((left_jumped && right_kept) || (right_jumped && left_kept)) {
+      faulty_wheel_ = left_jumped ? 1 : 2;
+      wheel_fault_s_ = 0.0;
+      held_difference_m_s_ = ref.left_m_s - ref.right_m_s;
+      ++wheel_faults_;
+      return CheckWheels(measured, 0.0);
+    }
+  }
+  const double a = dt_s / (options_.reference_time_s + dt_s);
+  ref.left_m_s += a * (measured.left_m_s - ref.left_m_s);
+  ref.right_m_s += a * (measured.right_m_s - ref.right_m_s);
+  return measured;
+}
+
+WheelSpeeds SlipGuard::Filter(const WheelSpeeds& raw, double dt_s) {
+  if (!options_.enabled) return raw;
   if (!started_) {
     started_ = true;
-    reference_m_s_ = v;
-    return measured;
+    reference_m_s_ = 0.5 * (raw.left_m_s + raw.right_m_s);
+    wheel_reference_ = raw;
+    return raw;
   }
+  const WheelSpeeds measured = CheckWheels(raw, dt_s);
+  const double v = 0.5 * (measured.left_m_s + measured.right_m_s);
   if (slipping_) {
     slip_s_ += dt_s;
     // The wheels grip again once they agree with the ground speed held.

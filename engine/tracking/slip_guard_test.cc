@@ -68,6 +68,54 @@ TEST(SlipGuard, AJumpThatLastsIsTakenAsAChangeOfSpeedAfterMaxSlip) {
   EXPECT_FALSE(guard.slipping());
 }
 
+// A stalled left encoder (reads 0 for 10 m) beside a right wheel at speed,
+// in a gentle turn: the left wheel is read as the right one plus the
+// difference they held, so speed and turn rate go on; the encoder's return
+// ends it. Without the check the ground speed halved and, scaled back up,
+// the right wheel alone drove a hard turn.
+TEST(SlipGuard, AStalledEncoderIsReadFromTheOtherWheelWithTheTurnRateHeld) {
+  SlipGuard guard;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.014);
+  const double left = 0.68, right = 0.72;  // left − right: −0.04 m/s
+  double distance_error = 0.0, turn_error = 0.0;
+  for (int k = 0; k < 1200; ++k) {
+    const bool stalled = k >= 100 && k < 814;  // 10 m at 0.7 m/s
+    const WheelSpeeds measured{stalled ? 0.0 : left + noise(rng), right + noise(rng)};
+    const WheelSpeeds w = guard.Filter(measured, kDt);
+    EXPECT_FALSE(guard.slipping()) << "sample " << k;
+    if (stalled) {
+      EXPECT_EQ(guard.faulty_wheel(), 1) << "sample " << k;
+      EXPECT_EQ(w.right_m_s, measured.right_m_s);
+      distance_error += (0.5 * (w.left_m_s + w.right_m_s) - 0.7) * kDt;
+      turn_error += (w.left_m_s - w.right_m_s - (left - right)) * kDt;
+    } else if (k > 820) {
+      EXPECT_EQ(guard.faulty_wheel(), 0) << "sample " << k;
+      EXPECT_EQ(w.left_m_s, measured.left_m_s);
+    }
+  }
+  EXPECT_EQ(guard.wheel_faults(), 1);
+  EXPECT_EQ(guard.bursts(), 0);
+  // Over the 10 m: the right wheel's noise (sd 14 mm/s, 714 samples: 7 mm)
+  // and the held difference's (a few mm/s over 14 s).
+  EXPECT_LT(std::abs(distance_error), 0.05);
+  // Wheel-path difference, m: 0.15 m is 0.1 rad of heading at a 1.5 m track.
+  EXPECT_LT(std::abs(turn_error), 0.15);
+}
+
+TEST(SlipGuard, BothWheelsSpinningIsSlipNotAWheelFaultAndNoiseTripsNeither) {
+  SlipGuard guard;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.014);
+  for (int k = 0; k < 20000; ++k) {  // 400 s, 280 m of noisy wheels
+    const double f = (k >= 10000 && k < 10030) ? 1.3 : 1.0;
+    guard.Filter({f * 0.7 + noise(rng), f * 0.7 + noise(rng)}, kDt);
+    EXPECT_EQ(guard.faulty_wheel(), 0) << "sample " << k;
+  }
+  EXPECT_EQ(guard.wheel_faults(), 0);
+  EXPECT_EQ(guard.bursts(), 1);
+}
+
 TEST(SlipGuard, OffPassesTheWheelsThroughAndBadOptionsAreNamed) {
   SlipGuardOptions o;
   o.enabled = false;
