@@ -71,10 +71,15 @@ bool Overlaps(double y0, double y1, const BuiltRange& r) { return y1 >= r.y0_m &
 
 int BlockOf(double y) { return static_cast<int>(std::floor(y / MapLayer::kBlockM)); }
 
-// Paints `tile` into a block image of `nx` × `ny` cells from `origin`, each
-// cell keeping its highest-ranked class.
-void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, int nx, int ny, std::vector<uint8_t>& cells) {
-  const double cell = MapLayer::kBlockCellM;
+int ChunkOf(int tile_y) {
+  return static_cast<int>(std::floor(static_cast<double>(tile_y) / MapLayer::kChunkRows));
+}
+
+// Paints `tile` into an image of `nx` × `ny` cells of `cell` metres from
+// `origin`, each cell keeping its highest-ranked class (at the tile's own
+// resolution, from a tile corner: a copy).
+void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, double cell, int nx, int ny,
+           std::vector<uint8_t>& cells) {
   const size_t n = std::min(t.cells.size(), static_cast<size_t>(t.width) * static_cast<size_t>(t.height));
   for (int j = 0; j < t.height; ++j) {
     const int by = static_cast<int>(std::floor((t.origin_m.y() + (j + 0.5) * t.resolution_m - origin.y()) / cell));
@@ -99,17 +104,13 @@ void MapLayer::Update(const RunModel& model, const FieldWindow& view) {
   if (changed) Index(model);
   if (!changed && detail == detail_ && built_.Covers(view)) return;
   seen_revisions_ = model.tile_revision_sum();
+  if (detail != detail_) {
+    for (auto& [index, d] : pieces_) Drop(d.actor);
+    pieces_.clear();
+  }
   detail_ = detail;
   built_ = BuiltRange::Around(view, length);
-  if (detail) {
-    for (auto& [b, d] : blocks_) Drop(d.actor);
-    blocks_.clear();
-    ShowTiles(model, built_);
-  } else {
-    for (auto& [k, d] : actors_) Drop(d.actor);
-    actors_.clear();
-    ShowBlocks(model, built_);
-  }
+  ShowPieces(model, built_);
 }
 
 // The extents of the model's tiles; tiles it no longer has (the station
@@ -119,7 +120,7 @@ void MapLayer::Index(const RunModel& model) {
     Extent& e = index_[key];
     if (e.revision == t.revision) continue;
     e = {t.revision, t.origin_m.x(), t.origin_m.x() + t.width * t.resolution_m, t.origin_m.y(),
-         t.origin_m.y() + t.height * t.resolution_m};
+         t.origin_m.y() + t.height * t.resolution_m, t.resolution_m};
   }
   if (index_.size() == model.tiles().size()) return;
   for (auto it = index_.begin(); it != index_.end();) {
@@ -127,65 +128,55 @@ void MapLayer::Index(const RunModel& model) {
   }
 }
 
-void MapLayer::ShowTiles(const RunModel& model, const BuiltRange& near) {
-  for (auto it = actors_.begin(); it != actors_.end();) {
-    const auto e = index_.find(it->first);
-    if (e != index_.end() && Overlaps(e->second.y0_m, e->second.y1_m, near)) {
-      ++it;
-      continue;
-    }
-    Drop(it->second.actor);
-    it = actors_.erase(it);
-  }
+std::map<int, MapLayer::Piece> MapLayer::Wanted(const BuiltRange& near) const {
+  std::map<int, Piece> wanted;
   for (const auto& [key, e] : index_) {
     if (!Overlaps(e.y0_m, e.y1_m, near)) continue;
-    Drawn& slot = actors_[key];
-    if (slot.stamp == e.revision && slot.actor) continue;
-    if (!slot.actor) slot.actor = NewActor();
-    const telemetry::MapTileDelta& t = model.tiles().at(key);
-    slot.actor->GetMapper()->SetInputData(Image(t.cells, t.width, t.height, t.resolution_m, t.origin_m));
-    slot.actor->Modified();
-    slot.stamp = e.revision;
-  }
-}
-
-void MapLayer::ShowBlocks(const RunModel& model, const BuiltRange& near) {
-  struct Pending {
-    int stamp = 0;
-    double x0 = 1e300, x1 = -1e300;
-    std::vector<TileKey> tiles;
-  };
-  std::map<int, Pending> wanted;
-  for (const auto& [key, e] : index_) {
-    if (!Overlaps(e.y0_m, e.y1_m, near)) continue;
-    for (int b = BlockOf(e.y0_m); b <= BlockOf(e.y1_m - 1e-9); ++b) {
-      Pending& p = wanted[b];
+    const int first = detail_ ? ChunkOf(key.second) : BlockOf(e.y0_m);
+    const int last = detail_ ? first : BlockOf(e.y1_m - 1e-9);
+    for (int b = first; b <= last; ++b) {
+      Piece& p = wanted[b];
       p.stamp += e.revision + 1;
       p.x0 = std::min(p.x0, e.x0_m), p.x1 = std::max(p.x1, e.x1_m);
+      p.y0 = std::min(p.y0, e.y0_m), p.y1 = std::max(p.y1, e.y1_m);
+      p.cell = std::min(p.cell, e.cell_m);
       p.tiles.push_back(key);
     }
   }
-  for (auto it = blocks_.begin(); it != blocks_.end();) {
+  return wanted;
+}
+
+void MapLayer::ShowPieces(const RunModel& model, const BuiltRange& near) {
+  const std::map<int, Piece> wanted = Wanted(near);
+  for (auto it = pieces_.begin(); it != pieces_.end();) {
     if (wanted.count(it->first)) {
       ++it;
       continue;
     }
     Drop(it->second.actor);
-    it = blocks_.erase(it);
+    it = pieces_.erase(it);
   }
-  for (const auto& [b, p] : wanted) {
-    Drawn& slot = blocks_[b];
-    if (slot.stamp == p.stamp && slot.actor) continue;
-    const Eigen::Vector2d origin(std::floor(p.x0 / kBlockCellM) * kBlockCellM, b * kBlockM);
-    const int nx = static_cast<int>(std::ceil((p.x1 - origin.x()) / kBlockCellM));
-    const int ny = static_cast<int>(std::ceil(kBlockM / kBlockCellM - 1e-9));
-    std::vector<uint8_t> cells(static_cast<size_t>(nx) * static_cast<size_t>(ny), Cell::CELL_UNKNOWN);
-    for (const TileKey& key : p.tiles) Paint(model.tiles().at(key), origin, nx, ny, cells);
-    if (!slot.actor) slot.actor = NewActor();
-    slot.actor->GetMapper()->SetInputData(Image(cells, nx, ny, kBlockCellM, origin));
-    slot.actor->Modified();
-    slot.stamp = p.stamp;
+  for (const auto& [index, piece] : wanted) {
+    Drawn& slot = pieces_[index];
+    if (slot.stamp != piece.stamp || !slot.actor) Draw(model, index, piece, slot);
   }
+}
+
+// A chunk at its finest tile's resolution from its tiles' corner; a block
+// in kBlockCellM cells over its kBlockM of bed.
+void MapLayer::Draw(const RunModel& model, int index, const Piece& p, Drawn& slot) {
+  const double cell = detail_ ? p.cell : kBlockCellM;
+  const Eigen::Vector2d origin = detail_ ? Eigen::Vector2d(p.x0, p.y0)
+                                         : Eigen::Vector2d(std::floor(p.x0 / cell) * cell, index * kBlockM);
+  const double y1 = detail_ ? p.y1 : origin.y() + kBlockM;
+  const int nx = static_cast<int>(std::ceil((p.x1 - origin.x()) / cell - 1e-6));
+  const int ny = static_cast<int>(std::ceil((y1 - origin.y()) / cell - 1e-6));
+  std::vector<uint8_t> cells(static_cast<size_t>(nx) * static_cast<size_t>(ny), Cell::CELL_UNKNOWN);
+  for (const TileKey& key : p.tiles) Paint(model.tiles().at(key), origin, cell, nx, ny, cells);
+  if (!slot.actor) slot.actor = NewActor();
+  slot.actor->GetMapper()->SetInputData(Image(cells, nx, ny, cell, origin));
+  slot.actor->Modified();
+  slot.stamp = p.stamp;
 }
 
 vtkSmartPointer<vtkImageActor> MapLayer::NewActor() {
@@ -203,8 +194,7 @@ void MapLayer::Drop(vtkImageActor* actor) {
 
 void MapLayer::SetVisible(bool visible) {
   visible_ = visible;
-  for (auto& [key, d] : actors_) d.actor->SetVisibility(visible);
-  for (auto& [key, d] : blocks_) d.actor->SetVisibility(visible);
+  for (auto& [index, d] : pieces_) d.actor->SetVisibility(visible);
 }
 
 bool MapLayer::Bounds(double b[4]) const {

@@ -150,7 +150,7 @@ void RunModel::ObserveTiles(const tm::TelemetrySnapshot& s) {
     const auto in = s.tiles.find(*tile_hint_);
     if (in == s.tiles.end()) return;
     const auto it = tiles_.find(*tile_hint_);
-    if (it != tiles_.end() && it->second.revision == in->second.revision) return;
+    if (it != tiles_.end() && it->second.revision >= in->second.revision) return;  // the newest wins
     tile_revisions_ += in->second.revision + 1 - (it != tiles_.end() ? it->second.revision + 1 : 0);
     tiles_[*tile_hint_] = in->second;
     NoteMapFront(in->second);
