@@ -9,7 +9,9 @@
 //    view leaves it);
 //  - far: blocks of kBlockM of bed resampled to kBlockCellM cells (a weed cell
 //    wins over treated, crop, soil and unknown, so weed patches stay seen),
-//    again only near the view.
+//    again only near the view; a view longer than kFarMaxM (kilometres of
+//    bed, metres a pixel) in blocks kCoarseBlocks times as long, of cells
+//    kCoarseCells times as big (bigger would paint a weedy bed all weed).
 
 #include <vtkImageActor.h>
 #include <vtkRenderer.h>
@@ -30,6 +32,9 @@ class MapLayer {
   static constexpr double kBlockM = 25.0;
   static constexpr double kBlockCellM = 0.08;
   static constexpr int kChunkRows = 6;
+  static constexpr double kFarMaxM = 600.0;
+  static constexpr int kCoarseBlocks = 10;
+  static constexpr int kCoarseCells = 2;
 
   void AddTo(vtkRenderer* renderer) { renderer_ = renderer; }
   // Shows the map of `model` near `view` (a tile the model no longer has,
@@ -55,6 +60,16 @@ class MapLayer {
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300, cell = 1e300;
     std::vector<std::pair<int, int>> tiles;
   };
+  // A far block's cells, kept when it leaves the view (25 m of bed in ~7 kB:
+  // a far view goes back to a block without painting its ~100 tiles again).
+  struct BlockCells {
+    int stamp = -1;
+    size_t tiles = 0;
+    double y0 = 0, y1 = 0;
+    Eigen::Vector2d origin = Eigen::Vector2d::Zero();
+    int nx = 0, ny = 0;
+    std::vector<uint8_t> cells;
+  };
   using TileKey = std::pair<int, int>;
 
   void Index(const RunModel& model);
@@ -62,15 +77,20 @@ class MapLayer {
   std::map<int, Piece> Wanted(const BuiltRange& near) const;
   void ShowPieces(const RunModel& model, const BuiltRange& near);
   void Draw(const RunModel& model, int index, const Piece& piece, Drawn& slot);
+  // The piece's cells at `cell` metres from `origin` (a far block's from
+  // the kept ones when its tiles are the same).
+  const std::vector<uint8_t>& Cells(const RunModel& model, int index, const Piece& piece, BlockCells& out) const;
   vtkSmartPointer<vtkImageActor> NewActor();
   void Drop(vtkImageActor* actor);
 
   vtkRenderer* renderer_ = nullptr;
   std::map<TileKey, Extent> index_;  // every tile of the model (no pixels)
   std::map<int, Drawn> pieces_;      // chunks or blocks near the view
+  std::map<std::pair<int, int>, BlockCells> far_cells_;  // every block drawn, by level and index
+  BlockCells chunk_cells_;               // scratch for a close chunk
   bool visible_ = true;
   int seen_revisions_ = -1;
-  bool detail_ = true;
+  int level_ = 0;  // 0 close (chunks), 1 far, 2 farther (blocks)
   BuiltRange built_;
 };
 

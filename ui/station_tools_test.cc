@@ -312,6 +312,30 @@ TEST(MapLayerLevels, FarViewDrawsBlocks) {
   EXPECT_LE(view.map_layer().actors(), 4) << "chunks near the view";
 }
 
+// A view of kilometres draws the bed in 250 m blocks of 16 cm cells, a
+// handful of images (VTK's cost is per image), weeds and soil still seen.
+TEST(MapLayerLevels, KilometreViewDrawsCoarseBlocks) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  SyntheticRunOptions o;
+  o.length_m = 700.0;
+  o.speed_m_s = 4.0, o.frame_rate_hz = 4.0;  // fewer messages, the same bed
+  LogTimeline run(SyntheticRun(o), "");
+  run.Seek(run.duration_s());
+  Canvas canvas(800, 200);
+  MapView view;
+  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
+  for (MapLayerId id : {MapLayerId::kPlants, MapLayerId::kGrid, MapLayerId::kEllipses, MapLayerId::kVehicle}) {
+    view.SetVisible(id, false);
+  }
+  view.SetWindow(view.WholeRun(run.model()));
+  view.Update(run.model());
+  const cv::Mat far = canvas.Render();
+  cv::imwrite(testing::OutputDir() + "/map_coarse.png", far);
+  EXPECT_LE(view.map_layer().actors(), 3) << "700 m in 250 m blocks";
+  EXPECT_GT(PixelsOf(far, palette::kWeed), 50);
+  EXPECT_GT(PixelsOf(far, palette::kSoil), 700);
+}
+
 // The vehicle sends a tile row once its spray bar has passed it, and its
 // bed frame drifts from the pose drawn: on the field preset the newest map
 // row trails the vehicle by 1.0 m at 100 m and 3.1 m at 4.75 km, beyond the
