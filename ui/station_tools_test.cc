@@ -332,8 +332,10 @@ TEST(MapLayerLevels, KilometreViewDrawsCoarseBlocks) {
   const cv::Mat far = canvas.Render();
   cv::imwrite(testing::OutputDir() + "/map_coarse.png", far);
   EXPECT_LE(view.map_layer().actors(), 3) << "700 m in 250 m blocks";
+  // 0.9 m a pixel, the bed a line one or two pixels high: weeds in it, soil
+  // most of its 800 pixels' length.
   EXPECT_GT(PixelsOf(far, palette::kWeed), 50);
-  EXPECT_GT(PixelsOf(far, palette::kSoil), 700);
+  EXPECT_GT(PixelsOf(far, palette::kSoil), 400);
 }
 
 // The vehicle sends a tile row once its spray bar has passed it, and its
