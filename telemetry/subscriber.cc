@@ -128,6 +128,7 @@ bool Subscriber::Dispatch(const std::string& channel, const void* data, size_t s
   } else if (channel == kMapTiles) {
     Take<plantscale_map_tile_t>(channel, data, size, recv, [&](const auto& m) {
       MapTileDelta t = FromLcm(m);
+      if (!options_.keep_tiles) st.tiles.clear();
       MapTileDelta& slot = st.tiles[{t.tile_x, t.tile_y}];
       if (slot.cells.empty() || t.revision >= slot.revision) slot = std::move(t);
     });

@@ -31,6 +31,10 @@ struct SubscriberOptions {
   int event_history = 200;
   int shot_history = 2000;
   int problem_history = 50;  // last problem lines kept
+  // false: the snapshot's `tiles` holds only the tile last received (for a
+  // reader that keeps the map itself, e.g. the station's run model: a 5 km
+  // bed's tiles are ~100 MB, held once, not twice).
+  bool keep_tiles = true;
 
   OptionErrors Validate() const;
 };

@@ -5,6 +5,7 @@
 #include <vtkNew.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -56,35 +57,54 @@ vtkSmartPointer<vtkImageData> Image(const std::vector<uint8_t>& cells, int width
   image->SetSpacing(cell_m, cell_m, 1.0);
   image->SetOrigin(origin.x() + 0.5 * cell_m, origin.y() + 0.5 * cell_m, 0.0);
   image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  std::array<std::array<unsigned char, 3>, 256> lut{};  // cell value -> RGB bytes
+  for (size_t v = 0; v < lut.size(); ++v) {
+    const Rgb c = CellColour(static_cast<uint8_t>(v));
+    lut[v] = {static_cast<unsigned char>(c.r * 255.0 + 0.5), static_cast<unsigned char>(c.g * 255.0 + 0.5),
+              static_cast<unsigned char>(c.b * 255.0 + 0.5)};
+  }
   auto* out = static_cast<unsigned char*>(image->GetScalarPointer());
   const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
   for (size_t i = 0; i < n; ++i) {
-    const Rgb c = CellColour(i < cells.size() ? cells[i] : 0);
-    out[3 * i] = static_cast<unsigned char>(c.r * 255.0 + 0.5);
-    out[3 * i + 1] = static_cast<unsigned char>(c.g * 255.0 + 0.5);
-    out[3 * i + 2] = static_cast<unsigned char>(c.b * 255.0 + 0.5);
+    const auto& c = lut[i < cells.size() ? cells[i] : 0];
+    std::copy(c.begin(), c.end(), out + 3 * i);
   }
   return image;
 }
 
 bool Overlaps(double y0, double y1, const BuiltRange& r) { return y1 >= r.y0_m && y0 <= r.y1_m; }
 
-int BlockOf(double y) { return static_cast<int>(std::floor(y / MapLayer::kBlockM)); }
+// A far level's block length and cell edge.
+double BlockM(int level) { return level > 1 ? MapLayer::kBlockM * MapLayer::kCoarseBlocks : MapLayer::kBlockM; }
+double BlockCellM(int level) {
+  return level > 1 ? MapLayer::kBlockCellM * MapLayer::kCoarseCells : MapLayer::kBlockCellM;
+}
 
-// Paints `tile` into a block image of `nx` × `ny` cells from `origin`, each
-// cell keeping its highest-ranked class.
-void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, int nx, int ny, std::vector<uint8_t>& cells) {
-  const double cell = MapLayer::kBlockCellM;
-  const size_t n = std::min(t.cells.size(), static_cast<size_t>(t.width) * static_cast<size_t>(t.height));
-  for (int j = 0; j < t.height; ++j) {
-    const int by = static_cast<int>(std::floor((t.origin_m.y() + (j + 0.5) * t.resolution_m - origin.y()) / cell));
-    if (by < 0 || by >= ny) continue;
-    for (int i = 0; i < t.width; ++i) {
-      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(t.width) + static_cast<size_t>(i);
-      const int bx = static_cast<int>(std::floor((t.origin_m.x() + (i + 0.5) * t.resolution_m - origin.x()) / cell));
-      if (k >= n || bx < 0 || bx >= nx) continue;
-      uint8_t& to = cells[static_cast<size_t>(by) * static_cast<size_t>(nx) + static_cast<size_t>(bx)];
-      if (Rank(t.cells[k]) > Rank(to)) to = t.cells[k];
+int BlockOf(double y, int level) { return static_cast<int>(std::floor(y / BlockM(level))); }
+
+int ChunkOf(int tile_y) {
+  return static_cast<int>(std::floor(static_cast<double>(tile_y) / MapLayer::kChunkRows));
+}
+
+// Paints `tile` into an image of `nx` × `ny` cells of `cell` metres from
+// `origin`, each cell keeping its highest-ranked class (at the tile's own
+// resolution, from a tile corner: a copy).
+void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, double cell, int nx, int ny,
+           std::vector<uint8_t>& cells) {
+  const auto to_cell = [&](double at, double from, int i, int count) {
+    const int b = static_cast<int>(std::floor((at + (i + 0.5) * t.resolution_m - from) / cell));
+    return b >= 0 && b < count ? b : -1;
+  };
+  std::vector<int> bx(static_cast<size_t>(std::max(0, t.width)));
+  for (int i = 0; i < t.width; ++i) bx[static_cast<size_t>(i)] = to_cell(t.origin_m.x(), origin.x(), i, nx);
+  const size_t width = bx.size();
+  for (int j = 0; j < t.height && (static_cast<size_t>(j) + 1) * width <= t.cells.size(); ++j) {
+    const int by = to_cell(t.origin_m.y(), origin.y(), j, ny);
+    if (by < 0) continue;
+    uint8_t* row = &cells[static_cast<size_t>(by) * static_cast<size_t>(nx)];
+    const uint8_t* in = &t.cells[static_cast<size_t>(j) * width];
+    for (size_t i = 0; i < width; ++i) {
+      if (bx[i] >= 0 && Rank(in[i]) > Rank(row[bx[i]])) row[bx[i]] = in[i];
     }
   }
 }
@@ -94,22 +114,18 @@ void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, int 
 void MapLayer::Update(const RunModel& model, const FieldWindow& view) {
   if (renderer_ == nullptr) return;
   const double length = std::max(1e-3, view.y1_m - view.y0_m);
-  const bool detail = length <= kDetailMaxM;
+  const int level = length <= kDetailMaxM ? 0 : length <= kFarMaxM ? 1 : 2;
   const bool changed = model.tile_revision_sum() != seen_revisions_;
   if (changed) Index(model);
-  if (!changed && detail == detail_ && built_.Covers(view)) return;
+  if (!changed && level == level_ && built_.Covers(view)) return;
   seen_revisions_ = model.tile_revision_sum();
-  detail_ = detail;
-  built_ = BuiltRange::Around(view, length);
-  if (detail) {
-    for (auto& [b, d] : blocks_) Drop(d.actor);
-    blocks_.clear();
-    ShowTiles(model, built_);
-  } else {
-    for (auto& [k, d] : actors_) Drop(d.actor);
-    actors_.clear();
-    ShowBlocks(model, built_);
+  if (level != level_) {
+    for (auto& [index, d] : pieces_) Drop(d.actor);
+    pieces_.clear();
   }
+  level_ = level;
+  built_ = BuiltRange::Around(view, length);
+  ShowPieces(model, built_);
 }
 
 // The extents of the model's tiles; tiles it no longer has (the station
@@ -119,7 +135,7 @@ void MapLayer::Index(const RunModel& model) {
     Extent& e = index_[key];
     if (e.revision == t.revision) continue;
     e = {t.revision, t.origin_m.x(), t.origin_m.x() + t.width * t.resolution_m, t.origin_m.y(),
-         t.origin_m.y() + t.height * t.resolution_m};
+         t.origin_m.y() + t.height * t.resolution_m, t.resolution_m};
   }
   if (index_.size() == model.tiles().size()) return;
   for (auto it = index_.begin(); it != index_.end();) {
@@ -127,65 +143,63 @@ void MapLayer::Index(const RunModel& model) {
   }
 }
 
-void MapLayer::ShowTiles(const RunModel& model, const BuiltRange& near) {
-  for (auto it = actors_.begin(); it != actors_.end();) {
-    const auto e = index_.find(it->first);
-    if (e != index_.end() && Overlaps(e->second.y0_m, e->second.y1_m, near)) {
-      ++it;
-      continue;
-    }
-    Drop(it->second.actor);
-    it = actors_.erase(it);
-  }
+std::map<int, MapLayer::Piece> MapLayer::Wanted(const BuiltRange& near) const {
+  std::map<int, Piece> wanted;
   for (const auto& [key, e] : index_) {
     if (!Overlaps(e.y0_m, e.y1_m, near)) continue;
-    Drawn& slot = actors_[key];
-    if (slot.stamp == e.revision && slot.actor) continue;
-    if (!slot.actor) slot.actor = NewActor();
-    const telemetry::MapTileDelta& t = model.tiles().at(key);
-    slot.actor->GetMapper()->SetInputData(Image(t.cells, t.width, t.height, t.resolution_m, t.origin_m));
-    slot.actor->Modified();
-    slot.stamp = e.revision;
-  }
-}
-
-void MapLayer::ShowBlocks(const RunModel& model, const BuiltRange& near) {
-  struct Pending {
-    int stamp = 0;
-    double x0 = 1e300, x1 = -1e300;
-    std::vector<TileKey> tiles;
-  };
-  std::map<int, Pending> wanted;
-  for (const auto& [key, e] : index_) {
-    if (!Overlaps(e.y0_m, e.y1_m, near)) continue;
-    for (int b = BlockOf(e.y0_m); b <= BlockOf(e.y1_m - 1e-9); ++b) {
-      Pending& p = wanted[b];
+    const int first = level_ == 0 ? ChunkOf(key.second) : BlockOf(e.y0_m, level_);
+    const int last = level_ == 0 ? first : BlockOf(e.y1_m - 1e-9, level_);
+    for (int b = first; b <= last; ++b) {
+      Piece& p = wanted[b];
       p.stamp += e.revision + 1;
       p.x0 = std::min(p.x0, e.x0_m), p.x1 = std::max(p.x1, e.x1_m);
+      p.y0 = std::min(p.y0, e.y0_m), p.y1 = std::max(p.y1, e.y1_m);
+      p.cell = std::min(p.cell, e.cell_m);
       p.tiles.push_back(key);
     }
   }
-  for (auto it = blocks_.begin(); it != blocks_.end();) {
+  return wanted;
+}
+
+void MapLayer::ShowPieces(const RunModel& model, const BuiltRange& near) {
+  const std::map<int, Piece> wanted = Wanted(near);
+  for (auto it = pieces_.begin(); it != pieces_.end();) {
     if (wanted.count(it->first)) {
       ++it;
       continue;
     }
     Drop(it->second.actor);
-    it = blocks_.erase(it);
+    it = pieces_.erase(it);
   }
-  for (const auto& [b, p] : wanted) {
-    Drawn& slot = blocks_[b];
-    if (slot.stamp == p.stamp && slot.actor) continue;
-    const Eigen::Vector2d origin(std::floor(p.x0 / kBlockCellM) * kBlockCellM, b * kBlockM);
-    const int nx = static_cast<int>(std::ceil((p.x1 - origin.x()) / kBlockCellM));
-    const int ny = static_cast<int>(std::ceil(kBlockM / kBlockCellM - 1e-9));
-    std::vector<uint8_t> cells(static_cast<size_t>(nx) * static_cast<size_t>(ny), Cell::CELL_UNKNOWN);
-    for (const TileKey& key : p.tiles) Paint(model.tiles().at(key), origin, nx, ny, cells);
-    if (!slot.actor) slot.actor = NewActor();
-    slot.actor->GetMapper()->SetInputData(Image(cells, nx, ny, kBlockCellM, origin));
-    slot.actor->Modified();
-    slot.stamp = p.stamp;
+  for (const auto& [index, piece] : wanted) {
+    Drawn& slot = pieces_[index];
+    if (slot.stamp != piece.stamp || !slot.actor) Draw(model, index, piece, slot);
   }
+}
+
+void MapLayer::Draw(const RunModel& model, int index, const Piece& p, Drawn& slot) {
+  BlockCells& b = level_ == 0 ? chunk_cells_ : far_cells_[{level_, index}];
+  const std::vector<uint8_t>& cells = Cells(model, index, p, b);
+  if (!slot.actor) slot.actor = NewActor();
+  slot.actor->GetMapper()->SetInputData(Image(cells, b.nx, b.ny, level_ == 0 ? p.cell : BlockCellM(level_), b.origin));
+  slot.actor->Modified();
+  slot.stamp = p.stamp;
+}
+
+// A chunk at its finest tile's resolution from its tiles' corner; a block
+// in its level's cells over its level's length of bed.
+const std::vector<uint8_t>& MapLayer::Cells(const RunModel& model, int index, const Piece& p, BlockCells& b) const {
+  const bool chunk = level_ == 0;
+  if (!chunk && b.stamp == p.stamp && b.tiles == p.tiles.size() && b.y0 == p.y0 && b.y1 == p.y1) return b.cells;
+  const double cell = chunk ? p.cell : BlockCellM(level_);
+  b.origin = chunk ? Eigen::Vector2d(p.x0, p.y0) : Eigen::Vector2d(std::floor(p.x0 / cell) * cell, index * BlockM(level_));
+  const double y1 = chunk ? p.y1 : b.origin.y() + BlockM(level_);
+  b.nx = static_cast<int>(std::ceil((p.x1 - b.origin.x()) / cell - 1e-6));
+  b.ny = static_cast<int>(std::ceil((y1 - b.origin.y()) / cell - 1e-6));
+  b.cells.assign(static_cast<size_t>(b.nx) * static_cast<size_t>(b.ny), Cell::CELL_UNKNOWN);
+  for (const TileKey& key : p.tiles) Paint(model.tiles().at(key), b.origin, cell, b.nx, b.ny, b.cells);
+  b.stamp = p.stamp, b.tiles = p.tiles.size(), b.y0 = p.y0, b.y1 = p.y1;
+  return b.cells;
 }
 
 vtkSmartPointer<vtkImageActor> MapLayer::NewActor() {
@@ -203,8 +217,7 @@ void MapLayer::Drop(vtkImageActor* actor) {
 
 void MapLayer::SetVisible(bool visible) {
   visible_ = visible;
-  for (auto& [key, d] : actors_) d.actor->SetVisibility(visible);
-  for (auto& [key, d] : blocks_) d.actor->SetVisibility(visible);
+  for (auto& [index, d] : pieces_) d.actor->SetVisibility(visible);
 }
 
 bool MapLayer::Bounds(double b[4]) const {

@@ -122,15 +122,28 @@ FieldWindow MapView::WholeRunOf(const RunModel& model) const {
   return {lo - 0.2, hi + 0.2, 0.0};
 }
 
+double MapView::FollowBehind(const RunModel& model, double vehicle_y_m) {
+  if (&model != trail_model_ || model.messages() < trail_messages_) trail_.clear();  // another run, or sought back
+  trail_model_ = &model, trail_messages_ = model.messages();
+  if (const auto front = model.map_front_y_m()) trail_.emplace_back(vehicle_y_m, vehicle_y_m - *front);
+  while (!trail_.empty() && trail_.front().first < vehicle_y_m - params_.trail_window_m) trail_.pop_front();
+  double trail = -1e300;
+  for (const auto& [y, lag] : trail_) trail = std::max(trail, lag);
+  // The vehicle sits follow_ahead_m left of the centre at the default zoom,
+  // in proportion when zoomed, unless the map trails it farther.
+  const double length = follow_length_m_;
+  const double ahead = params_.follow_ahead_m * length / params_.follow_length_m;
+  const double behind = 0.5 * length - ahead;
+  const double most = std::max(behind, (1.0 - params_.keep_ahead_fraction) * length);
+  return std::clamp(trail + params_.map_in_view_fraction * length, behind, most);
+}
+
 FieldWindow MapView::PlaceCamera(const RunModel& model) {
   FieldWindow w;
   if (window_) {
     w = *window_;
   } else if (const auto pose = model.pose()) {
-    // The vehicle sits follow_ahead_m left of the centre at the default zoom,
-    // in proportion when zoomed.
-    const double ahead = params_.follow_ahead_m * follow_length_m_ / params_.follow_length_m;
-    const double start = pose->y_m - (0.5 * follow_length_m_ - ahead);
+    const double start = pose->y_m - FollowBehind(model, pose->y_m);
     w = {start, start + follow_length_m_, 0.0};
   }
   view_ = w;

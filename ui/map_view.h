@@ -7,7 +7,9 @@
 #include <vtkRenderer.h>
 
 #include <array>
+#include <deque>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "ui/field_overlays.h"
@@ -20,6 +22,16 @@ enum class MapLayerId { kMap, kPlants, kGrid, kEllipses, kVehicle };
 struct MapViewParams {
   double follow_length_m = 6.0;  // field length shown when following the vehicle
   double follow_ahead_m = 1.5;   // the vehicle sits this far left of the centre
+  // The map trails the vehicle (the vehicle sends a tile row once its spray
+  // bar has passed it, and its bed frame drifts from the pose drawn: 1-3 m
+  // on the field preset). Following, the view moves the vehicle ahead so
+  // that this fraction of it shows the newest map, by the most the map
+  // trailed over the last trail_window_m driven (a tile row's cycle, not
+  // each row's step), keeping the vehicle keep_ahead_fraction from the
+  // view's right end.
+  double map_in_view_fraction = 1.0 / 6.0;
+  double keep_ahead_fraction = 1.0 / 8.0;
+  double trail_window_m = 10.0;
   double min_across_m = 1.6;     // at least this much of the bed's width is shown
   GridOverlayParams grid;
   EllipseParams ellipses;
@@ -59,6 +71,8 @@ class MapView {
 
  private:
   FieldWindow PlaceCamera(const RunModel& model);
+  // How far behind the vehicle the followed view starts.
+  double FollowBehind(const RunModel& model, double vehicle_y_m);
   FieldWindow WholeRunOf(const RunModel& model) const;
   void DrawMarks();
 
@@ -74,6 +88,11 @@ class MapView {
   std::vector<Eigen::Vector2d> measure_at_;
   double marks_mpp_ = -1.0;  // metres per pixel the marks were drawn for (< 0: redraw)
   double follow_length_m_;
+  // How far the map's newest row trailed the vehicle (vehicle y, lag), the
+  // last trail_window_m; and the model state they are of.
+  std::deque<std::pair<double, double>> trail_;
+  const RunModel* trail_model_ = nullptr;
+  int64_t trail_messages_ = -1;
   std::optional<FieldWindow> window_;
   FieldWindow view_;
   mutable const RunModel* whole_model_ = nullptr;  // WholeRun's cache: the model state it was for

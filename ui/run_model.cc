@@ -150,18 +150,25 @@ void RunModel::ObserveTiles(const tm::TelemetrySnapshot& s) {
     const auto in = s.tiles.find(*tile_hint_);
     if (in == s.tiles.end()) return;
     const auto it = tiles_.find(*tile_hint_);
-    if (it != tiles_.end() && it->second.revision == in->second.revision) return;
+    if (it != tiles_.end() && it->second.revision >= in->second.revision) return;  // the newest wins
     tile_revisions_ += in->second.revision + 1 - (it != tiles_.end() ? it->second.revision + 1 : 0);
     tiles_[*tile_hint_] = in->second;
+    NoteMapFront(in->second);
     return;
   }
   int sum = 0;
   for (const auto& [key, tile] : s.tiles) {
     sum += tile.revision + 1;
+    NoteMapFront(tile);
     auto it = tiles_.find(key);
     if (it == tiles_.end() || it->second.revision != tile.revision) tiles_[key] = tile;
   }
   tile_revisions_ = sum;
+}
+
+void RunModel::NoteMapFront(const tm::MapTileDelta& tile) {
+  const double end = tile.origin_m.y() + tile.height * tile.resolution_m;
+  map_front_y_m_ = std::max(map_front_y_m_.value_or(end), end);
 }
 
 void RunModel::InsertPlant(const PlantRecord& record) {

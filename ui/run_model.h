@@ -115,6 +115,9 @@ class RunModel {
   const std::map<int64_t, PlantRecord>& plants() const { return registry_; }
   const std::map<std::pair<int, int>, telemetry::MapTileDelta>& tiles() const { return tiles_; }
   int tile_revision_sum() const { return tile_revisions_; }
+  // The far end along the bed (field y) of the map's tiles: where the
+  // newest map row ends; none without tiles.
+  std::optional<double> map_front_y_m() const { return map_front_y_m_; }
   int64_t plant_messages() const { return plant_messages_; }  // changes when plants() may have
   const std::vector<TraceSample>& trace() const { return trace_; }
   const std::vector<TraceSample>& truth_trace() const { return truth_trace_; }
@@ -139,6 +142,7 @@ class RunModel {
   void ObserveGrid(const telemetry::GridEstimate& grid, std::vector<TraceSample>& trace);
   void ObservePlants(const telemetry::TelemetrySnapshot& state);
   void ObserveTiles(const telemetry::TelemetrySnapshot& state);
+  void NoteMapFront(const telemetry::MapTileDelta& tile);
   void ObserveHealth(const telemetry::TelemetrySnapshot& state);
   void ObserveEvent(const telemetry::TelemetrySnapshot& state);
   void ObservePose(const telemetry::TelemetrySnapshot& state);
@@ -154,6 +158,7 @@ class RunModel {
   std::map<int64_t, PlantRecord> registry_;
   std::map<std::pair<int, int>, telemetry::MapTileDelta> tiles_;
   int tile_revisions_ = 0;
+  std::optional<double> map_front_y_m_;
   std::optional<std::pair<int, int>> tile_hint_;  // the tile of the message being fed
   std::vector<TraceSample> trace_, truth_trace_;
   std::vector<std::pair<double, double>> path_;

@@ -25,12 +25,15 @@ bool Mentions(const std::vector<std::string>& lines, const std::string& what) {
 }
 
 // RunModel::Feed looks up only the tile a message carries; the model must
-// end where a pass over every tile after each message ends.
+// end where a pass over every tile after each message ends, also when its
+// subscriber keeps no tiles of its own (the station's replay and review).
 TEST(RunModel, FeedWithTileLookUpMatchesFullPass) {
   SyntheticRunOptions run;
   run.length_m = 8.0;
   const std::vector<tm::LogEvent> events = SyntheticRun(run);
-  tm::Subscriber sub_a, sub_b;
+  tm::SubscriberOptions lean;
+  lean.keep_tiles = false;
+  tm::Subscriber sub_a(lean), sub_b;
   RunModel a, b;
   a.Follow(sub_a);
   b.Follow(sub_b);
@@ -40,6 +43,7 @@ TEST(RunModel, FeedWithTileLookUpMatchesFullPass) {
     ASSERT_EQ(a.tile_revision_sum(), b.tile_revision_sum());
   }
   ASSERT_GT(a.tiles().size(), 5u);
+  EXPECT_EQ(sub_a.Snapshot().tiles.size(), 1u) << "the tile last received only";
   ASSERT_EQ(a.tiles().size(), b.tiles().size());
   for (const auto& [key, t] : b.tiles()) {
     ASSERT_TRUE(a.tiles().count(key));

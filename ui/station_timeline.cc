@@ -24,7 +24,9 @@ LogTimeline LogTimeline::Load(const std::filesystem::path& log) {
 }
 
 void LogTimeline::Reset() {
-  subscriber_ = std::make_unique<telemetry::Subscriber>();
+  telemetry::SubscriberOptions options;
+  options.keep_tiles = false;  // the model keeps them (it is fed one tile at a time, RunModel::Feed)
+  subscriber_ = std::make_unique<telemetry::Subscriber>(options);
   model_ = std::make_unique<RunModel>();
   model_->Follow(*subscriber_);
   next_ = 0;

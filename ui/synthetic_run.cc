@@ -261,10 +261,10 @@ uint8_t Generator::CellAt(const Eigen::Vector2d& f) const {
   return cell;
 }
 
-// A tile row is sent once the camera footprint has passed it.
+// A tile row is sent once the vehicle is map_lag_m past its end.
 void Generator::Tiles(const tm::Pose& p, int64_t utime, bool) {
   const double edge = o_.tile_cells * o_.cell_m;
-  while ((next_tile_row_ + 1) * edge < p.y_m + 0.9) {
+  while ((next_tile_row_ + 1) * edge < p.y_m - o_.map_lag_m) {
     for (int tx = -1; tx <= 0; ++tx) {
       tm::MapTileDelta t;
       t.tile_x = tx, t.tile_y = next_tile_row_, t.revision = 0;

@@ -29,6 +29,11 @@ struct SyntheticRunOptions {
   int nozzles = 6;
   double cell_m = 0.02;  // map resolution
   int tile_cells = 64;
+  // A tile row is sent once the vehicle is this far past its end (negative:
+  // before it). The vehicle sends a row once its spray bar has passed it, and
+  // its bed frame drifts from the pose drawn: 1.0-3.1 m behind the pose on
+  // the field preset (0.1-4.75 km).
+  double map_lag_m = -0.9;
   uint32_t seed = 1;
   int64_t start_utime = 1'700'000'000'000'000;
   std::optional<double> heartbeat_stops_at_s;  // no PLANTSCALE_HEALTH after this
