@@ -209,7 +209,9 @@ void WritePng(const CropMap& map, const Georeference* georef, const std::filesys
   cells.copyTo(img(cv::Rect(kMargin, kMargin, size.width, size.height)));
   cv::rectangle(img, cv::Rect(kMargin - 1, kMargin - 1, size.width + 2, size.height + 2),
                 cv::Scalar(20, 20, 20));
-  DrawScaleBar(img, {kMargin, kMargin + size.height + 18}, s / g.resolution_m(), std::max(size.width, 60));
+  // Panels: a short bar, not one spanning panels side by side (x there is not along the run).
+  const int bar_px = panels_note.empty() ? std::max(size.width, 60) : std::min(size.width, 300);
+  DrawScaleBar(img, {kMargin, kMargin + size.height + 18}, s / g.resolution_m(), bar_px);
   DrawLegend(img, size.width + 2 * kMargin, map, georef, panels_note);
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", img, png)) throw MapIoError(file.string(), "cannot encode PNG");
