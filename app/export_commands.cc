@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <utility>
 
 #include "app/archive_commands.h"
 #include "app/config_loader.h"
@@ -175,7 +176,8 @@ int Export(const ExportArgs& args) {
   if (args.out.empty()) throw ConfigError("export", "--out", "give the output folder (--out DIR) or an archive (--to)");
   std::vector<maps::CropMap> inputs;
   for (const std::string& input : args.inputs) inputs.push_back(LoadInput(input, args));
-  const maps::CropMap map = inputs.size() == 1 ? inputs[0] : maps::MergeMaps(inputs);
+  // Moved, not copied: a km-long map is hundreds of MB.
+  const maps::CropMap map = inputs.size() == 1 ? std::move(inputs[0]) : maps::MergeMaps(inputs);
   const maps::ExportOptions options = MakeOptions(args, map);
   ThrowIfInvalid("command line (--format, --origin, --heading, --epsg)", options.Validate());
   ProgressBar bar(std::cerr, "export", static_cast<int>(options.formats.size()), !args.quiet);

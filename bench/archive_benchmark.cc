@@ -5,9 +5,10 @@
 // The runs are made cheaply from one synthetic 1 km bed, the kind a run's
 // log gives (app/log_map.h): lettuce, 3 rows 0.4 m apart, a plant every
 // 0.3 m (10 000 crops), 2.5 weeds per m² (3 000), a 4 cm map grid with
-// every plant's footprint painted and the weeds treated (a map grid holds at
-// most 32768 rows, maps/map_grid.h: 1 km of the vehicle's 1.333 cm cells is
-// more than one map). Run k moves every
+// every plant's footprint painted and the weeds treated (coarser than the
+// vehicle's 1.333 cm cells, which make a run's import raster-bound: a real
+// 1 km field log's import is measured on its own, docs/results/
+// 2026-11-27-archive.md). Run k moves every
 // plant by N(0, 1 cm) (re-localisation), loses 1 % of the crops, grows them
 // by 2 % and brings new weeds, so matching does the work it does on a farm;
 // its run id and start date vary. Each run goes through what

@@ -13,6 +13,7 @@
 #include "maps/export.h"
 #include "maps/gdal_util.h"
 #include "maps/map_errors.h"
+#include "maps/writers.h"
 
 namespace plantscale::maps {
 namespace {
@@ -270,23 +271,15 @@ void WriteRows(ArchiveDb& db, const ArchiveRun& run, const Frames& frames) {
 // then taken to WGS84 exactly (no affine approximation).
 void WriteTreatedAreas(ArchiveDb& db, const ArchiveRun& run, const CropMap& map, const Frames& frames) {
   const MapGrid& g = map.grid();
-  DatasetPtr raster = CreateMemRaster(g.cols(), g.rows(), 1, GDT_Byte);
+  DatasetPtr raster = CreateScratchRaster(g.cols(), g.rows(), 1, GDT_Byte);
   double gt[6] = {g.origin_m().x(), g.resolution_m(), 0.0, g.max_m().y(), 0.0, -g.resolution_m()};
   raster->SetGeoTransform(gt);
-  std::vector<uint8_t> treated(g.size());
-  for (int line = 0; line < g.rows(); ++line) {
-    for (int col = 0; col < g.cols(); ++col) {
-      treated[static_cast<size_t>(line) * static_cast<size_t>(g.cols()) + static_cast<size_t>(col)] =
-          map.layers().treated[g.Index({col, g.rows() - 1 - line})] == 1 ? 1 : 0;
-    }
-  }
   GDALRasterBand* band = raster->GetRasterBand(1);
+  WriteTreatedBand(map, *band, db.name);
   GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("Memory");
   DatasetPtr vec(mem->Create("treated", 0, 0, 0, GDT_Unknown, nullptr));
   OGRLayer* polys = vec->CreateLayer("treated", nullptr, wkbPolygon, nullptr);
-  if (band->RasterIO(GF_Write, 0, 0, g.cols(), g.rows(), treated.data(), g.cols(), g.rows(), GDT_Byte, 0, 0,
-                     nullptr) != CE_None ||
-      GDALPolygonize(GDALRasterBand::ToHandle(band), GDALRasterBand::ToHandle(band), OGRLayer::ToHandle(polys), -1,
+  if (GDALPolygonize(GDALRasterBand::ToHandle(band), GDALRasterBand::ToHandle(band), OGRLayer::ToHandle(polys), -1,
                      nullptr, nullptr, nullptr) != CE_None) {
     ThrowGdal(db.name, "cannot polygonize the treated area of run " + run.run_id);
   }

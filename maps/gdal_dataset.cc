@@ -56,8 +56,21 @@ DatasetPtr CreateDataset(const char* driver_name, const MemoryFile& file, int co
   return Create(driver_name, file.vsi_path(), file.vsi_path(), cols, rows, bands, type, options);
 }
 
-DatasetPtr CreateMemRaster(int cols, int rows, int bands, GDALDataType type) {
-  return Create("MEM", "", "memory raster", cols, rows, bands, type, {});
+namespace {
+constexpr const char* kScratchPrefix = "/vsimem/plantscale_scratch_";
+}  // namespace
+
+void DatasetCloser::operator()(GDALDataset* d) const {
+  const std::string path = d != nullptr ? d->GetDescription() : "";
+  GDALClose(GDALDataset::ToHandle(d));
+  if (path.rfind(kScratchPrefix, 0) == 0) VSIUnlink(path.c_str());
+}
+
+DatasetPtr CreateScratchRaster(int cols, int rows, int bands, GDALDataType type) {
+  static std::atomic<int> counter{0};
+  const std::string path = kScratchPrefix + std::to_string(++counter) + ".tif";
+  return Create("GTiff", path, "scratch raster", cols, rows, bands, type,
+                {"COMPRESS=DEFLATE", "ZLEVEL=1", "TILED=YES", "INTERLEAVE=BAND", "BIGTIFF=YES", "SPARSE_OK=YES"});
 }
 
 void CloseAndCopy(DatasetPtr& dataset, const MemoryFile& file) {

@@ -14,8 +14,9 @@
 
 namespace plantscale::maps {
 
+// Closes the dataset; a scratch raster's memory file goes with it.
 struct DatasetCloser {
-  void operator()(GDALDataset* d) const { GDALClose(GDALDataset::ToHandle(d)); }
+  void operator()(GDALDataset* d) const;
 };
 using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
 
@@ -46,8 +47,12 @@ DatasetPtr CreateDataset(const char* driver, const MemoryFile& file, int cols = 
 // Closes the dataset, checks GDAL reported no failure, then copies the
 // memory file to disk. Throws MapIoError naming the disk path.
 void CloseAndCopy(DatasetPtr& dataset, const MemoryFile& file);
-// A dataset on nothing but memory (MEM driver) for intermediate rasters.
-DatasetPtr CreateMemRaster(int cols, int rows, int bands, GDALDataType type);
+// An intermediate raster (polygonizing, warping): a tiled, compressed
+// GeoTIFF in GDAL's memory file system, removed when the dataset closes.
+// Compressed because a km-long map at the vehicle's cells is millions of
+// mostly uniform cells: written strip by strip it costs its compressed
+// size (plus GDAL's block cache), not 2 bytes a cell as a MEM raster would.
+DatasetPtr CreateScratchRaster(int cols, int rows, int bands, GDALDataType type);
 
 // The export CRS as an OSR object (traditional GIS axis order).
 OGRSpatialReference ProjectedSrs(const Georeference& georef);

@@ -60,37 +60,39 @@ IsoGrid BoundingGrid(const MapGrid& g, const Georeference& georef, double cell_m
   return grid;
 }
 
-std::vector<int32_t> CellValues(const CropMap& map, const Georeference& georef, const IsoGrid& iso,
-                                int32_t rate) {
-  std::vector<int32_t> values;
-  values.reserve(static_cast<size_t>(iso.cols) * static_cast<size_t>(iso.rows));
+// One grid row (west to east) of setpoints: the rate where the cell centre
+// lies in a treated map cell, else 0, as little-endian int32.
+void RowBytes(const CropMap& map, const Georeference& georef, const IsoGrid& iso, int32_t rate, int r,
+              std::vector<char>& out) {
   std::vector<Eigen::Vector2d> centres(static_cast<size_t>(iso.cols));
-  for (int r = 0; r < iso.rows; ++r) {
-    for (int c = 0; c < iso.cols; ++c) {
-      centres[static_cast<size_t>(c)] = {iso.min_lon + (c + 0.5) * iso.cell_lon,
-                                         iso.min_lat + (r + 0.5) * iso.cell_lat};
-    }
-    for (const Eigen::Vector2d& f : georef.Wgs84ToField(centres)) {
-      const auto cell = map.grid().FindCell(f);
-      const bool treated = cell && map.layers().treated[map.grid().Index(*cell)] != 0;
-      values.push_back(treated ? rate : 0);
-    }
+  for (int c = 0; c < iso.cols; ++c) {
+    centres[static_cast<size_t>(c)] = {iso.min_lon + (c + 0.5) * iso.cell_lon, iso.min_lat + (r + 0.5) * iso.cell_lat};
   }
-  return values;
+  out.clear();
+  for (const Eigen::Vector2d& f : georef.Wgs84ToField(centres)) {
+    const auto cell = map.grid().FindCell(f);
+    const bool treated = cell && map.layers().treated[map.grid().Index(*cell)] != 0;
+    const auto u = static_cast<uint32_t>(treated ? rate : 0);
+    for (int shift = 0; shift < 32; shift += 8) out.push_back(static_cast<char>((u >> shift) & 0xff));
+  }
 }
 
-size_t WriteBinary(const fs::path& file, const std::vector<int32_t>& values) {
+// Streams the grid row by row (southern-most first): a km-long grid never
+// sits in memory whole.
+size_t WriteBinary(const fs::path& file, const CropMap& map, const Georeference& georef, const IsoGrid& iso,
+                   int32_t rate) {
   std::ofstream out(file, std::ios::binary);
   if (!out) throw MapIoError(file.string(), "cannot be created");
-  for (int32_t v : values) {
-    const auto u = static_cast<uint32_t>(v);
-    const char le[4] = {static_cast<char>(u & 0xff), static_cast<char>((u >> 8) & 0xff),
-                        static_cast<char>((u >> 16) & 0xff), static_cast<char>(u >> 24)};
-    out.write(le, 4);
+  std::vector<char> row;
+  size_t bytes = 0;
+  for (int r = 0; r < iso.rows && out; ++r) {
+    RowBytes(map, georef, iso, rate, r, row);
+    out.write(row.data(), static_cast<std::streamsize>(row.size()));
+    bytes += row.size();
   }
   out.close();
   if (!out) throw MapIoError(file.string(), "write failed (disk full?)");
-  return values.size() * 4;
+  return bytes;
 }
 
 std::string Escape(const std::string& text) {
@@ -131,6 +133,20 @@ std::string TaskXml(const CropMap& map, const IsoGrid& g, int32_t rate, size_t b
   return x.str();
 }
 
+// A long run at a heading far from north or east has a huge north-aligned
+// bounding grid (5 km at 45 degrees and 1.33 cm: 7e10 cells): refused with
+// the cell size that would fit, instead of filling the disk.
+void CheckGridSize(const IsoGrid& grid, double cell_m) {
+  constexpr double kMaxCells = 2e8;  // 800 MB of int32 setpoints
+  const double cells = static_cast<double>(grid.cols) * grid.rows;
+  if (cells <= kMaxCells) return;
+  const double fits = cell_m * std::sqrt(cells / kMaxCells) * 1.01;
+  std::ostringstream why;
+  why << "the ISOXML grid would be " << grid.cols << " x " << grid.rows << " cells of " << cell_m
+      << " m (more than 2e8); give --isoxml-cell-m " << std::setprecision(3) << fits << " or more";
+  ThrowIfInvalid("ISOXML export", {{"isoxml.cell_size_m", why.str()}});
+}
+
 }  // namespace
 
 void WriteIsoxml(const CropMap& map, const Georeference& georef, const IsoxmlOptions& options,
@@ -140,8 +156,9 @@ void WriteIsoxml(const CropMap& map, const Georeference& georef, const IsoxmlOpt
   if (ec) throw MapIoError(folder.string(), "cannot create folder: " + ec.message());
   const double cell_m = options.cell_size_m > 0 ? options.cell_size_m : map.grid().resolution_m();
   const IsoGrid grid = BoundingGrid(map.grid(), georef, cell_m);
+  CheckGridSize(grid, cell_m);
   const auto rate = static_cast<int32_t>(std::lround(options.rate_l_per_ha * 100.0));
-  const size_t bytes = WriteBinary(folder / "GRD00001.BIN", CellValues(map, georef, grid, rate));
+  const size_t bytes = WriteBinary(folder / "GRD00001.BIN", map, georef, grid, rate);
   const fs::path xml = folder / "TASKDATA.XML";
   std::ofstream out(xml, std::ios::binary);
   if (!out) throw MapIoError(xml.string(), "cannot be created");

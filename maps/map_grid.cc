@@ -1,6 +1,8 @@
 #include "maps/map_grid.h"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "engine/common/check.h"
 
@@ -11,9 +13,16 @@ OptionErrors MapGridOptions::Validate() const {
   RequirePositive(errors, "resolution_m", resolution_m);
   RequireFinite(errors, "origin_m.x", origin_m.x());
   RequireFinite(errors, "origin_m.y", origin_m.y());
-  // 2^15 cells a side: 655 m at 2 cm, far beyond one bed.
-  RequireInRange(errors, "cols", cols, 1, 32768);
-  RequireInRange(errors, "rows", rows, 1, 32768);
+  // Across the rows 2^15 cells (437 m at the vehicle's 1.333 cm: wider than
+  // any bed); along them 2^22 (55.9 km): a day's run of one bed. The cell
+  // count is capped so a map's layers (6 bytes a cell) stay within memory.
+  RequireInRange(errors, "cols", cols, 1, kMaxCols);
+  RequireInRange(errors, "rows", rows, 1, kMaxRows);
+  if (cols >= 1 && rows >= 1 && static_cast<double>(cols) * rows > static_cast<double>(kMaxCells)) {
+    errors.push_back({"cells", std::to_string(cols) + " x " + std::to_string(rows) +
+                                   " cells exceed the limit of " + std::to_string(kMaxCells) +
+                                   " (use coarser cells)"});
+  }
   return errors;
 }
 
@@ -28,8 +37,12 @@ MapGrid MapGrid::Covering(const Eigen::Vector2d& min_m, const Eigen::Vector2d& m
   const double x0 = std::floor(min_m.x() / resolution_m);
   const double y0 = std::floor(min_m.y() / resolution_m);
   o.origin_m = {x0 * resolution_m, y0 * resolution_m};
-  o.cols = static_cast<int>(std::floor(max_m.x() / resolution_m) - x0) + 1;
-  o.rows = static_cast<int>(std::floor(max_m.y() / resolution_m) - y0) + 1;
+  // Clamped before the cast so an absurd extent is refused by Validate, not overflowed.
+  auto count = [](double cells) {
+    return std::isfinite(cells) ? static_cast<int>(std::clamp(cells, 0.0, 2147483647.0)) : 0;
+  };
+  o.cols = count(std::floor(max_m.x() / resolution_m) - x0 + 1);
+  o.rows = count(std::floor(max_m.y() / resolution_m) - y0 + 1);
   return MapGrid(o);
 }
 

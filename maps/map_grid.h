@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 
 #include "engine/common/options.h"
@@ -24,6 +25,10 @@ struct Cell {
 };
 
 struct MapGridOptions {
+  static constexpr int kMaxCols = 1 << 15;
+  static constexpr int kMaxRows = 1 << 22;
+  static constexpr int64_t kMaxCells = int64_t{1} << 30;
+
   double resolution_m = 0.02;          // edge of a square cell
   Eigen::Vector2d origin_m{0.0, 0.0};  // field-frame corner of cell (0, 0)
   int cols = 1;                        // cells along x

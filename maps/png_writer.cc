@@ -53,6 +53,63 @@ double PixelsPerCell(const MapGrid& g) {
   return std::clamp(std::min(1400.0 / g.rows(), 1000.0 / g.cols()), 0.05, 12.0);
 }
 
+// A long run (over ~370 m of 1.33 cm cells) would be a thin line one
+// picture high: it is cut along y into panels of equal length drawn side by
+// side (panel 0, the run's start, on the left), each at most 1400 px high,
+// about 1600 px wide in all.
+struct PanelLayout {
+  double scale = 1.0;  // pixels per cell
+  int panels = 1;
+  int panel_rows = 0;  // map rows per panel
+  int panel_width = 0, panel_height = 0;
+  static constexpr int kGap = 10;  // pixels between panels
+  int width() const { return panels * (panel_width + kGap) - kGap; }
+};
+
+bool NeedsPanels(const MapGrid& g) { return std::min(1400.0 / g.rows(), 1000.0 / g.cols()) < 0.05; }
+
+PanelLayout PlanPanels(const MapGrid& g) {
+  PanelLayout best;
+  best.scale = 0.0;
+  for (int n = 1; n <= 200; ++n) {
+    const int rows = (g.rows() + n - 1) / n;
+    const double s = std::min(1400.0 / rows, (1600.0 / n - PanelLayout::kGap) / g.cols());
+    if (s > best.scale) best = {s, n, rows, 0, 0};
+  }
+  best.panel_width = std::max(1, static_cast<int>(std::ceil(g.cols() * best.scale)));
+  best.panel_height = std::max(1, static_cast<int>(std::ceil(best.panel_rows * best.scale)));
+  return best;
+}
+
+// Every cell adds its colour to the panel pixel it falls in; a pixel shows
+// the mean (as INTER_AREA would), built without a full-size cell image.
+cv::Mat PanelImage(const CropMap& map, const PanelLayout& l) {
+  const MapGrid& g = map.grid();
+  cv::Mat sum(l.panel_height, l.width(), CV_32FC3, cv::Scalar::all(0));
+  cv::Mat count(l.panel_height, l.width(), CV_32F, cv::Scalar(0));
+  for (int row = 0; row < g.rows(); ++row) {
+    const int p = row / l.panel_rows;
+    const int y = std::min(l.panel_height - 1, static_cast<int>((l.panel_rows - 1 - (row - p * l.panel_rows)) * l.scale));
+    const size_t row0 = g.Index({0, row});
+    for (int col = 0; col < g.cols(); ++col) {
+      const size_t i = row0 + static_cast<size_t>(col);
+      cv::Vec3b colour = ColourOf(static_cast<CellClass>(map.layers().cls[i]));
+      if (map.layers().treated[i] != 0) colour = Tinted(colour);
+      const int x = p * (l.panel_width + PanelLayout::kGap) + std::min(l.panel_width - 1, static_cast<int>(col * l.scale));
+      sum.at<cv::Vec3f>(y, x) += cv::Vec3f(colour[0], colour[1], colour[2]);
+      count.at<float>(y, x) += 1.0f;
+    }
+  }
+  cv::Mat image(sum.size(), CV_8UC3, cv::Scalar::all(255));
+  for (int y = 0; y < sum.rows; ++y) {
+    for (int x = 0; x < sum.cols; ++x) {
+      const float n = count.at<float>(y, x);
+      if (n > 0) image.at<cv::Vec3b>(y, x) = sum.at<cv::Vec3f>(y, x) / n;
+    }
+  }
+  return image;
+}
+
 void Text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.5) {
   cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(20, 20, 20), 1, cv::LINE_AA);
 }
@@ -89,7 +146,7 @@ void DrawNorthArrow(cv::Mat& img, cv::Point centre, double heading_deg) {
   Text(img, "N", tip + cv::Point(cvRound(14 * dir.x) - 5, cvRound(14 * dir.y) + 5), 0.55);
 }
 
-void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* georef) {
+void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* georef, const std::string& panels) {
   int y = kMargin + 14;
   Text(img, "plantscale crop map", {x, y}, 0.6);
   const std::pair<const char*, cv::Vec3b> keys[] = {{"soil", kSoil},
@@ -118,6 +175,7 @@ void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* geo
   Text(img, "cell " + Metres(map.grid().resolution_m()), {x, y += 22}, 0.45);
   if (src != map.metadata().end()) Text(img, "source: " + src->second, {x, y += 22}, 0.45);
   Text(img, "up = field +y (along rows)", {x, y += 22}, 0.45);
+  if (!panels.empty()) Text(img, panels, {x, y += 22}, 0.45);
   if (georef != nullptr) {
     char heading[64];
     std::snprintf(heading, sizeof heading, "heading %.1f deg, EPSG:%d",
@@ -130,19 +188,31 @@ void DrawLegend(cv::Mat& img, int x, const CropMap& map, const Georeference* geo
 }  // namespace
 
 void WritePng(const CropMap& map, const Georeference* georef, const std::filesystem::path& file) {
-  const double s = PixelsPerCell(map.grid());
+  const MapGrid& g = map.grid();
   cv::Mat cells;
-  const cv::Size size(std::max(1, static_cast<int>(std::lround(map.grid().cols() * s))),
-                      std::max(1, static_cast<int>(std::lround(map.grid().rows() * s))));
-  cv::resize(CellImage(map), cells, size, 0, 0, s >= 1.0 ? cv::INTER_NEAREST : cv::INTER_AREA);
-  const int height = std::max(size.height + kScaleBarHeight, 420) + 2 * kMargin;
+  double s = PixelsPerCell(g);
+  std::string panels_note;
+  if (NeedsPanels(g)) {
+    const PanelLayout layout = PlanPanels(g);
+    cells = PanelImage(map, layout);
+    s = layout.scale;
+    panels_note = std::to_string(layout.panels) + " panels of " + Metres(std::round(layout.panel_rows * g.resolution_m())) +
+                  ", start left";
+  } else {
+    const cv::Size size(std::max(1, static_cast<int>(std::lround(g.cols() * s))),
+                        std::max(1, static_cast<int>(std::lround(g.rows() * s))));
+    cv::resize(CellImage(map), cells, size, 0, 0, s >= 1.0 ? cv::INTER_NEAREST : cv::INTER_AREA);
+  }
+  const cv::Size size = cells.size();
+  const int height = std::max(size.height + kScaleBarHeight, panels_note.empty() ? 420 : 460) + 2 * kMargin;
   cv::Mat img(height, size.width + kLegendWidth + 3 * kMargin, CV_8UC3, cv::Scalar(255, 255, 255));
   cells.copyTo(img(cv::Rect(kMargin, kMargin, size.width, size.height)));
   cv::rectangle(img, cv::Rect(kMargin - 1, kMargin - 1, size.width + 2, size.height + 2),
                 cv::Scalar(20, 20, 20));
-  DrawScaleBar(img, {kMargin, kMargin + size.height + 18}, s / map.grid().resolution_m(),
-               std::max(size.width, 60));
-  DrawLegend(img, size.width + 2 * kMargin, map, georef);
+  // Panels: a short bar, not one spanning panels side by side (x there is not along the run).
+  const int bar_px = panels_note.empty() ? std::max(size.width, 60) : std::min(size.width, 300);
+  DrawScaleBar(img, {kMargin, kMargin + size.height + 18}, s / g.resolution_m(), bar_px);
+  DrawLegend(img, size.width + 2 * kMargin, map, georef, panels_note);
   std::vector<uint8_t> png;
   if (!cv::imencode(".png", img, png)) throw MapIoError(file.string(), "cannot encode PNG");
   std::ofstream out(file, std::ios::binary);

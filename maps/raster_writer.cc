@@ -16,17 +16,23 @@ namespace {
 
 constexpr uint16_t kNoData = 65535;
 const char* const kBandNames[] = {"class", "crop_count", "weed_count", "treated"};
+// BigTIFF when the file might pass 4 GB (a long run's uncompressed bands can).
+const std::vector<std::string> kTiffOptions{"COMPRESS=DEFLATE", "TILED=YES", "INTERLEAVE=BAND",
+                                            "BIGTIFF=IF_SAFER"};
 
-// Band `b` in raster order: line 0 is the map's last row (largest y).
-std::vector<uint16_t> BandValues(const CropMap& map, int b) {
+constexpr int kStripLines = 256;  // lines per write: memory stays bounded on a km-long map
+
+// Lines [line0, line0 + lines) of band `b` in raster order: line 0 is the
+// map's last row (largest y).
+std::vector<uint16_t> BandStrip(const CropMap& map, int b, int line0, int lines) {
   const MapGrid& g = map.grid();
   const MapLayers& l = map.layers();
-  std::vector<uint16_t> out(g.size());
-  for (int line = 0; line < g.rows(); ++line) {
+  std::vector<uint16_t> out(static_cast<size_t>(lines) * static_cast<size_t>(g.cols()));
+  for (int k = 0; k < lines; ++k) {
+    const size_t row0 = g.Index({0, g.rows() - 1 - (line0 + k)});
     for (int col = 0; col < g.cols(); ++col) {
-      const size_t i = g.Index({col, g.rows() - 1 - line});
-      const size_t o =
-          static_cast<size_t>(line) * static_cast<size_t>(g.cols()) + static_cast<size_t>(col);
+      const size_t i = row0 + static_cast<size_t>(col);
+      const size_t o = static_cast<size_t>(k) * static_cast<size_t>(g.cols()) + static_cast<size_t>(col);
       const bool unknown = l.cls[i] == static_cast<uint8_t>(CellClass::kUnknown);
       const uint16_t v = b == 0   ? l.cls[i]
                          : b == 1 ? l.crop_count[i]
@@ -49,12 +55,16 @@ void SetGeoreference(GDALDataset& ds, const CropMap& map, const Georeference& ge
 
 void WriteBand(GDALDataset& ds, const CropMap& map, int b, const std::filesystem::path& file) {
   GDALRasterBand* band = ds.GetRasterBand(b + 1);
-  std::vector<uint16_t> values = BandValues(map, b);
   band->SetDescription(kBandNames[b]);
   band->SetNoDataValue(kNoData);
-  if (band->RasterIO(GF_Write, 0, 0, map.grid().cols(), map.grid().rows(), values.data(),
-                     map.grid().cols(), map.grid().rows(), GDT_UInt16, 0, 0, nullptr) != CE_None) {
-    ThrowGdal(file, std::string("cannot write band ") + kBandNames[b]);
+  const int cols = map.grid().cols();
+  for (int line0 = 0; line0 < map.grid().rows(); line0 += kStripLines) {
+    const int lines = std::min(kStripLines, map.grid().rows() - line0);
+    std::vector<uint16_t> values = BandStrip(map, b, line0, lines);
+    if (band->RasterIO(GF_Write, 0, line0, cols, lines, values.data(), cols, lines, GDT_UInt16, 0, 0,
+                       nullptr) != CE_None) {
+      ThrowGdal(file, std::string("cannot write band ") + kBandNames[b]);
+    }
   }
 }
 
@@ -75,8 +85,7 @@ void WriteGeoTiff(const CropMap& map, const Georeference& georef,
   GdalErrorScope scope;
   const MapGrid& g = map.grid();
   MemoryFile mem(file);
-  DatasetPtr ds = CreateDataset("GTiff", mem, g.cols(), g.rows(), 4, GDT_UInt16,
-                                {"COMPRESS=DEFLATE", "TILED=YES", "INTERLEAVE=BAND"});
+  DatasetPtr ds = CreateDataset("GTiff", mem, g.cols(), g.rows(), 4, GDT_UInt16, kTiffOptions);
   SetGeoreference(*ds, map, georef, file);
   for (int b = 0; b < 4; ++b) WriteBand(*ds, map, b, file);
   ds->SetMetadataItem("CLASS_CODES", "0=soil,1=crop,2=weed,65535=unknown (nodata)");
@@ -91,7 +100,7 @@ void WriteNorthUpGeoTiff(const CropMap& map, const Georeference& georef,
                          const std::filesystem::path& file) {
   GdalErrorScope scope;
   const MapGrid& g = map.grid();
-  DatasetPtr src = CreateMemRaster(g.cols(), g.rows(), 4, GDT_UInt16);
+  DatasetPtr src = CreateScratchRaster(g.cols(), g.rows(), 4, GDT_UInt16);
   SetGeoreference(*src, map, georef, file);
   for (int b = 0; b < 4; ++b) WriteBand(*src, map, b, file);
 
@@ -110,8 +119,7 @@ void WriteNorthUpGeoTiff(const CropMap& map, const Georeference& georef,
   const int cols = static_cast<int>(std::ceil((max_e - e0) / res));
   const int rows = static_cast<int>(std::ceil((n0 - min_n) / res));
   MemoryFile mem(file);
-  DatasetPtr dst = CreateDataset("GTiff", mem, cols, rows, 4, GDT_UInt16,
-                                 {"COMPRESS=DEFLATE", "TILED=YES", "INTERLEAVE=BAND"});
+  DatasetPtr dst = CreateDataset("GTiff", mem, cols, rows, 4, GDT_UInt16, kTiffOptions);
   std::array<double, 6> north_up{e0, res, 0.0, n0, 0.0, -res};
   const OGRSpatialReference srs = ProjectedSrs(georef);
   if (dst->SetGeoTransform(north_up.data()) != CE_None || dst->SetSpatialRef(&srs) != CE_None) {
@@ -158,17 +166,35 @@ void WriteNorthUpGeoTiff(const CropMap& map, const Georeference& georef,
   CloseAndCopy(dst, mem);
 }
 
+void WriteTreatedBand(const CropMap& map, GDALRasterBand& band, const std::filesystem::path& path) {
+  const MapGrid& g = map.grid();
+  const std::vector<uint8_t>& treated = map.layers().treated;
+  std::vector<uint8_t> strip;
+  for (int line0 = 0; line0 < g.rows(); line0 += kStripLines) {
+    const int lines = std::min(kStripLines, g.rows() - line0);
+    strip.assign(static_cast<size_t>(lines) * static_cast<size_t>(g.cols()), 0);
+    for (int k = 0; k < lines; ++k) {
+      const size_t row0 = g.Index({0, g.rows() - 1 - (line0 + k)});
+      for (int col = 0; col < g.cols(); ++col) {
+        strip[static_cast<size_t>(k) * static_cast<size_t>(g.cols()) + static_cast<size_t>(col)] =
+            treated[row0 + static_cast<size_t>(col)] == 1 ? 1 : 0;
+      }
+    }
+    if (band.RasterIO(GF_Write, 0, line0, g.cols(), lines, strip.data(), g.cols(), lines, GDT_Byte, 0, 0,
+                      nullptr) != CE_None) {
+      ThrowGdal(path, "cannot write the treated cells");
+    }
+  }
+}
+
 void WriteTreatedPolygons(const CropMap& map, const Georeference& georef, OGRLayer& layer,
                           const std::filesystem::path& path) {
   const MapGrid& g = map.grid();
-  DatasetPtr mem = CreateMemRaster(g.cols(), g.rows(), 1, GDT_UInt16);
-  SetGeoreference(*mem, map, georef, path);
-  GDALRasterBand* band = mem->GetRasterBand(1);
-  std::vector<uint16_t> treated = BandValues(map, 3);
-  for (uint16_t& v : treated) v = v == 1 ? 1 : 0;
-  if (band->RasterIO(GF_Write, 0, 0, g.cols(), g.rows(), treated.data(), g.cols(), g.rows(),
-                     GDT_UInt16, 0, 0, nullptr) != CE_None ||
-      GDALPolygonize(GDALRasterBand::ToHandle(band), GDALRasterBand::ToHandle(band),
+  DatasetPtr raster = CreateScratchRaster(g.cols(), g.rows(), 1, GDT_Byte);
+  SetGeoreference(*raster, map, georef, path);
+  GDALRasterBand* band = raster->GetRasterBand(1);
+  WriteTreatedBand(map, *band, path);
+  if (GDALPolygonize(GDALRasterBand::ToHandle(band), GDALRasterBand::ToHandle(band),
                      OGRLayer::ToHandle(&layer), 0, nullptr, nullptr, nullptr) != CE_None) {
     ThrowGdal(path, "cannot polygonize the treated area");
   }

@@ -8,6 +8,7 @@
 #include "maps/crop_map.h"
 #include "maps/georef.h"
 
+class GDALRasterBand;
 class OGRLayer;
 
 namespace plantscale::maps {
@@ -37,6 +38,9 @@ void WritePng(const CropMap& map, const Georeference* georef, const std::filesys
 void WriteIsoxml(const CropMap& map, const Georeference& georef, const IsoxmlOptions& options,
                  const std::filesystem::path& folder);
 
+// The treated layer as a Byte band (1 treated, 0 not; line 0 = largest
+// field y), written 256 lines at a time.
+void WriteTreatedBand(const CropMap& map, GDALRasterBand& band, const std::filesystem::path& path);
 // The treated layer as polygons in the export CRS (GDALPolygonize).
 void WriteTreatedPolygons(const CropMap& map, const Georeference& georef, OGRLayer& layer,
                           const std::filesystem::path& path);
