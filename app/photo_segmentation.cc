@@ -37,6 +37,23 @@ bool JpegComplete(const fs::path& p) {
   return static_cast<unsigned char>(tail[0]) == 0xFF && static_cast<unsigned char>(tail[1]) == 0xD9;
 }
 
+enum class ImageFormat { kPng, kJpeg, kOther };
+
+// What the file's first bytes say it is (the signatures OpenCV's PNG and JPEG
+// decoders take), whatever its name says. Only these two reach cv::imread: it
+// would take any format OpenCV knows, and its Radiance HDR reader leaves the
+// file open on a bad header (one descriptor lost per such file).
+ImageFormat SniffFormat(const fs::path& p) {
+  static constexpr unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  unsigned char head[8] = {};
+  std::ifstream in(p, std::ios::binary);
+  in.read(reinterpret_cast<char*>(head), sizeof head);
+  const std::streamsize n = in.gcount();
+  if (n == 8 && std::equal(head, head + 8, kPng)) return ImageFormat::kPng;
+  if (n >= 3 && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF) return ImageFormat::kJpeg;
+  return ImageFormat::kOther;
+}
+
 }  // namespace
 
 cv::Mat ReadImage(const fs::path& p) {
@@ -44,7 +61,11 @@ cv::Mat ReadImage(const fs::path& p) {
   const auto size = fs::file_size(p, ec);
   if (ec) throw DataError("cannot read: " + ec.message());
   if (size == 0) throw DataError("empty file (0 bytes)");
-  if (IsJpeg(p) && !JpegComplete(p)) throw DataError("truncated JPEG (no end-of-image marker)");
+  const ImageFormat format = SniffFormat(p);
+  if (format == ImageFormat::kOther) throw DataError("not a PNG or JPEG image (neither signature)");
+  if (format == ImageFormat::kJpeg && !JpegComplete(p)) {
+    throw DataError("truncated JPEG (no end-of-image marker)");
+  }
   cv::Mat image = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
   if (image.empty()) throw DataError("not a readable PNG/JPEG image (corrupt or truncated)");
   if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);

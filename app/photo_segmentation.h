@@ -45,7 +45,8 @@ void ForEachImage(const std::vector<std::filesystem::path>& inputs, const std::f
                   const std::function<void(const std::filesystem::path&)>& one);
 
 // A PNG/JPEG as 8-bit grey or BGR; throws DataError naming what is wrong
-// (empty, truncated, corrupt, unsupported depth or channels).
+// (empty, neither PNG nor JPEG by its first bytes, truncated, corrupt,
+// unsupported depth or channels).
 cv::Mat ReadImage(const std::filesystem::path& path);
 
 // The segmenter options `plantscale segment` uses on this photograph, and in

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -294,6 +295,16 @@ TEST(FaultInjection, DiskFullWhileLogging) {
   Check({FaultKind::kDiskFull, 4.0, 6.0, false, "log: not written", "log_resumed"}, 10);
 }
 
+// "2026-11-27 15:52 UTC": when the table was made.
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &utc);
+  return text;
+}
+
 // PLANTSCALE_FAULT_TABLE=FILE: the table of the faults run, in markdown.
 class TableWriter : public ::testing::Environment {
  public:
@@ -302,10 +313,13 @@ class TableWriter : public ::testing::Environment {
     if (path == nullptr || Table().empty()) return;
     std::ofstream out(path);
     out << "# Fault injection on the simulator, 2026-11-27\n\n"
-           "Issue 35. Each fault injected once into the vehicle process (the product's wiring,\n"
+        << "Made " << UtcNow() << ". "
+        << "Issue 35. Each fault injected once into the vehicle process (the product's wiring,\n"
            "`app/vehicle/vehicle_process.h`) on the field preset, seed 1, 7 m at 0.7 m/s, from\n"
            "4.0 s of message time; LCM over memq://, the spray bar over a socketpair to the\n"
-           "simulated bar, the log written to a file. What each fault is and what the vehicle does:\n"
+           "simulated bar, the log written to a file. The engine is configured from the preset's\n"
+           "crop and vehicle profiles, so the fail-safe on uncertainty is on (its default since\n"
+           "session 23, docs/fail-safe.md). What each fault is and what the vehicle does:\n"
            "[../faults.md](../faults.md). Made by (build first: `./plantscale.sh test` or\n"
            "`cmake --build build --target fault_test`):\n\n"
            "```\nPLANTSCALE_FAULT_TABLE=docs/results/2026-11-27-fault-injection.md "
