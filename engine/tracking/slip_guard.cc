@@ -63,11 +63,18 @@ WheelSpeeds SlipGuard::CheckWheels(const WheelSpeeds& measured, double dt_s) {
         std::abs(measured.left_m_s - ref.left_m_s) > wide * Threshold(ref.left_m_s, span);
     const bool right_jumped =
         std::abs(measured.right_m_s - ref.right_m_s) > wide * Threshold(ref.right_m_s, span);
-    const bool left_kept = std::abs(measured.left_m_s - ref.left_m_s) <=
-                           std::sqrt(2.0) * Threshold(ref.left_m_s, span);
-    const bool right_kept = std::abs(measured.right_m_s - ref.right_m_s) <=
-                            std::sqrt(2.0) * Threshold(ref.right_m_s, span);
-    if ((left_jumped && right_kept) || (right_jumped && left_kept)) {
+    const bool left_kept =
+        std::abs(measured.left_m_s - ref.left_m_s) <= Threshold(ref.left_m_s, span);
+    const bool right_kept =
+        std::abs(measured.right_m_s - ref.right_m_s) <= Threshold(ref.right_m_s, span);
+    // And the two diverge: a wheel stalling or spinning alone pulls them
+    // apart, where a steering change that jumps one wheel more than the
+    // other (the vehicle straightening) may as well bring them together.
+    const double before = ref.left_m_s - ref.right_m_s;
+    const double after = measured.left_m_s - measured.right_m_s;
+    const bool diverged = std::abs(after) > std::abs(before) + wide * Threshold(
+                                                                   0.5 * (ref.left_m_s + ref.right_m_s), span);
+    if (diverged && ((left_jumped && right_kept) || (right_jumped && left_kept))) {
       faulty_wheel_ = left_jumped ? 1 : 2;
       wheel_fault_s_ = 0.0;
       held_difference_m_s_ = ref.left_m_s - ref.right_m_s;

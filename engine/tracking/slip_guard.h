@@ -41,7 +41,8 @@ struct SlipGuardOptions {
   double reference_time_s = 0.05;  // the ground speed's smoothing (it lags a·τ when speeding up)
   double max_slip_s = 2.0;
   // One wheel's jump beyond this multiple of the ground speed's threshold,
-  // with the other wheel within √2 of it, is a fault of that wheel alone
+  // with the other wheel within the threshold and the two pulled apart, is
+  // a fault of that wheel alone
   // (about 8σ of one wheel with 2 % noise; a stalled encoder is 50σ).
   double wheel_fault_factor = 2.0;
   double max_wheel_fault_s = 30.0;  // a stalled encoder over 20 m at 0.7 m/s
