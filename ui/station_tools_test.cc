@@ -276,6 +276,18 @@ TEST(StationReview, WholeRunThenAnyMetre) {
   EXPECT_NE(controller.tool_text().find("sprayed"), std::string::npos);
 }
 
+// The whole run's bed map alone (plants, grid, ellipses and vehicle
+// hidden), as the view of the whole run draws it.
+cv::Mat RenderWholeRunMap(LogTimeline& run, Canvas& canvas, MapView& view) {
+  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
+  for (MapLayerId id : {MapLayerId::kPlants, MapLayerId::kGrid, MapLayerId::kEllipses, MapLayerId::kVehicle}) {
+    view.SetVisible(id, false);
+  }
+  view.SetWindow(view.WholeRun(run.model()));
+  view.Update(run.model());
+  return canvas.Render();
+}
+
 // A long bed seen whole is drawn in 25 m blocks, not a tile actor each, and
 // its weeds still show.
 TEST(MapLayerLevels, FarViewDrawsBlocks) {
@@ -286,13 +298,7 @@ TEST(MapLayerLevels, FarViewDrawsBlocks) {
   run.Seek(run.duration_s());
   Canvas canvas(800, 200);
   MapView view;
-  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
-  for (MapLayerId id : {MapLayerId::kPlants, MapLayerId::kGrid, MapLayerId::kEllipses, MapLayerId::kVehicle}) {
-    view.SetVisible(id, false);
-  }
-  view.SetWindow(view.WholeRun(run.model()));
-  view.Update(run.model());
-  const cv::Mat far = canvas.Render();
+  const cv::Mat far = RenderWholeRunMap(run, canvas, view);
   cv::imwrite(testing::OutputDir() + "/map_far.png", far);
   const int tiles = static_cast<int>(run.model().tiles().size());
   EXPECT_GT(tiles, 100);
@@ -323,13 +329,7 @@ TEST(MapLayerLevels, KilometreViewDrawsCoarseBlocks) {
   run.Seek(run.duration_s());
   Canvas canvas(800, 200);
   MapView view;
-  view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
-  for (MapLayerId id : {MapLayerId::kPlants, MapLayerId::kGrid, MapLayerId::kEllipses, MapLayerId::kVehicle}) {
-    view.SetVisible(id, false);
-  }
-  view.SetWindow(view.WholeRun(run.model()));
-  view.Update(run.model());
-  const cv::Mat far = canvas.Render();
+  const cv::Mat far = RenderWholeRunMap(run, canvas, view);
   cv::imwrite(testing::OutputDir() + "/map_coarse.png", far);
   EXPECT_LE(view.map_layer().actors(), 3) << "700 m in 250 m blocks";
   // 0.9 m a pixel, the bed a line one or two pixels high: weeds in it, soil
