@@ -72,8 +72,8 @@ WheelSpeeds SlipGuard::CheckWheels(const WheelSpeeds& measured, double dt_s) {
     // other (the vehicle straightening) may as well bring them together.
     const double before = ref.left_m_s - ref.right_m_s;
     const double after = measured.left_m_s - measured.right_m_s;
-    const bool diverged = std::abs(after) > std::abs(before) + wide * Threshold(
-                                                                   0.5 * (ref.left_m_s + ref.right_m_s), span);
+    const double ground = 0.5 * (ref.left_m_s + ref.right_m_s);
+    const bool diverged = std::abs(after) > std::abs(before) + wide * Threshold(ground, span);
     if (diverged && ((left_jumped && right_kept) || (right_jumped && left_kept))) {
       faulty_wheel_ = left_jumped ? 1 : 2;
       wheel_fault_s_ = 0.0;
