@@ -335,21 +335,23 @@ struct SeedChains {
   std::optional<Chain> thesis;
   treatment::TreatmentOptions thesis_options;
 
-  SeedChains(const TreatmentEvalOptions& options, const sim::SimulatorOptions& so,
-             double true_latency_s)
-      : ours(TreatmentEngineCamera(options, so.seed),
+  // `engine_camera`: the vehicle's calibration of this seed
+  // (TreatmentEngineCamera), which both chains are given.
+  SeedChains(const TreatmentEvalOptions& options, const std::string& preset,
+             const geometry::CameraOptions& engine_camera, double true_latency_s)
+      : ours(engine_camera,
              treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
              OurTracker(options), options.treatment, true_latency_s,
              options.visual_motion ? VisualMotionOptions(*options.profiles)
                                    : pipeline::MotionFusionOptions{}),
-        thesis_options(ThesisTreatmentOptions(so.preset, TreatmentEngineCamera(options, so.seed))) {
+        thesis_options(ThesisTreatmentOptions(preset, engine_camera)) {
     ours.collect_samples = options.mrroc;
     thesis_options.scheduler = options.treatment.scheduler;
     // The thesis's chain commands its bar at the pose rate, as it did before
     // ours went to 200 Hz: the baseline stays where it was calibrated.
     thesis_options.scheduler.tick_s = thesis_options.scheduler.pose_period_s;
     if (options.baseline_thesis) {
-      thesis.emplace(TreatmentEngineCamera(options, so.seed), vision::ThesisSegmenterOptions(),
+      thesis.emplace(engine_camera, vision::ThesisSegmenterOptions(),
                      ThesisTrackerOptions(*options.profiles), thesis_options, true_latency_s);
     }
   }
@@ -493,7 +495,7 @@ TreatmentEvaluation EvaluateTreatment(const TreatmentEvalOptions& options) {
     const cv::Mat roi = WheelTrapezoid(simulator.camera(), so.vehicle.track_width_m);  // scoring
     RequireImageSize(options.profiles->vehicle, so.camera.image_width_px,
                      so.camera.image_height_px);
-    SeedChains chains(options, so, latency);
+    SeedChains chains(options, so.preset, TreatmentEngineCamera(options, so.seed), latency);
     const SeedDrive drive = DriveSeed(options, simulator, chains, roi);
     result.distance_m = drive.distance_m;
     ScoreSeed(options, simulator, chains, drive, k, sums);
