@@ -229,6 +229,7 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
 InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double right_m_s,
                                      double sd_fraction) {
   CatchUp();
+  if (utime > last_wheels_utime_) last_wheels_utime_ = utime;
   InputStatus status;
   std::string problem;
   if (!std::isfinite(left_m_s) || !std::isfinite(right_m_s)) {
@@ -263,7 +264,7 @@ InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double righ
     // uncertainty of half of a brisk walking pace: the pose stays usable,
     // its covariance says how much less.
     const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
-    const double sd = 0.5 * std::max({std::abs(left_m_s_), std::abs(right_m_s_), 0.5}) * dt;
+    const double sd = BridgeSd(dt);
     Predict(u, sd, sd, dt);
     utime_ = utime;
     if (std::isfinite(left_m_s) && std::isfinite(right_m_s) &&
@@ -306,9 +307,27 @@ void GridTracker::PredictTo(int64_t utime) {
   }
   const double dt = (utime - utime_) * 1e-6;
   const WheelIncrement u{left_m_s_ * dt, right_m_s_ * dt};
-  Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
-          options_.wheel_sd_fraction * std::abs(u.right_m), dt);
+  if (WheelsSilentAt(utime)) {
+    // No odometry for longer than a gap: the speeds are the last ones
+    // heard, a guess as the vehicle drives and steers on, with the
+    // uncertainty of the odometry-gap bridge (AddOdometry), so the rows and
+    // plants take over the bearing and the distance.
+    const double sd = BridgeSd(dt);
+    Predict(u, sd, sd, dt);
+  } else {
+    Predict(u, options_.wheel_sd_fraction * std::abs(u.left_m),
+            options_.wheel_sd_fraction * std::abs(u.right_m), dt);
+  }
   utime_ = utime;
+}
+
+bool GridTracker::WheelsSilentAt(int64_t utime) const {
+  return last_wheels_utime_ >= 0 && (utime - last_wheels_utime_) * 1e-6 > options_.max_odometry_gap_s;
+}
+
+// A wheel uncertainty of half of a brisk walking pace over dt.
+double GridTracker::BridgeSd(double dt) const {
+  return 0.5 * std::max({std::abs(left_m_s_), std::abs(right_m_s_), 0.5}) * dt;
 }
 
 Eigen::Vector2d GridTracker::PlantPosition(int m, int n) const {

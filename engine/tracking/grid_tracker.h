@@ -395,6 +395,10 @@ class GridTracker {
   void Predict(const WheelIncrement& u, double left_sd_m, double right_sd_m, double dt_s);
   void ResetBounce();
   void PredictTo(int64_t utime);
+  // No odometry sample for longer than max_odometry_gap_s before utime.
+  bool WheelsSilentAt(int64_t utime) const;
+  // The odometry-gap bridge's σ of each wheel's increment over dt.
+  double BridgeSd(double dt) const;
   void MoveMean(const WheelIncrement& u);  // the mean only (out-of-sequence frames)
   void ShiftReference(FrameReport& report);
   void AddSpacingNoise(int lines_changed);
@@ -454,6 +458,7 @@ class GridTracker {
   std::vector<double> band_radius_m_;
   std::vector<int> band_samples_;
   int64_t utime_ = -1;      // time of the state
+  int64_t last_wheels_utime_ = -1;  // newest odometry sample offered, accepted or not
   SlipGuard slip_guard_;
   double left_m_s_ = 0.0;   // last accepted wheel speeds (past the slip guard)
   double right_m_s_ = 0.0;
