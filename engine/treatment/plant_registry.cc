@@ -64,7 +64,7 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
   (d.crop ? r.crop_votes : r.weed_votes) += 1;
   if (!d.clipped && d.area_m2 > r.largest_m2) {
     r.largest_m2 = d.area_m2;
-    if (r.sizes_m2.empty()) r.area_m2 = d.area_m2;
+    if (r.sizes.empty()) r.area_m2 = d.area_m2;
     r.small = d.area_m2 < d.size_filter_m2;
     r.size_filter_m2 = d.size_filter_m2;
   }
@@ -168,7 +168,7 @@ void PlantRegistry::CountView(const Quad& view) {
   }
 }
 
-double UnstretchedArea(std::span<const SizeSample> samples) {
+double UnstretchedArea(std::span<const SizeSample> samples, double* distance_m) {
   double area = 0.0;
   Eigen::Vector2d first = Eigen::Vector2d::Zero();
   Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
@@ -179,6 +179,7 @@ double UnstretchedArea(std::span<const SizeSample> samples) {
   }
   if (!(area > 0.0)) return 0.0;
   const Eigen::Vector2d centre = first / area;
+  if (distance_m) *distance_m = centre.norm();
   const Eigen::Matrix2d cov = second / area - centre * centre.transpose();
   if (!(centre.norm() > 0.0)) return area;  // straight under the camera: no stretch
   const Eigen::Vector2d along = centre.normalized();
@@ -186,6 +187,16 @@ double UnstretchedArea(std::span<const SizeSample> samples) {
   const double var_along = along.dot(cov * along), var_across = across.dot(cov * across);
   if (!(var_along > 0.0) || !(var_across >= 0.0)) return area;
   return area * std::min(1.0, std::sqrt(var_across / var_along));
+}
+
+double NearHalfMedian(std::span<const PlantRecord::FrameSize> sizes) {
+  if (sizes.empty()) return 0.0;
+  std::vector<PlantRecord::FrameSize> v(sizes.begin(), sizes.end());
+  std::sort(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.distance_m < b.distance_m; });
+  std::vector<float> near;
+  for (size_t i = 0; i < (v.size() + 1) / 2; ++i) near.push_back(v[i].area_m2);
+  std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(near.size() / 2), near.end());
+  return near[near.size() / 2];
 }
 
 PlantRecord* PlantRegistry::Mutable(int id) {
@@ -209,10 +220,10 @@ void PlantRegistry::EndFrame() {
     }
     PlantRecord* r = Mutable(id);
     if (r == nullptr || clipped) continue;
-    r->sizes_m2.push_back(static_cast<float>(UnstretchedArea(blobs)));
-    std::vector<float> v = r->sizes_m2;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    r->area_m2 = v[v.size() / 2];
+    double distance = 0.0;
+    const double area = UnstretchedArea(blobs, &distance);
+    r->sizes.push_back({static_cast<float>(distance), static_cast<float>(area)});
+    r->area_m2 = NearHalfMedian(r->sizes);
   }
   frame_sizes_.clear();
   UpdateUndersized();
@@ -227,7 +238,7 @@ void PlantRegistry::UpdateUndersized() {
   const auto voted_crop = [](const PlantRecord& r) { return r.crop_votes >= r.weed_votes && r.crop_votes > 0; };
   std::vector<double> sizes;
   for (const PlantRecord& r : Recent()) {
-    if (voted_crop(r) && r.sizes_m2.size() >= min_frames) sizes.push_back(r.area_m2);
+    if (voted_crop(r) && r.sizes.size() >= min_frames) sizes.push_back(r.area_m2);
   }
   constexpr size_t kMinCrops = 10;
   if (sizes.size() >= kMinCrops) {
@@ -238,7 +249,7 @@ void PlantRegistry::UpdateUndersized() {
   const double radius_fraction = std::max(0.0, 1.0 - 3.0 * s);
   const double limit = radius_fraction * radius_fraction * crop_median_m2_;
   for (PlantRecord& r : Recent()) {
-    if (r.sizes_m2.size() >= min_frames) r.undersized = voted_crop(r) && r.area_m2 < limit;
+    if (r.sizes.size() >= min_frames) r.undersized = voted_crop(r) && r.area_m2 < limit;
   }
 }
 

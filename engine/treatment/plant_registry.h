@@ -16,9 +16,10 @@
 // tips) lengthens its outline on the ground along the line of sight while
 // its extent across that line is kept; the area is scaled by the ratio of
 // the two spreads (second moments), which a plant of symmetric outline has
-// equal. The size is the median of those per-frame areas, not the largest
-// (which picked the most stretched view and a neighbour touching for a
-// frame). A record standing in a predicted crop's place but much smaller
+// equal. The size is the median of those per-frame areas over the nearer
+// half of the frames (the plant closest to the camera, seen most steeply,
+// where what the stretch leaves is least), not the largest (which picked
+// the most stretched view and a neighbour touching for a frame). A record standing in a predicted crop's place but much smaller
 // than the crops around it (below (1 − 3 s)² of their median size, s the
 // crop profile's spread of the leaf-tip radius) is a weed where a crop is
 // missing, not that crop: it is `undersized` and not a crop().
@@ -46,7 +47,11 @@ struct PlantRecord {
   int weed_votes = 0;
   double area_m2 = 0.0;  // median per-frame size (above); the largest blob until measured
   double largest_m2 = 0.0;  // largest unclipped blob seen (the size filter's test)
-  std::vector<float> sizes_m2;  // per-frame sizes, oldest first
+  struct FrameSize {
+    float distance_m;  // from the camera's ground point
+    float area_m2;
+  };
+  std::vector<FrameSize> sizes;  // per-frame sizes, oldest first
   bool undersized = false;  // in a crop's place, far smaller than the crops (above)
   double gamma2 = std::numeric_limits<double>::infinity();  // smallest to a predicted crop
   double distance_m = std::numeric_limits<double>::infinity();
@@ -96,7 +101,11 @@ struct SizeSample {
 // The area of a plant seen as `samples` (its blobs of one frame), its
 // stretch along the line of sight from the camera taken out (above):
 // the blobs' joint area times sd across / sd along that line, at most 1.
-double UnstretchedArea(std::span<const SizeSample> samples);
+// `distance_m`, when given, is set to the blobs' joint centroid's distance
+// from the camera's ground point.
+double UnstretchedArea(std::span<const SizeSample> samples, double* distance_m = nullptr);
+// The median area of the nearer half of `sizes` (above).
+double NearHalfMedian(std::span<const PlantRecord::FrameSize> sizes);
 
 class PlantRegistry {
  public:

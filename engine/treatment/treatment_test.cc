@@ -680,37 +680,37 @@ TEST(PlantRegistry, UnstretchedAreaTakesTheObliqueStretchOut) {
 }
 
 // A record's size is the median of its frames' sizes (each frame's blobs
-// of it together), frames where the border cut it left out; the largest
-// blob still drives the size-filter flag.
-TEST(PlantRegistry, SizeIsTheMedianOverFramesSeenWhole) {
+// of it together) over the nearer half of the frames, frames where the
+// border cut it left out; the largest blob still drives the size filter.
+TEST(PlantRegistry, SizeIsTheMedianOverTheNearerFramesSeenWhole) {
   PlantRegistry reg;
   classify::BlobDecision leaf;
   leaf.crop = leaf.associated = true;
   leaf.gamma2 = 1.0;
   const Eigen::Vector2d plant(0.0, 1.0);
-  const auto sample = [](double area, bool clipped) {
-    SizeSample s;
-    s.area_m2 = area;
-    s.ground_m = {0.0, 2.0};
-    s.covariance_m2 = 0.01 * Eigen::Matrix2d::Identity();
-    s.clipped = clipped;
-    return s;
-  };
-  // Frame areas (two leaves each): 0.02, 0.03, 0.025, then 0.08 clipped.
-  const double leaves[4][2] = {{0.01, 0.01}, {0.02, 0.01}, {0.015, 0.01}, {0.04, 0.04}};
-  for (int f = 0; f < 4; ++f) {
-    for (const double a : leaves[f]) {
-      leaf.area_m2 = a;
-      leaf.clipped = f == 3;
-      reg.AddSize(reg.Observe({0.0, 1.0}, leaf, plant), sample(a, f == 3));
+  // Per frame: the plant's distance from the camera's ground point and its
+  // area, two leaves of half each; the nearest frame is cut by the border.
+  const double frames[6][2] = {{3.0, 0.05}, {2.5, 0.04}, {2.0, 0.02}, {1.5, 0.03}, {1.25, 0.025}, {1.0, 0.08}};
+  for (const auto& [distance, area] : frames) {
+    const bool clipped = distance == 1.0;
+    for (int half = 0; half < 2; ++half) {
+      leaf.area_m2 = 0.5 * area;
+      leaf.clipped = clipped;
+      SizeSample s;
+      s.area_m2 = 0.5 * area;
+      s.ground_m = {0.0, distance};
+      s.covariance_m2 = 0.01 * Eigen::Matrix2d::Identity();
+      s.clipped = clipped;
+      reg.AddSize(reg.Observe({0.0, 1.0}, leaf, plant), s);
     }
     reg.EndFrame();
   }
   ASSERT_EQ(reg.records().size(), 1u);
   const PlantRecord& r = reg.records()[0];
-  EXPECT_EQ(r.sizes_m2.size(), 3u);
-  EXPECT_NEAR(r.area_m2, 0.025, 1e-7);
-  EXPECT_DOUBLE_EQ(r.largest_m2, 0.02);
+  EXPECT_EQ(r.sizes.size(), 5u);
+  EXPECT_NEAR(r.sizes[0].distance_m, 3.0, 1e-6);
+  EXPECT_NEAR(r.area_m2, 0.025, 1e-7);  // the median of 0.03, 0.025, 0.02
+  EXPECT_DOUBLE_EQ(r.largest_m2, 0.025);
 }
 
 // With the crop's size spread s known (profile), a record in a crop's place
