@@ -356,6 +356,11 @@ tracking::TrackerOptions ProductTrackerOptions(const Profiles& p) {
 treatment::TreatmentOptions ProductTreatmentOptions(const Profiles& p) {
   treatment::TreatmentOptions o;
   o.scheduler.bar = p.vehicle.bar;
+  // A record far smaller than the crops in a crop's place is a weed in a
+  // gap: how much smaller the crop's own spread of sizes says.
+  o.registry.crop_size_sd_fraction = p.crop.leaf_radius_sd_fraction;
+  // Plant sizes are measured at the leaf tips, where the outline is.
+  o.outline_height_m = p.crop.leaf_height_m;
   return o;
 }
 

@@ -8,14 +8,16 @@
 # Issue 36 asks for crop plants, gaps, median size and weed density within
 # 5 % of the truth. The report's arithmetic is exact (ui/report_test.cc, on
 # a synthetic bed with known gaps and sizes); what it summarises is the
-# vehicle's plant records, and today those meet 5 % for the crop count only
-# (docs/results/2026-11-27-report.md, 40 m and 1 km): weeds standing where a
-# crop is missing are taken for that crop (fewer gaps), the record's area is
-# the largest blob seen projected to the ground (leaf-tip radius about 30 %
-# high), and about a third of the weeds have no record. Those three are held
-# to the bounds they meet now (a regression check, stated below), the crop
-# count to 5 %. Needs no display (the report starts xvfb-run itself when it
-# can, and writes everything but the camera views without one).
+# vehicle's plant records (docs/results/2026-11-27-report.md). A record's
+# size is the median over its nearer frames of its blobs' area at the leaf
+# tips, the oblique stretch taken out (leaf-tip radius now about 5 % high,
+# was 30 %), and a record far under the crops' size in a crop's place is a
+# weed in a gap (missing plants were 15 % low; at 40 m one plant is 17 %);
+# about a third of the weeds still have no record (under and against the
+# crops' canopy, or never confirmed). Those three are held to the bounds
+# they meet now (stated below, so that the old records' figures fail), the
+# crop count to 5 %. Needs no display (the report starts xvfb-run itself
+# when it can, and writes everything but the camera views without one).
 set -uo pipefail
 # shellcheck source=cli_lib.sh
 source "$(dirname "$0")/cli_lib.sh"
@@ -36,9 +38,9 @@ if t is None:
 # name, report, truth, lowest and highest (report - truth) / truth allowed
 checks = [
     ("crop plants", a["crop_plants"], t["crop_plants"], -0.05, 0.05),
-    ("missing plants", a["missing_plants"], t["missing_plants"], -0.40, 0.05),
-    ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.05, 0.40),
-    ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.45, 0.05),
+    ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.35),
+    ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.08),
+    ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.42, 0.05),
 ]
 bad = 0
 for name, got, want, lo, hi in checks:

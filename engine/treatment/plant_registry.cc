@@ -1,5 +1,6 @@
 #include "engine/treatment/plant_registry.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ranges>
@@ -9,6 +10,8 @@ namespace plantscale::treatment {
 OptionErrors RegistryOptions::Validate() const {
   OptionErrors e;
   RequireInRange(e, "merge_radius_m", merge_radius_m, 0.001, 1.0);
+  RequireInRange(e, "crop_size_sd_fraction", crop_size_sd_fraction, 0.0, 0.5);
+  if (min_size_frames < 1) e.push_back({"min_size_frames", "must be >= 1"});
   return e;
 }
 
@@ -59,8 +62,9 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
   r.bed_m = (r.bed_m * r.observations + bed) / (r.observations + 1);
   ++r.observations;
   (d.crop ? r.crop_votes : r.weed_votes) += 1;
-  if (!d.clipped && d.area_m2 > r.area_m2) {
-    r.area_m2 = d.area_m2;
+  if (!d.clipped && d.area_m2 > r.largest_m2) {
+    r.largest_m2 = d.area_m2;
+    if (r.sizes.empty()) r.area_m2 = d.area_m2;
     r.small = d.area_m2 < d.size_filter_m2;
     r.size_filter_m2 = d.size_filter_m2;
   }
@@ -90,7 +94,8 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
       r.map_class = map.ClassOf(column, row);
     }
     char text[384];
-    const char* reason = r.crop() && r.small && r.grid_plant
+    const char* reason = r.undersized ? "in a predicted crop's place, under the crops' size: a weed where a crop is missing"
+                         : r.crop() && r.small && r.grid_plant
                              ? "below the size filter, alone in a predicted crop's region"
                          : r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
                          : r.crop()          ? "associated with a predicted crop"
@@ -132,6 +137,8 @@ void PlantRegistry::Clear() {
   first_id_ += static_cast<int>(records_.size());
   cleared_id_ = first_id_;
   records_.clear();
+  frame_sizes_.clear();
+  crop_median_m2_ = 0.0;
   final_from_ = 0;
   let_go_confirmed_ = 0;
 }
@@ -158,6 +165,91 @@ int PlantRegistry::confirmed() const {
 void PlantRegistry::CountView(const Quad& view) {
   for (PlantRecord& r : Recent()) {
     if (InsideQuad(view, r.bed_m)) ++r.frames_in_view;
+  }
+}
+
+double UnstretchedArea(std::span<const SizeSample> samples, double* distance_m) {
+  double area = 0.0;
+  Eigen::Vector2d first = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
+  for (const SizeSample& s : samples) {
+    area += s.area_m2;
+    first += s.area_m2 * s.ground_m;
+    second += s.area_m2 * (s.covariance_m2 + s.ground_m * s.ground_m.transpose());
+  }
+  if (!(area > 0.0)) return 0.0;
+  const Eigen::Vector2d centre = first / area;
+  if (distance_m) *distance_m = centre.norm();
+  const Eigen::Matrix2d cov = second / area - centre * centre.transpose();
+  if (!(centre.norm() > 0.0)) return area;  // straight under the camera: no stretch
+  const Eigen::Vector2d along = centre.normalized();
+  const Eigen::Vector2d across(-along.y(), along.x());
+  const double var_along = along.dot(cov * along), var_across = across.dot(cov * across);
+  if (!(var_along > 0.0) || !(var_across >= 0.0)) return area;
+  return area * std::min(1.0, std::sqrt(var_across / var_along));
+}
+
+double NearHalfMedian(std::span<const PlantRecord::FrameSize> sizes) {
+  if (sizes.empty()) return 0.0;
+  std::vector<PlantRecord::FrameSize> v(sizes.begin(), sizes.end());
+  std::sort(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.distance_m < b.distance_m; });
+  std::vector<float> near;
+  for (size_t i = 0; i < (v.size() + 1) / 2; ++i) near.push_back(v[i].area_m2);
+  std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(near.size() / 2), near.end());
+  return near[near.size() / 2];
+}
+
+PlantRecord* PlantRegistry::Mutable(int id) {
+  if (id < first_id_ || id - first_id_ >= static_cast<int>(records_.size())) return nullptr;
+  return &records_[static_cast<size_t>(id - first_id_)];
+}
+
+void PlantRegistry::AddSize(int id, const SizeSample& sample) { frame_sizes_.emplace_back(id, sample); }
+
+void PlantRegistry::EndFrame() {
+  std::stable_sort(frame_sizes_.begin(), frame_sizes_.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<SizeSample> blobs;
+  for (size_t i = 0; i < frame_sizes_.size();) {
+    const int id = frame_sizes_[i].first;
+    bool clipped = false;
+    blobs.clear();
+    for (; i < frame_sizes_.size() && frame_sizes_[i].first == id; ++i) {
+      clipped = clipped || frame_sizes_[i].second.clipped;
+      blobs.push_back(frame_sizes_[i].second);
+    }
+    PlantRecord* r = Mutable(id);
+    if (r == nullptr || clipped) continue;
+    double distance = 0.0;
+    const double area = UnstretchedArea(blobs, &distance);
+    r->sizes.push_back({static_cast<float>(distance), static_cast<float>(area)});
+    r->area_m2 = NearHalfMedian(r->sizes);
+  }
+  frame_sizes_.clear();
+  UpdateUndersized();
+}
+
+// The crops' median size over the records that can still be in view, and
+// which records in a crop's place fall far below it.
+void PlantRegistry::UpdateUndersized() {
+  const double s = options_.crop_size_sd_fraction;
+  if (!(s > 0.0)) return;
+  const size_t min_frames = static_cast<size_t>(options_.min_size_frames);
+  const auto voted_crop = [](const PlantRecord& r) { return r.crop_votes >= r.weed_votes && r.crop_votes > 0; };
+  std::vector<double> sizes;
+  for (const PlantRecord& r : Recent()) {
+    if (voted_crop(r) && r.sizes.size() >= min_frames) sizes.push_back(r.area_m2);
+  }
+  constexpr size_t kMinCrops = 10;
+  if (sizes.size() >= kMinCrops) {
+    std::nth_element(sizes.begin(), sizes.begin() + static_cast<std::ptrdiff_t>(sizes.size() / 2), sizes.end());
+    crop_median_m2_ = sizes[sizes.size() / 2];
+  }
+  if (!(crop_median_m2_ > 0.0)) return;
+  const double radius_fraction = std::max(0.0, 1.0 - 3.0 * s);
+  const double limit = radius_fraction * radius_fraction * crop_median_m2_;
+  for (PlantRecord& r : Recent()) {
+    if (r.sizes.size() >= min_frames) r.undersized = voted_crop(r) && r.area_m2 < limit;
   }
 }
 

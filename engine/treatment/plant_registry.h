@@ -7,6 +7,22 @@
 // centroids scatter over its canopy, make one record. Each plant carries its votes, size, distance to the predicted
 // crop position, the map counters under it and whether a nozzle sprayed it —
 // and a sentence saying why, for the map and the station.
+//
+// A record's size (area_m2) is robust to the view: each frame that saw the
+// plant whole (no blob of it cut by the image border) measures the area of
+// all its blobs of that frame together, so a crop split into leaves counts
+// whole, and takes out the stretch of the oblique view: the camera looks
+// down at about 45°, so the plant's height (the flank under its near leaf
+// tips) lengthens its outline on the ground along the line of sight while
+// its extent across that line is kept; the area is scaled by the ratio of
+// the two spreads (second moments), which a plant of symmetric outline has
+// equal. The size is the median of those per-frame areas over the nearer
+// half of the frames (the plant closest to the camera, seen most steeply,
+// where what the stretch leaves is least), not the largest (which picked
+// the most stretched view and a neighbour touching for a frame). A record standing in a predicted crop's place but much smaller
+// than the crops around it (below (1 − 3 s)² of their median size, s the
+// crop profile's spread of the leaf-tip radius) is a weed where a crop is
+// missing, not that crop: it is `undersized` and not a crop().
 
 #include <Eigen/Core>
 #include <limits>
@@ -29,7 +45,14 @@ struct PlantRecord {
   int frames_in_view = 0;  // frames whose view held its position (seen or not)
   int crop_votes = 0;
   int weed_votes = 0;
-  double area_m2 = 0.0;  // largest seen
+  double area_m2 = 0.0;  // median per-frame size (above); the largest blob until measured
+  double largest_m2 = 0.0;  // largest unclipped blob seen (the size filter's test)
+  struct FrameSize {
+    float distance_m;  // from the camera's ground point
+    float area_m2;
+  };
+  std::vector<FrameSize> sizes;  // per-frame sizes, oldest first
+  bool undersized = false;  // in a crop's place, far smaller than the crops (above)
   double gamma2 = std::numeric_limits<double>::infinity();  // smallest to a predicted crop
   double distance_m = std::numeric_limits<double>::infinity();
   bool small = false;  // its largest unclipped view failed the size filter
@@ -42,7 +65,7 @@ struct PlantRecord {
   Eigen::Vector2d grid_bed_m{0.0, 0.0};
   std::string why;
 
-  bool crop() const { return crop_votes >= weed_votes && crop_votes > 0; }
+  bool crop() const { return crop_votes >= weed_votes && crop_votes > 0 && !undersized; }
   // A plant rather than a passing detection (a speck, a stone's glint, a leaf
   // cut off for a frame or two): seen in at least 3 frames and in at least
   // 40 % of the (8 or more) frames that looked at its place: crops are seen
@@ -54,9 +77,35 @@ struct PlantRecord {
 
 struct RegistryOptions {
   double merge_radius_m = 0.05;
+  // The crop profile's plant-to-plant spread of the leaf-tip radius (sd /
+  // mean); 0: no record is held undersized.
+  double crop_size_sd_fraction = 0.0;
+  // Per-frame sizes a crop record needs before its size counts towards the
+  // crops' median (and before it can be held undersized).
+  int min_size_frames = 3;
 
   OptionErrors Validate() const;
 };
+
+// One blob's share of its record's size this frame: its ground area, its
+// centroid and the covariance of its pixels on the ground, in a frame whose
+// origin is under the camera (the vehicle frame), and whether the image
+// border cut it.
+struct SizeSample {
+  double area_m2 = 0.0;
+  Eigen::Vector2d ground_m{0.0, 0.0};
+  Eigen::Matrix2d covariance_m2 = Eigen::Matrix2d::Zero();
+  bool clipped = false;
+};
+
+// The area of a plant seen as `samples` (its blobs of one frame), its
+// stretch along the line of sight from the camera taken out (above):
+// the blobs' joint area times sd across / sd along that line, at most 1.
+// `distance_m`, when given, is set to the blobs' joint centroid's distance
+// from the camera's ground point.
+double UnstretchedArea(std::span<const SizeSample> samples, double* distance_m = nullptr);
+// The median area of the nearer half of `sizes` (above).
+double NearHalfMedian(std::span<const PlantRecord::FrameSize> sizes);
 
 class PlantRegistry {
  public:
@@ -77,6 +126,13 @@ class PlantRegistry {
   void TakeFinalCounts(const TreatmentMap& map, int row);
   // A frame looked at this part of the bed: the records inside it were in view.
   void CountView(const Quad& view);
+  // A blob of record `id` this frame, for its size (EndFrame measures it).
+  void AddSize(int id, const SizeSample& sample);
+  // The frame's blobs are all in: each record seen whole adds its size of
+  // this frame, and the crops' median size and who is undersized follow.
+  void EndFrame();
+  // The median size of the crop records measured (0: none yet).
+  double crop_median_m2() const { return crop_median_m2_; }
   // Lets go of the oldest records whose counts are final (TakeFinalCounts):
   // their place is behind the bar, they were published as they changed, and
   // a day's run would hold hundreds of thousands of them.
@@ -107,7 +163,12 @@ class PlantRegistry {
     return {records_.data() + records_.size() - n, n};
   }
 
+  PlantRecord* Mutable(int id);
+  void UpdateUndersized();
+
   RegistryOptions options_;
+  std::vector<std::pair<int, SizeSample>> frame_sizes_;  // this frame's, by record id
+  double crop_median_m2_ = 0.0;
   std::vector<PlantRecord> records_;  // bed y increasing, within a merge radius
 };
 

@@ -17,6 +17,7 @@ OptionErrors TreatmentOptions::Validate() const {
   RequireInRange(e, "crop_footprint_min_half_m", crop_footprint_min_half_m, 0.0, 0.5);
   RequireInRange(e, "weed_footprint_scale", weed_footprint_scale, 0.05, 2.0);
   RequireInRange(e, "weed_height_m", weed_height_m, 0.0, 0.5);
+  RequireInRange(e, "outline_height_m", outline_height_m, 0.0, 0.5);
   RequireInRange(e, "min_weed_part_m2", min_weed_part_m2, 0.0, 1.0);
   RequireInRange(e, "own_offset_fraction_across", own_offset_fraction_across, 0.0, 1.0);
   RequireInRange(e, "own_offset_fraction_along", own_offset_fraction_along, 0.0, 1.0);
@@ -308,8 +309,10 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
         VehicleToBed(pose, low ? *low : features[i].ground_m), d,
         d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
                      : std::nullopt);
+    registry_.AddSize(frame_.plant_ids[i], SizeSampleOf(blob, d));
   }
   if (seen) registry_.CountView(*seen);
+  registry_.EndFrame();
   PlacePlantFootprints(plants, tracker, pose);
   // Plants long out of view stay where they were last placed.
   std::erase_if(followed_,
@@ -335,6 +338,19 @@ void TreatmentSystem::StartFrame(int64_t utime, const tracking::GridTracker& tra
     frame_.map_reset = true;
     ++map_resets_;
   }
+}
+
+// The blob's share of its record's size: its area and its pixels'
+// covariance on the plane of the leaf tips (outline_height_m). A ray's
+// footprint on a horizontal plane grows with the plane's depth below the
+// camera, so lengths on it scale by (C − z) / (C − h) from the virtual
+// plane at h, C the camera's height.
+SizeSample TreatmentSystem::SizeSampleOf(const vision::Blob& blob, const classify::BlobDecision& d) const {
+  const double h = camera_.options().virtual_plane_height_m, c = camera_.options().height_m;
+  const double z = options_.outline_height_m > 0.0 ? options_.outline_height_m : h;
+  const double scale = (c - z) / (c - h), scale2 = scale * scale;
+  const Eigen::Matrix2d j = camera_.ImageToPlaneJacobian(blob.centroid_px, h);
+  return {d.area_m2 * scale2, blob.ground_m, scale2 * j * blob.covariance_px2 * j.transpose(), d.clipped};
 }
 
 // Pixels of plant (m, n): one footprint per plant and frame.

@@ -48,6 +48,10 @@ struct TreatmentOptions {
   // 3 m ahead of a camera at 1.5 m lands 20 cm beyond where it is, and
   // slides towards the camera as it nears, leaving a trail of records.
   double weed_height_m = 0.005;
+  // A plant's size (PlantRegistry) is its outline at the leaf tips, which
+  // stand at this height: its blobs' areas, measured on the crops' virtual
+  // plane, are taken to this plane. 0: left on the virtual plane.
+  double outline_height_m = 0.0;
   // Crop blobs of one frame associated with the same predicted plant are
   // its leaves, cut apart by segmentation: they mark one footprint, their
   // joint bounding box scaled about their joint (area-weighted) centroid,
@@ -232,6 +236,7 @@ class TreatmentSystem {
   };
   void StartFrame(int64_t utime, const tracking::GridTracker& tracker,
                   const tracking::FrameReport& report, size_t features);
+  SizeSample SizeSampleOf(const vision::Blob& blob, const classify::BlobDecision& d) const;
   static void AddToPlant(std::vector<PlantFootprint>& plants, int m, int n, double area_px,
                          const Eigen::Vector2d& moment_px, const cv::Rect& box);
   void MapBlob(int feature, const vision::Blob& blob, const classify::BlobDecision& d,

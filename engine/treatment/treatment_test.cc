@@ -643,6 +643,110 @@ TEST(PlantRegistry, LeafFragmentsOfOneGridPlantMakeOneRecord) {
   EXPECT_FALSE(reg.records()[2].grid_plant);
 }
 
+// A disc of radius r seen from the camera with its outline stretched by k
+// along the line of sight (a plant's height under the oblique view): the
+// stretch is taken out whatever the bearing; a round plant is left as it is.
+TEST(PlantRegistry, UnstretchedAreaTakesTheObliqueStretchOut) {
+  const double r = 0.1, area = M_PI * r * r;
+  for (const double bearing : {0.0, 0.4, -1.1}) {
+    const Eigen::Vector2d along(std::sin(bearing), std::cos(bearing)), across(along.y(), -along.x());
+    const double k = 1.3;
+    SizeSample s;
+    s.area_m2 = k * area;
+    s.ground_m = 2.0 * along;
+    s.covariance_m2 = 0.25 * r * r * (across * across.transpose() + k * k * along * along.transpose());
+    EXPECT_NEAR(UnstretchedArea({&s, 1}), area, 1e-12) << bearing;
+    s.area_m2 = area;
+    s.covariance_m2 = 0.25 * r * r * Eigen::Matrix2d::Identity();
+    EXPECT_NEAR(UnstretchedArea({&s, 1}), area, 1e-12) << bearing;
+  }
+  // Two halves of a stretched plant (its leaves cut apart) make the same
+  // plant: their joint moments, not each half's.
+  const double k = 1.5, h = 4.0 * r / (3.0 * M_PI);  // a half-disc's centroid from the cut
+  SizeSample near, far;
+  near.area_m2 = far.area_m2 = 0.5 * k * area;
+  near.ground_m = {0.0, 2.0 - k * h};
+  far.ground_m = {0.0, 2.0 + k * h};
+  const double var_along = (0.25 - h * h / (r * r)) * r * r * k * k;
+  near.covariance_m2 = far.covariance_m2 = Eigen::Vector2d(0.25 * r * r, var_along).asDiagonal();
+  const SizeSample halves[] = {near, far};
+  EXPECT_NEAR(UnstretchedArea(halves), area, 1e-12);
+  // Widened across (a neighbour beside it): not enlarged.
+  SizeSample wide;
+  wide.area_m2 = area;
+  wide.ground_m = {0.0, 2.0};
+  wide.covariance_m2 = Eigen::Vector2d(0.5 * r * r, 0.25 * r * r).asDiagonal();
+  EXPECT_DOUBLE_EQ(UnstretchedArea({&wide, 1}), area);
+}
+
+// A record's size is the median of its frames' sizes (each frame's blobs
+// of it together) over the nearer half of the frames, frames where the
+// border cut it left out; the largest blob still drives the size filter.
+TEST(PlantRegistry, SizeIsTheMedianOverTheNearerFramesSeenWhole) {
+  PlantRegistry reg;
+  classify::BlobDecision leaf;
+  leaf.crop = leaf.associated = true;
+  leaf.gamma2 = 1.0;
+  const Eigen::Vector2d plant(0.0, 1.0);
+  // Per frame: the plant's distance from the camera's ground point and its
+  // area, two leaves of half each; the nearest frame is cut by the border.
+  const double frames[6][2] = {{3.0, 0.05}, {2.5, 0.04}, {2.0, 0.02}, {1.5, 0.03}, {1.25, 0.025}, {1.0, 0.08}};
+  for (const auto& [distance, area] : frames) {
+    const bool clipped = distance == 1.0;
+    for (int half = 0; half < 2; ++half) {
+      leaf.area_m2 = 0.5 * area;
+      leaf.clipped = clipped;
+      SizeSample s;
+      s.area_m2 = 0.5 * area;
+      s.ground_m = {0.0, distance};
+      s.covariance_m2 = 0.01 * Eigen::Matrix2d::Identity();
+      s.clipped = clipped;
+      reg.AddSize(reg.Observe({0.0, 1.0}, leaf, plant), s);
+    }
+    reg.EndFrame();
+  }
+  ASSERT_EQ(reg.records().size(), 1u);
+  const PlantRecord& r = reg.records()[0];
+  EXPECT_EQ(r.sizes.size(), 5u);
+  EXPECT_NEAR(r.sizes[0].distance_m, 3.0, 1e-6);
+  EXPECT_NEAR(r.area_m2, 0.025, 1e-7);  // the median of 0.03, 0.025, 0.02
+  EXPECT_DOUBLE_EQ(r.largest_m2, 0.025);
+}
+
+// With the crop's size spread s known (profile), a record in a crop's place
+// below (1 − 3 s)² of the crops' median size is a weed where the crop is
+// missing; without it (s = 0) nothing changes.
+TEST(PlantRegistry, AWeedInAGapIsNotTheMissingCrop) {
+  for (const double spread : {0.15, 0.0}) {
+    RegistryOptions o;
+    o.crop_size_sd_fraction = spread;
+    PlantRegistry reg(o);
+    classify::BlobDecision crop;
+    crop.crop = crop.associated = true;
+    crop.gamma2 = 1.0;
+    for (int frame = 0; frame < 4; ++frame) {
+      for (int m = 0; m < 12; ++m) {
+        const Eigen::Vector2d at(0.0, 0.45 * m);
+        // Plant 5 is missing: a weed of 0.012 m² stands in its region.
+        const double area = m == 5 ? 0.012 : 0.05 + 0.001 * m;
+        crop.area_m2 = area;
+        SizeSample s;
+        s.area_m2 = area;
+        s.ground_m = {0.0, 2.0};
+        s.covariance_m2 = 0.001 * Eigen::Matrix2d::Identity();
+        reg.AddSize(reg.Observe(at, crop, at), s);
+      }
+      reg.EndFrame();
+    }
+    ASSERT_EQ(reg.records().size(), 12u);
+    EXPECT_EQ(reg.records()[5].crop(), spread == 0.0) << spread;
+    EXPECT_EQ(reg.records()[5].undersized, spread > 0.0) << spread;
+    for (int m : {0, 4, 6, 11}) EXPECT_TRUE(reg.records()[static_cast<size_t>(m)].crop()) << m;
+    // The median of the 12 crop-voted records (the upper one of an even count).
+    EXPECT_NEAR(reg.crop_median_m2(), spread > 0.0 ? 0.056 : 0.0, 1e-7);
+  }
+}
+
 // Spray-weed mode's segmentation joins no blobs by soil growth, so that a
 // weed against a crop's rim keeps its own blob; the rest of the options is
 // the caller's.
