@@ -49,6 +49,18 @@ TEST(TrackingSystem, TestBed) {
   EXPECT_LT(e.ours.lateral_rmse_m, 0.5 * e.thesis->lateral_rmse_m);
 }
 
+// One field run on the preset's profiles with the wheel odometry faulty
+// over the default stretch (15 m on).
+TrackingEvaluation FieldWithOdometryFault(uint64_t seed, OdometryFaultKind kind) {
+  TrackingEvalOptions o;
+  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
+  o.sim.seed = seed;
+  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
+  o.seeds = 1;
+  o.odometry_fault.kind = kind;
+  return EvaluateTracking(o);
+}
+
 // The left wheel's encoder reads 0 for 10 m (issue 38's stall): the slip
 // guard reads it from the right wheel with the turn rate held, the tracker
 // widens that wheel's noise, and the rows hold the bearing. Tuning seed 1:
@@ -56,13 +68,7 @@ TEST(TrackingSystem, TestBed) {
 // (49 mm); now 5.0 mm. Held-out 1000–1001: 6.7 and 2.9 mm, no loss (before
 // either change: lost, 608 and 614 mm).
 TEST(TrackingSystem, FieldRidesThroughAStalledWheelEncoder) {
-  TrackingEvalOptions o;
-  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
-  o.sim.seed = 1;
-  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
-  o.seeds = 1;
-  o.odometry_fault.kind = OdometryFaultKind::kStall;
-  const TrackingEvaluation e = EvaluateTracking(o);
+  const TrackingEvaluation e = FieldWithOdometryFault(1, OdometryFaultKind::kStall);
   ASSERT_GT(e.ours.fault_frames, 150);
   EXPECT_EQ(e.ours.fault_losses, 0);
   EXPECT_EQ(e.ours.fault_frames_tracking, e.ours.fault_frames);
@@ -77,13 +83,7 @@ TEST(TrackingSystem, FieldRidesThroughAStalledWheelEncoder) {
 // 0.4 rad off, 228 mm lateral over the stretch); it is a regression check
 // of that loss, not a tuning seed (tuned on 1–6: 1.3–6.2 mm, no loss).
 TEST(TrackingSystem, FieldRidesThroughOdometryThatStops) {
-  TrackingEvalOptions o;
-  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
-  o.sim.seed = 1000;
-  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
-  o.seeds = 1;
-  o.odometry_fault.kind = OdometryFaultKind::kStop;
-  const TrackingEvaluation e = EvaluateTracking(o);
+  const TrackingEvaluation e = FieldWithOdometryFault(1000, OdometryFaultKind::kStop);
   ASSERT_GT(e.ours.fault_frames, 150);
   EXPECT_EQ(e.ours.fault_losses, 0);
   EXPECT_EQ(e.ours.fault_frames_tracking, e.ours.fault_frames);
