@@ -13,7 +13,30 @@ OptionErrors MotionFusionOptions::Validate() const {
   RequirePositive(e, "wheel_sd_fraction", wheel_sd_fraction);
   RequirePositive(e, "min_wheel_sd_m_s", min_wheel_sd_m_s);
   RequirePositive(e, "substitute_after_s", substitute_after_s);
+  RequirePositive(e, "scale_memory_m", scale_memory_m);
+  RequirePositive(e, "scale_min_distance_m", scale_min_distance_m);
+  RequireInRange(e, "scale_bound", scale_bound, 0.0, 1.0, false, false);
   return e;
+}
+
+PlanarSpeed Scaled(const PlanarSpeed& s, double scale) {
+  PlanarSpeed out = s;
+  out.speed_m_s *= scale;
+  out.speed_sd_m_s *= scale;
+  return out;
+}
+
+void VisualScale::Add(double wheel_speed_m_s, double camera_speed_m_s, double dt_s) {
+  if (!std::isfinite(wheel_speed_m_s) || !std::isfinite(camera_speed_m_s) || !(dt_s > 0.0)) return;
+  const double w = std::abs(wheel_speed_m_s) * dt_s, c = std::abs(camera_speed_m_s) * dt_s;
+  const double keep = std::exp(-w / options_.scale_memory_m);
+  wheel_m_ = keep * wheel_m_ + w;
+  camera_m_ = keep * camera_m_ + c;
+}
+
+double VisualScale::ratio() const {
+  if (camera_m_ < options_.scale_min_distance_m || wheel_m_ <= 0.0) return 1.0;
+  return std::clamp(wheel_m_ / camera_m_, 1.0 - options_.scale_bound, 1.0 + options_.scale_bound);
 }
 
 PlanarSpeed WheelSpeed(double left_m_s, double right_m_s, double scale, double track_width_m,

@@ -26,6 +26,13 @@ struct MotionFusionOptions {
   // Odometry silent this long at a frame: the camera's motion is fed to the
   // tracker as the odometry of the frame's capture.
   double substitute_after_s = 0.1;
+  // The camera's distance scale, learnt against the wheels' (× the
+  // tracker's odometry scale) while the two agree: the distance over which
+  // old agreement is forgotten, the distance needed before the scale is
+  // applied, and the bounds it is held within.
+  double scale_memory_m = 20.0;
+  double scale_min_distance_m = 3.0;
+  double scale_bound = 0.2;
 
   OptionErrors Validate() const;
 };
@@ -52,6 +59,30 @@ struct FusedSpeed {
 
 // `visual` null: the wheels alone.
 FusedSpeed Fuse(const PlanarSpeed& wheels, const PlanarSpeed* visual, double gate_chi2);
+
+// The camera's speeds × scale (σ alike); the yaw rate is an angle, kept.
+PlanarSpeed Scaled(const PlanarSpeed& s, double scale);
+
+// The ratio of the wheels' distance to the camera's while they agree. The
+// camera's speed is a pixel motion turned into metres through the height of
+// the contour features above the ground, taken from the crop profile: a
+// profile a few centimetres off the crop scales every camera speed alike,
+// a bias that no per-frame σ covers and that, standing in for silent wheels
+// over metres, puts the spray centimetres along the row. The wheels × the
+// tracker's odometry scale (learnt on the plants) measure it while both
+// sources are sound.
+class VisualScale {
+ public:
+  explicit VisualScale(const MotionFusionOptions& options) : options_(options) {}
+  // An agreeing pair of speeds held for dt_s.
+  void Add(double wheel_speed_m_s, double camera_speed_m_s, double dt_s);
+  // 1 until the camera has covered scale_min_distance_m in agreement.
+  double ratio() const;
+
+ private:
+  MotionFusionOptions options_;
+  double wheel_m_ = 0.0, camera_m_ = 0.0;  // forgetting sums of |distance|
+};
 
 // Back to wheel speeds (divided by the scale, as the tracker's input).
 void ToWheels(const PlanarSpeed& s, double scale, double track_width_m, double& left_m_s,

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace plantscale::pipeline {
 namespace {
 
@@ -59,12 +61,51 @@ TEST(MotionFusion, OneWheelSigmaCarriesSpeedAndTurnRate) {
   EXPECT_NEAR(WheelSdFraction({0.0, 0.0, 0.03, 0.0}, 1.5), 0.3, 1e-12);  // speed floor
 }
 
+TEST(VisualScale, LearnsTheCameraScaleOnceItHasDrivenEnough) {
+  MotionFusionOptions o;  // memory 20 m, applied after 3 m
+  VisualScale scale(o);
+  // The camera reads 4 % short: 0.672 m/s against the wheels' 0.7, 50 Hz.
+  for (int i = 0; i < 100; ++i) scale.Add(0.7, 0.672, 0.02);  // 1.34 m of camera travel
+  EXPECT_DOUBLE_EQ(scale.ratio(), 1.0);
+  for (int i = 0; i < 200; ++i) scale.Add(0.7, 0.672, 0.02);  // 4.0 m in all
+  EXPECT_NEAR(scale.ratio(), 0.7 / 0.672, 1e-9);
+  EXPECT_NEAR(Scaled({0.672, 0.05, 0.03, 0.02}, scale.ratio()).speed_m_s, 0.7, 1e-9);
+  EXPECT_NEAR(Scaled({0.672, 0.05, 0.03, 0.02}, scale.ratio()).yaw_rate_rad_s, 0.05, 1e-12);
+}
+
+TEST(VisualScale, ForgetsOldAgreementOverItsMemory) {
+  MotionFusionOptions o;
+  VisualScale scale(o);
+  for (int i = 0; i < 1000; ++i) scale.Add(0.7, 0.672, 0.02);  // 14 m at −4 %
+  // Then 60 m (three memories) at +2 %: the old share is e^−3 ≈ 5 % of the
+  // sums, so the ratio is within 0.3 % of the new one.
+  for (int i = 0; i < 4286; ++i) scale.Add(0.7, 0.714, 0.02);
+  EXPECT_NEAR(scale.ratio(), 0.7 / 0.714, 0.003);
+  EXPECT_GT(scale.ratio(), 0.7 / 0.714);  // what is left of the old pulls it up
+}
+
+TEST(VisualScale, StaysWithinItsBoundsAndRefusesNonsense) {
+  MotionFusionOptions o;
+  VisualScale scale(o);
+  for (int i = 0; i < 1000; ++i) scale.Add(0.7, 0.35, 0.02);  // half: beyond ±20 %
+  EXPECT_DOUBLE_EQ(scale.ratio(), 1.2);
+  VisualScale other(o);
+  other.Add(std::nan(""), 0.7, 0.02);
+  other.Add(0.7, 0.7, -1.0);
+  for (int i = 0; i < 1000; ++i) other.Add(0.7, 0.7, 0.02);
+  EXPECT_NEAR(other.ratio(), 1.0, 1e-12);
+}
+
 TEST(MotionFusion, OptionsExplainWhatIsWrong) {
   MotionFusionOptions o;
   o.gate_chi2 = 0.0;
   const OptionErrors e = o.Validate();
   ASSERT_EQ(e.size(), 1U);
   EXPECT_EQ(e[0].key, "gate_chi2");
+  MotionFusionOptions bound;
+  bound.scale_bound = 1.0;
+  ASSERT_EQ(bound.Validate().size(), 1U);
+  EXPECT_EQ(bound.Validate()[0].key, "scale_bound");
 }
 
 }  // namespace

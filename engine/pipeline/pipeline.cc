@@ -59,7 +59,8 @@ Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& o
     : camera_(camera),
       options_(WithCropMargins(options)),
       segmenter_(options_.segmenter),
-      tracker_(camera, options_.tracker) {
+      tracker_(camera, options_.tracker),
+      visual_scale_(options_.motion) {
   if (options_.treat) {
     system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
   }
@@ -95,15 +96,18 @@ void Pipeline::KeepTicks(std::span<const treatment::TickResult> ticks) {
   if (!ticks.empty()) last_tick_ = ticks.back();
 }
 
-OdometrySample Pipeline::Fused(const OdometrySample& o) {
+OdometrySample Pipeline::Fused(const OdometrySample& o, int64_t previous_utime) {
   const double scale = tracker_.odometry_scale();
   const double width = options_.tracker.track_width_m;
   const PlanarSpeed wheels = WheelSpeed(o.left_m_s, o.right_m_s, scale, width, options_.motion);
   const motion::VisualMotion* v = visual_->last().valid ? &visual_->last() : nullptr;
   if (v && (o.utime - v->utime) * 1e-6 > options_.motion.max_visual_age_s) v = nullptr;
-  const PlanarSpeed camera = v ? VisualSpeed(*v) : PlanarSpeed{};
+  const PlanarSpeed camera = v ? Scaled(VisualSpeed(*v), visual_scale_.ratio()) : PlanarSpeed{};
   const bool finite = std::isfinite(o.left_m_s) && std::isfinite(o.right_m_s);
   const FusedSpeed f = Fuse(wheels, v && finite ? &camera : nullptr, options_.motion.gate_chi2);
+  if (f.source == FusedSource::kFused && previous_utime >= 0 && o.utime > previous_utime) {
+    visual_scale_.Add(wheels.speed_m_s, v->speed_m_s, (o.utime - previous_utime) * 1e-6);
+  }
   last_source_ = f.source;
   if (f.source == FusedSource::kWheels) {
     driven_ = wheels;
@@ -117,9 +121,10 @@ OdometrySample Pipeline::Fused(const OdometrySample& o) {
 }
 
 const PoseResult& Pipeline::AddOdometry(const OdometrySample& o) {
+  const int64_t previous = last_wheel_utime_;
   if (o.utime > last_wheel_utime_) last_wheel_utime_ = o.utime;
   if (!visual_) return DeadReckon(o, options_.tracker.wheel_sd_fraction);
-  const OdometrySample s = Fused(o);
+  const OdometrySample s = Fused(o, previous);
   // The camera's own σ when it stands in.
   const double sd = last_source_ == FusedSource::kCamera
                         ? WheelSdFraction(driven_, options_.tracker.track_width_m)
@@ -127,7 +132,7 @@ const PoseResult& Pipeline::AddOdometry(const OdometrySample& o) {
   return DeadReckon(s, sd);
 }
 
-const PoseResult& Pipeline::DeadReckon(const OdometrySample& o, double sd_fraction) {
+const PoseResult& Pipeline::DeadReckon(const OdometrySample& o, double sd_fraction, int ticks) {
   pose_.input = tracker_.AddOdometry(o.utime, o.left_m_s, o.right_m_s, sd_fraction);
   pose_.ticks = {};
   if (o.utime > last_odometry_utime_) last_odometry_utime_ = o.utime;
@@ -136,7 +141,8 @@ const PoseResult& Pipeline::DeadReckon(const OdometrySample& o, double sd_fracti
   // sample leaves the wheels unknown (the bar closes on it).
   const bool ok = pose_.input.accepted;
   const treatment::BedPose pose = treatment::TrackerPose(tracker_, o.utime, ok);
-  pose_.ticks = system_->TicksFrom(o.utime, pose, Safety(std::min(tracker_.utime(), o.utime), ok));
+  pose_.ticks =
+      system_->TicksFrom(o.utime, pose, Safety(std::min(tracker_.utime(), o.utime), ok), ticks);
   KeepTicks(pose_.ticks);
   return pose_;
 }
@@ -208,6 +214,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   frame_.state = tracker_.state();
   frame_.covariance = tracker_.covariance();
   frame_.forward_distance_m = tracker_.forward_distance_m();
+  if (frame_.accepted && visual_) KeepGridMotion();
   if (frame_.accepted && system_) Treat();
   tracker_.CatchUp();
   if (system_ && options_.map_keep_behind_bar_m > 0.0 &&
@@ -225,36 +232,69 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
 // odometry of the frame's capture when the wheels have gone silent.
 void Pipeline::UpdateVisualMotion() {
   if (!visual_) return;
-  frame_.visual = visual_->Update(frame_.utime, frame_.blobs, driven_.speed_m_s,
-                                  driven_.yaw_rate_rad_s);
-  if (!frame_.visual.valid) frame_.faults.push_back("camera motion: " + frame_.visual.reason);
   const bool silent = last_wheel_utime_ >= 0 &&
                       (frame_.utime - last_wheel_utime_) * 1e-6 > options_.motion.substitute_after_s;
-  if (!silent || frame_.utime <= tracker_.utime()) return;
-  // The wheels are silent: the camera's motion, or when it gave none the
-  // speeds last driven with (as the tracker would dead-reckon on its own,
-  // without the wide bridge of an odometry gap).
-  double sd = options_.tracker.wheel_sd_fraction;
-  if (frame_.visual.valid) {
-    driven_ = VisualSpeed(frame_.visual);
-    sd = WheelSdFraction(driven_, options_.tracker.track_width_m);
-    last_source_ = FusedSource::kCamera;
-    ++camera_substitutions_;
-    frame_.visual_substituted = true;
-  }
+  // The search's prior: the speeds driven with, from the wheels while they
+  // report; once they are silent the grid's own motion over the last
+  // frames (the plants hold it), not the camera's last estimate, whose
+  // error the search would otherwise carry on from frame to frame.
+  const std::optional<PlanarSpeed> grid = silent ? GridMotion() : std::nullopt;
+  const PlanarSpeed prior = grid ? *grid : driven_;
+  frame_.visual = visual_->Update(frame_.utime, frame_.blobs, prior.speed_m_s / visual_scale_.ratio(),
+                                  prior.yaw_rate_rad_s);
+  if (!frame_.visual.valid) frame_.faults.push_back("camera motion: " + frame_.visual.reason);
+  // The wheels are silent and the camera gave no motion: nothing is fed, so
+  // the tracker dead-reckons on its own with the wide noise of silent
+  // wheels (GridTracker::PredictTo); a held speed fed as odometry would
+  // claim the wheels' precision.
+  if (!silent || !frame_.visual.valid || frame_.utime <= tracker_.utime()) return;
+  driven_ = Scaled(VisualSpeed(frame_.visual), visual_scale_.ratio());
+  const double sd = WheelSdFraction(driven_, options_.tracker.track_width_m);
+  last_source_ = FusedSource::kCamera;
+  ++camera_substitutions_;
+  frame_.visual_substituted = true;
   OdometrySample s;
   s.utime = frame_.utime;
   ToWheels(driven_, tracker_.odometry_scale(), options_.tracker.track_width_m, s.left_m_s,
            s.right_m_s);
-  if (!frame_.visual.valid) {
-    // Dead reckoning only: no odometry stands behind it, so the bar still
-    // closes on the stopped odometry (CloseIfOdometryStopped).
-    tracker_.AddOdometry(s.utime, s.left_m_s, s.right_m_s, sd);
-    return;
-  }
-  const PoseResult& p = DeadReckon(s, sd);
+  const PoseResult& p = DeadReckon(s, sd, FrameTicks());
   frame_ticks_.insert(frame_ticks_.end(), p.ticks.begin(), p.ticks.end());
   frame_.faults.push_back("odometry: silent; the camera's motion stands in");
+}
+
+// Over the longest span of the last frames within a pairable gap (the
+// posterior's frame-to-frame wander averages down over it).
+std::optional<PlanarSpeed> Pipeline::GridMotion() const {
+  const GridAt& b = grid_at_.back();
+  for (const GridAt& a : grid_at_) {
+    if (a.utime < 0 || b.utime <= a.utime) continue;
+    const double dt = (b.utime - a.utime) * 1e-6;
+    if (dt > options_.motion.visual.max_frame_gap_s) continue;
+    PlanarSpeed s;
+    s.speed_m_s = (b.forward_m - a.forward_m) / dt;
+    s.yaw_rate_rad_s = (b.bearing_rad - a.bearing_rad) / dt;  // Ψ' = Ψ + the turn
+    return s;
+  }
+  return std::nullopt;
+}
+
+void Pipeline::KeepGridMotion() {
+  if (tracker_.mode() != tracking::TrackerMode::kTracking) {
+    grid_at_.fill(GridAt{});
+    return;
+  }
+  std::rotate(grid_at_.begin(), grid_at_.begin() + 1, grid_at_.end());
+  grid_at_.back() = {frame_.utime, tracker_.forward_distance_m(), tracker_.state().bearing_rad};
+}
+
+// Ticks from a frame's pose standing in for silent wheels: until the next
+// frame is due (the interval since the previous one), at most as long as a
+// pose stays fresh (the fail-safe would close the bar on the later ones).
+int Pipeline::FrameTicks() const {
+  if (!system_) return 0;
+  const treatment::SchedulerOptions& o = options_.treatment.scheduler;
+  const double span = std::min(frame_.visual.dt_s, o.fail_safe.max_pose_age_s);
+  return std::max(o.TicksPerPose(), static_cast<int>(std::floor(span / o.tick_s)));
 }
 
 // Classification and mapping with the grid at capture (the tracker holds it

@@ -14,6 +14,7 @@
 // lost grid or odometry that stopped is a reported state with the bar
 // closed (the scheduler's fail-safe reasons).
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -153,9 +154,11 @@ class Pipeline {
   void CloseIfOdometryStopped();
   void KeepTicks(std::span<const treatment::TickResult> ticks);
   // The speeds the tracker dead-reckons with for a wheel sample.
-  OdometrySample Fused(const OdometrySample& wheels);
-  const PoseResult& DeadReckon(const OdometrySample& s, double sd_fraction);
+  OdometrySample Fused(const OdometrySample& wheels, int64_t previous_utime);
+  // `ticks`: as TreatmentSystem::TicksFrom's count.
+  const PoseResult& DeadReckon(const OdometrySample& s, double sd_fraction, int ticks = 0);
   void UpdateVisualMotion();
+  int FrameTicks() const;
 
   const geometry::CameraModel& camera_;
   PipelineOptions options_;
@@ -177,6 +180,17 @@ class Pipeline {
   FusedSource last_source_ = FusedSource::kWheels;
   int camera_substitutions_ = 0;
   int64_t last_wheel_utime_ = -1;  // newest sample from the wheels themselves
+  VisualScale visual_scale_;
+  // The grid's motion between the last two frames the tracker held it
+  // (forward distance and bearing at capture): the camera's search prior
+  // while the wheels are silent.
+  struct GridAt {
+    int64_t utime = -1;
+    double forward_m = 0.0, bearing_rad = 0.0;
+  };
+  std::array<GridAt, 4> grid_at_{};  // oldest first
+  std::optional<PlanarSpeed> GridMotion() const;
+  void KeepGridMotion();
 };
 
 }  // namespace plantscale::pipeline

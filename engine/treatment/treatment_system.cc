@@ -490,11 +490,12 @@ std::span<const TickResult> TreatmentSystem::OnPose(int64_t utime,
 }
 
 std::span<const TickResult> TreatmentSystem::TicksFrom(int64_t utime, const BedPose& pose,
-                                                       const SafetyInputs& safety) {
+                                                       const SafetyInputs& safety, int count) {
   const SchedulerOptions& o = scheduler_.options();
   const int64_t tick_us = std::llround(o.tick_s * 1e6);
+  const int n = count > 0 ? count : o.TicksPerPose();
   pose_ticks_.clear();
-  for (int k = 0; k < o.TicksPerPose(); ++k) pose_ticks_.push_back(Tick(utime + k * tick_us, pose, safety));
+  for (int k = 0; k < n; ++k) pose_ticks_.push_back(Tick(utime + k * tick_us, pose, safety));
   return pose_ticks_;
 }
 

@@ -192,9 +192,12 @@ class TreatmentSystem {
   std::span<const TickResult> OnPose(int64_t utime, const tracking::GridTracker& tracker,
                                      bool odometry_ok, bool camera_ok = true);
   // The same with the pose and health given (a runner that ticks after the
-  // tracker has moved on dead-reckons the pose back to the tick).
+  // tracker has moved on dead-reckons the pose back to the tick). `count`
+  // ticks when positive (a pose that comes less often than the odometry's,
+  // such as a camera frame's standing in for silent wheels, ticks until the
+  // next one is due), else TicksPerPose.
   std::span<const TickResult> TicksFrom(int64_t utime, const BedPose& pose,
-                                        const SafetyInputs& safety);
+                                        const SafetyInputs& safety, int count = 0);
   // One tick.
   TickResult Tick(int64_t utime, const BedPose& pose, const SafetyInputs& safety);
   int64_t last_frame_utime() const { return last_frame_utime_; }
