@@ -15,10 +15,12 @@
 //            rows (a missing neighbour scores 0);
 //   nearest  each true row is matched to the detected row nearest it.
 //
-// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]
+// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F]
 //   --shape: categories "curved" and "straight" from the labels themselves
 //   (the central label line departs from a straight line by more than 5 %
 //   of the spacing somewhere, or not).
+//   --snap F: the centring ceiling; each detected row within F × the label
+//   spacing of a label line is scored as if it lay on it.
 //   DIR of labels: NAME.{jpg,png}; DIR of rows: NAME_rows.csv, NAME_rows.json.
 //   --categories: lines "NAME,category"; otherwise the category is the
 //   file name up to its first digit ("" → "all").
@@ -155,7 +157,20 @@ std::pair<double, double> ScoreRow(const std::vector<double>& us,
   return {ordered, nearest};
 }
 
-Score ScoreImage(const cv::Mat& label, const Detected& det) {
+// The centring ceiling (--snap F): every detected row within F × the
+// label spacing of a label line is moved onto it, as a detector that found
+// the same rows but centred them perfectly would place them.
+void SnapToLabels(std::vector<double>& us, const std::vector<double>& centres, double d, double f) {
+  for (double& u : us) {
+    size_t k = 0;
+    for (size_t i = 1; i < centres.size(); ++i) {
+      if (std::abs(centres[i] - u) < std::abs(centres[k] - u)) k = i;
+    }
+    if (std::abs(centres[k] - u) <= f * d) u = centres[k];
+  }
+}
+
+Score ScoreImage(const cv::Mat& label, const Detected& det, double snap) {
   Score s;
   const double sx = static_cast<double>(det.width) / label.cols;
   const double sy = static_cast<double>(det.height) / label.rows;
@@ -165,7 +180,9 @@ Score ScoreImage(const cv::Mat& label, const Detected& det) {
     const size_t c = CentralLine(centres, det.width);
     const double d = 0.5 * (centres[c + 1] - centres[c - 1]);
     const int v = std::clamp(static_cast<int>(std::floor((y + 0.5) * sy)), 0, det.height - 1);
-    const auto [ordered, nearest] = ScoreRow(DetectedAt(det, v), centres, c, d);
+    std::vector<double> us = DetectedAt(det, v);
+    if (snap > 0.0) SnapToLabels(us, centres, d, snap);
+    const auto [ordered, nearest] = ScoreRow(us, centres, c, d);
     s.ordered += ordered / 3.0;
     s.nearest += nearest / 3.0;
     ++s.rows;
@@ -267,6 +284,7 @@ void PrintTally(const std::string& label, const Tally& t) {
 int main(int argc, char** argv) {
   fs::path labels, rows, categories_file;
   bool per_image = false, shape = false;
+  double snap = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--labels" && i + 1 < argc) labels = argv[++i];
@@ -274,8 +292,9 @@ int main(int argc, char** argv) {
     else if (a == "--categories" && i + 1 < argc) categories_file = argv[++i];
     else if (a == "--per-image") per_image = true;
     else if (a == "--shape") shape = true;
+    else if (a == "--snap" && i + 1 < argc) snap = std::stod(argv[++i]);
     else {
-      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]\n";
+      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F]\n";
       return 2;
     }
   }
@@ -302,7 +321,7 @@ int main(int argc, char** argv) {
       ++errors;
       continue;
     }
-    const Score s = ScoreImage(label, det);
+    const Score s = ScoreImage(label, det, snap);
     if (s.rows == 0) continue;  // nothing labelled with three rows
     const std::string category = shape ? LabelShape(label, 0.05) : CategoryOf(name, category_of);
     for (Tally* t : {&tallies[category], &all}) {
