@@ -15,17 +15,20 @@
 //            rows (a missing neighbour scores 0);
 //   nearest  each true row is matched to the detected row nearest it.
 //
-// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F]
+// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]
 //   --shape: categories "curved" and "straight" from the labels themselves
 //   (the central label line departs from a straight line by more than 5 %
 //   of the spacing somewhere, or not).
 //   --snap F: the centring ceiling; each detected row within F × the label
 //   spacing of a label line is scored as if it lay on it.
+//   --by-spacing: the ordered CRDA over all labelled image rows by the
+//   label spacing there (pixels of the photograph).
 //   DIR of labels: NAME.{jpg,png}; DIR of rows: NAME_rows.csv, NAME_rows.json.
 //   --categories: lines "NAME,category"; otherwise the category is the
 //   file name up to its first digit ("" → "all").
 // Exit 0 when at least one image was scored, 2 otherwise.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -106,10 +109,20 @@ bool ReadDetected(const fs::path& csv, const fs::path& json, Detected& d, std::s
   return true;
 }
 
+// Label spacing classes of --by-spacing (upper bounds, pixels of the photograph).
+constexpr std::array<double, 4> kSpacingClasses = {40.0, 80.0, 160.0, 1e9};
+
 struct Score {
   double ordered = 0.0, nearest = 0.0;
   int rows = 0;
+  std::array<double, 4> by_spacing{}, rows_by_spacing{};  // ordered CRDA summed, image rows
 };
+
+size_t SpacingClass(double d) {
+  size_t i = 0;
+  while (i + 1 < kSpacingClasses.size() && d > kSpacingClasses[i]) ++i;
+  return i;
+}
 
 // The central line: nearest the image's centre column, with a neighbour
 // each side (centres has at least 3).
@@ -186,6 +199,8 @@ Score ScoreImage(const cv::Mat& label, const Detected& det, double snap) {
     s.ordered += ordered / 3.0;
     s.nearest += nearest / 3.0;
     ++s.rows;
+    s.by_spacing[SpacingClass(d)] += ordered / 3.0;
+    s.rows_by_spacing[SpacingClass(d)] += 1.0;
   }
   if (s.rows > 0) {
     s.ordered /= s.rows;
@@ -237,6 +252,7 @@ std::string LabelShape(const cv::Mat& label, double tolerance) {
 struct Tally {
   int images = 0, found = 0;
   double ordered = 0.0, nearest = 0.0;
+  std::array<double, 4> by_spacing{}, rows_by_spacing{};
 };
 
 // "NAME,category" lines; empty without a file.
@@ -279,11 +295,23 @@ void PrintTally(const std::string& label, const Tally& t) {
             << (t.images ? t.nearest / t.images : 0.0) << '\n';
 }
 
+// Ordered CRDA over all labelled image rows by the label spacing there.
+void PrintBySpacing(const Tally& t) {
+  double lo = 0.0;
+  for (size_t i = 0; i < kSpacingClasses.size(); ++i) {
+    const double n = t.rows_by_spacing[i];
+    std::cout << "spacing " << std::setw(4) << lo << "-" << std::setw(4)
+              << (i + 1 < kSpacingClasses.size() ? kSpacingClasses[i] : 9999.0) << " px  image rows "
+              << std::setw(7) << n << "  crda_ordered " << (n > 0 ? t.by_spacing[i] / n : 0.0) << '\n';
+    lo = kSpacingClasses[i];
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   fs::path labels, rows, categories_file;
-  bool per_image = false, shape = false;
+  bool per_image = false, shape = false, by_spacing = false;
   double snap = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -292,9 +320,10 @@ int main(int argc, char** argv) {
     else if (a == "--categories" && i + 1 < argc) categories_file = argv[++i];
     else if (a == "--per-image") per_image = true;
     else if (a == "--shape") shape = true;
+    else if (a == "--by-spacing") by_spacing = true;
     else if (a == "--snap" && i + 1 < argc) snap = std::stod(argv[++i]);
     else {
-      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F]\n";
+      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]\n";
       return 2;
     }
   }
@@ -329,6 +358,10 @@ int main(int argc, char** argv) {
       t->found += det.found ? 1 : 0;
       t->ordered += s.ordered;
       t->nearest += s.nearest;
+      for (size_t i = 0; i < kSpacingClasses.size(); ++i) {
+        t->by_spacing[i] += s.by_spacing[i];
+        t->rows_by_spacing[i] += s.rows_by_spacing[i];
+      }
     }
     if (per_image) {
       std::cout << "image " << name << " crda_ordered " << s.ordered << " crda_nearest " << s.nearest
@@ -339,6 +372,7 @@ int main(int argc, char** argv) {
     for (const auto& [category, t] : tallies) PrintTally(category, t);
   }
   PrintTally("overall", all);
+  if (by_spacing) PrintBySpacing(all);
   if (errors > 0) std::cout << errors << " error(s)\n";
   return all.images > 0 ? 0 : 2;
 }

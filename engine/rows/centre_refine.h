@@ -37,16 +37,16 @@ namespace plantscale::rows {
 
 struct CentreRefineOptions {
   bool enabled = true;
-  int bands = 24;                  // horizontal bands over the rows' visible height
-  double window_fraction = 0.3;    // h: mean-shift half-window, of the local spacing
+  int bands = 48;                  // horizontal bands over the rows' visible height
+  double window_fraction = 0.15;   // h: mean-shift half-window, of the local spacing
   int iterations = 4;              // mean-shift steps per band
   double max_shift = 0.35;         // no centre further than this × spacing from the comb
-  int degree = 2;                  // of A, B and R_n in t
-  double row_ridge = 2.0;          // penalty on R_n's coefficients (in bands of full weight)
+  int degree = 3;                  // of A, B and R_n in t
+  double row_ridge = 0.3;          // penalty on R_n's coefficients (in bands of full weight)
   double shared_ridge = 0.1;       // ... on A's and B's
   double min_band_matter = 0.25;   // a band's centre counts when its matter is this × the mean
   int min_row_bands = 3;           // bands a row needs for its own R_n
-  double outlier_scale = 0.15;     // Tukey's c, in spacings
+  double outlier_scale = 0.3;      // Tukey's c, in spacings
   int robust_iterations = 3;
 
   OptionErrors Validate() const;
