@@ -49,6 +49,7 @@ void SetOption(rows::RowDetectorOptions& options, const std::string& kv) {
   else if (key == "centring_iterations") options.centring.iterations = static_cast<int>(value);
   else if (key == "max_shift") options.centring.max_shift = value;
   else if (key == "centring_degree") options.centring.degree = static_cast<int>(value);
+  else if (key == "spacing_degree") options.centring.spacing_degree = static_cast<int>(value);
   else if (key == "row_ridge") options.centring.row_ridge = value;
   else if (key == "shared_ridge") options.centring.shared_ridge = value;
   else if (key == "min_band_matter") options.centring.min_band_matter = value;

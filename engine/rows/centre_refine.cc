@@ -15,6 +15,7 @@ OptionErrors CentreRefineOptions::Validate() const {
   if (iterations < 1) e.push_back({"iterations", "must be >= 1"});
   RequireInRange(e, "max_shift", max_shift, 0.0, 1.0);
   if (degree < 0 || degree > 4) e.push_back({"degree", "must be in [0, 4]"});
+  if (spacing_degree < 0 || spacing_degree > 4) e.push_back({"spacing_degree", "must be in [0, 4]"});
   RequireInRange(e, "row_ridge", row_ridge, 0.0, 1e6);
   RequireInRange(e, "shared_ridge", shared_ridge, 0.0, 1e6);
   RequireInRange(e, "min_band_matter", min_band_matter, 0.0, 1e3);
@@ -130,6 +131,7 @@ namespace {
 // The design of step 2: columns A (P), B (P), then P per row with its own R_n.
 struct Design {
   int P = 1;
+  int PB = 1;            // B's terms (the rest of its P columns stay 0)
   std::vector<int> own;  // rows with their own R_n
   double v_bottom = 0.0, height = 1.0, t_max = 1.0;
 
@@ -147,7 +149,7 @@ struct Design {
     const double s = S(c.v_px);
     for (int p = 0; p < P; ++p, power *= s) {
       x[p] = power;
-      x[P + p] = c.n * power;
+      if (p < PB) x[P + p] = c.n * power;
       if (slot >= 0) x[P * (2 + slot) + p] = power;
     }
     return x;
@@ -158,6 +160,7 @@ Design MakeDesign(const std::vector<CentreObservation>& obs, const RowDetection&
                   const CentreRefineOptions& o) {
   Design d;
   d.P = o.degree + 1;
+  d.PB = std::min(o.degree, o.spacing_degree) + 1;
   d.v_bottom = det.height_px - 0.5;
   d.height = det.height_px;
   double t_max = 0.0;
@@ -210,7 +213,17 @@ CentreRefinement FitCentres(const std::vector<CentreObservation>& obs, const Row
   out.shared_a = coefficients(0);
   out.shared_b = coefficients(P);
   out.rows = design.own;
-  for (size_t r = 0; r < design.own.size(); ++r) out.row_r.push_back(coefficients(P * (2 + static_cast<int>(r))));
+  for (size_t r = 0; r < design.own.size(); ++r) {
+    out.row_r.push_back(coefficients(P * (2 + static_cast<int>(r))));
+    out.row_s.emplace_back(1.0, 0.0);
+  }
+  for (const CentreObservation& c : obs) {
+    const int slot = design.Slot(c.n);
+    if (slot < 0) continue;
+    auto& [lo, hi] = out.row_s[static_cast<size_t>(slot)];
+    lo = std::min(lo, design.S(c.v_px));
+    hi = std::max(hi, design.S(c.v_px));
+  }
   out.v_bottom = design.v_bottom;
   out.height = design.height;
   out.t_max = design.t_max;
@@ -222,7 +235,10 @@ double CentreRefinement::Offset(int n, double v_px) const {
   const double s = std::clamp((v_bottom - v_px) / height / t_max, 0.0, 1.0);
   double e = Poly(shared_a, s) + n * Poly(shared_b, s);
   const auto it = std::find(rows.begin(), rows.end(), n);
-  if (it != rows.end()) e += Poly(row_r[static_cast<size_t>(it - rows.begin())], s);
+  if (it != rows.end()) {
+    const size_t i = static_cast<size_t>(it - rows.begin());
+    e += Poly(row_r[i], std::clamp(s, row_s[i].first, row_s[i].second));
+  }
   return e;
 }
 

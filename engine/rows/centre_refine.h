@@ -19,16 +19,19 @@
 //
 //       e_n(t) = A(t) + n·B(t) + R_n(t),   t = (v_bottom − v) / H,
 //
-//     A and B polynomials shared by all rows (a correction of c(v) and
+//     A and B polynomials shared by all rows (B of low degree) (a correction of c(v) and
 //     d(v): the comb's even spacing kept as the prior), R_n a polynomial
 //     per row penalised by `row_ridge` × its squared coefficients (a row
 //     leaves the even spacing only where its own plants say so), weighted
 //     by each band's plant matter, with a Tukey reweighting of outliers.
 //
 // The refined rows are u_n(v) + d(v)·e_n(t), t held in the fitted range
-// beyond it; rows without enough bands of their own keep A + n·B.
+// beyond it (R_n in its own row's range: a row entering from the image's
+// side is not extrapolated along a cubic); rows without enough bands of
+// their own keep A + n·B.
 
 #include <opencv2/core.hpp>
+#include <utility>
 #include <vector>
 
 #include "engine/common/options.h"
@@ -41,7 +44,8 @@ struct CentreRefineOptions {
   double window_fraction = 0.15;   // h: mean-shift half-window, of the local spacing
   int iterations = 4;              // mean-shift steps per band
   double max_shift = 0.35;         // no centre further than this × spacing from the comb
-  int degree = 3;                  // of A, B and R_n in t
+  int degree = 3;                  // of A and R_n in t
+  int spacing_degree = 1;          // of B (n·B: far rows would amplify a wiggle)
   double row_ridge = 0.3;          // penalty on R_n's coefficients (in bands of full weight)
   double shared_ridge = 0.1;       // ... on A's and B's
   double min_band_matter = 0.25;   // a band's centre counts when its matter is this × the mean
@@ -57,6 +61,7 @@ struct CentreRefinement {
   std::vector<double> shared_a, shared_b;  // A and B's coefficients (t^0 first)
   std::vector<int> rows;                   // the rows n with their own R_n
   std::vector<std::vector<double>> row_r;  // R_n's coefficients, in the order of `rows`
+  std::vector<std::pair<double, double>> row_s;  // each R_n's range of s = t / t_max
   double v_bottom = 0.0, height = 1.0;     // t = (v_bottom − v) / height
   double t_max = 1.0;                      // t held in [0, t_max]
   bool empty() const { return shared_a.empty(); }
