@@ -295,6 +295,13 @@ void PrintTally(const std::string& label, const Tally& t) {
             << (t.images ? t.nearest / t.images : 0.0) << '\n';
 }
 
+void AddBySpacing(Tally& t, const Score& s) {
+  for (size_t i = 0; i < kSpacingClasses.size(); ++i) {
+    t.by_spacing[i] += s.by_spacing[i];
+    t.rows_by_spacing[i] += s.rows_by_spacing[i];
+  }
+}
+
 // Ordered CRDA over all labelled image rows by the label spacing there.
 void PrintBySpacing(const Tally& t) {
   double lo = 0.0;
@@ -307,30 +314,42 @@ void PrintBySpacing(const Tally& t) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   fs::path labels, rows, categories_file;
   bool per_image = false, shape = false, by_spacing = false;
   double snap = 0.0;
+};
+
+// The command line; false (after a message) when it is not usable.
+bool ParseArgs(int argc, char** argv, Args& a) {
   for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--labels" && i + 1 < argc) labels = argv[++i];
-    else if (a == "--rows" && i + 1 < argc) rows = argv[++i];
-    else if (a == "--categories" && i + 1 < argc) categories_file = argv[++i];
-    else if (a == "--per-image") per_image = true;
-    else if (a == "--shape") shape = true;
-    else if (a == "--by-spacing") by_spacing = true;
-    else if (a == "--snap" && i + 1 < argc) snap = std::stod(argv[++i]);
+    const std::string s = argv[i];
+    const bool value = i + 1 < argc;
+    if (s == "--labels" && value) a.labels = argv[++i];
+    else if (s == "--rows" && value) a.rows = argv[++i];
+    else if (s == "--categories" && value) a.categories_file = argv[++i];
+    else if (s == "--per-image") a.per_image = true;
+    else if (s == "--shape") a.shape = true;
+    else if (s == "--by-spacing") a.by_spacing = true;
+    else if (s == "--snap" && value) a.snap = std::stod(argv[++i]);
     else {
       std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]\n";
-      return 2;
+      return false;
     }
   }
-  if (labels.empty() || rows.empty() || !fs::is_directory(labels) || !fs::is_directory(rows)) {
+  if (a.labels.empty() || a.rows.empty() || !fs::is_directory(a.labels) || !fs::is_directory(a.rows)) {
     std::cerr << "crda_score: --labels and --rows must be folders\n";
-    return 2;
+    return false;
   }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args args;
+  if (!ParseArgs(argc, argv, args)) return 2;
+  const auto& [labels, rows, categories_file, per_image, shape, by_spacing, snap] = args;
   const std::map<std::string, std::string> category_of = ReadCategories(categories_file);
   const std::vector<fs::path> files = LabelFiles(labels);
   std::map<std::string, Tally> tallies;
@@ -358,10 +377,7 @@ int main(int argc, char** argv) {
       t->found += det.found ? 1 : 0;
       t->ordered += s.ordered;
       t->nearest += s.nearest;
-      for (size_t i = 0; i < kSpacingClasses.size(); ++i) {
-        t->by_spacing[i] += s.by_spacing[i];
-        t->rows_by_spacing[i] += s.rows_by_spacing[i];
-      }
+      AddBySpacing(*t, s);
     }
     if (per_image) {
       std::cout << "image " << name << " crda_ordered " << s.ordered << " crda_nearest " << s.nearest
