@@ -15,15 +15,20 @@
 //            rows (a missing neighbour scores 0);
 //   nearest  each true row is matched to the detected row nearest it.
 //
-// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]
+// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]
 //   --shape: categories "curved" and "straight" from the labels themselves
 //   (the central label line departs from a straight line by more than 5 %
 //   of the spacing somewhere, or not).
+//   --snap F: the centring ceiling; each detected row within F × the label
+//   spacing of a label line is scored as if it lay on it.
+//   --by-spacing: the ordered CRDA over all labelled image rows by the
+//   label spacing there (pixels of the photograph).
 //   DIR of labels: NAME.{jpg,png}; DIR of rows: NAME_rows.csv, NAME_rows.json.
 //   --categories: lines "NAME,category"; otherwise the category is the
 //   file name up to its first digit ("" → "all").
 // Exit 0 when at least one image was scored, 2 otherwise.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -104,10 +109,20 @@ bool ReadDetected(const fs::path& csv, const fs::path& json, Detected& d, std::s
   return true;
 }
 
+// Label spacing classes of --by-spacing (upper bounds, pixels of the photograph).
+constexpr std::array<double, 4> kSpacingClasses = {40.0, 80.0, 160.0, 1e9};
+
 struct Score {
   double ordered = 0.0, nearest = 0.0;
   int rows = 0;
+  std::array<double, 4> by_spacing{}, rows_by_spacing{};  // ordered CRDA summed, image rows
 };
+
+size_t SpacingClass(double d) {
+  size_t i = 0;
+  while (i + 1 < kSpacingClasses.size() && d > kSpacingClasses[i]) ++i;
+  return i;
+}
 
 // The central line: nearest the image's centre column, with a neighbour
 // each side (centres has at least 3).
@@ -155,7 +170,20 @@ std::pair<double, double> ScoreRow(const std::vector<double>& us,
   return {ordered, nearest};
 }
 
-Score ScoreImage(const cv::Mat& label, const Detected& det) {
+// The centring ceiling (--snap F): every detected row within F × the
+// label spacing of a label line is moved onto it, as a detector that found
+// the same rows but centred them perfectly would place them.
+void SnapToLabels(std::vector<double>& us, const std::vector<double>& centres, double d, double f) {
+  for (double& u : us) {
+    size_t k = 0;
+    for (size_t i = 1; i < centres.size(); ++i) {
+      if (std::abs(centres[i] - u) < std::abs(centres[k] - u)) k = i;
+    }
+    if (std::abs(centres[k] - u) <= f * d) u = centres[k];
+  }
+}
+
+Score ScoreImage(const cv::Mat& label, const Detected& det, double snap) {
   Score s;
   const double sx = static_cast<double>(det.width) / label.cols;
   const double sy = static_cast<double>(det.height) / label.rows;
@@ -165,10 +193,14 @@ Score ScoreImage(const cv::Mat& label, const Detected& det) {
     const size_t c = CentralLine(centres, det.width);
     const double d = 0.5 * (centres[c + 1] - centres[c - 1]);
     const int v = std::clamp(static_cast<int>(std::floor((y + 0.5) * sy)), 0, det.height - 1);
-    const auto [ordered, nearest] = ScoreRow(DetectedAt(det, v), centres, c, d);
+    std::vector<double> us = DetectedAt(det, v);
+    if (snap > 0.0) SnapToLabels(us, centres, d, snap);
+    const auto [ordered, nearest] = ScoreRow(us, centres, c, d);
     s.ordered += ordered / 3.0;
     s.nearest += nearest / 3.0;
     ++s.rows;
+    s.by_spacing[SpacingClass(d)] += ordered / 3.0;
+    s.rows_by_spacing[SpacingClass(d)] += 1.0;
   }
   if (s.rows > 0) {
     s.ordered /= s.rows;
@@ -220,6 +252,7 @@ std::string LabelShape(const cv::Mat& label, double tolerance) {
 struct Tally {
   int images = 0, found = 0;
   double ordered = 0.0, nearest = 0.0;
+  std::array<double, 4> by_spacing{}, rows_by_spacing{};
 };
 
 // "NAME,category" lines; empty without a file.
@@ -262,27 +295,61 @@ void PrintTally(const std::string& label, const Tally& t) {
             << (t.images ? t.nearest / t.images : 0.0) << '\n';
 }
 
+void AddBySpacing(Tally& t, const Score& s) {
+  for (size_t i = 0; i < kSpacingClasses.size(); ++i) {
+    t.by_spacing[i] += s.by_spacing[i];
+    t.rows_by_spacing[i] += s.rows_by_spacing[i];
+  }
+}
+
+// Ordered CRDA over all labelled image rows by the label spacing there.
+void PrintBySpacing(const Tally& t) {
+  double lo = 0.0;
+  for (size_t i = 0; i < kSpacingClasses.size(); ++i) {
+    const double n = t.rows_by_spacing[i];
+    std::cout << "spacing " << std::setw(4) << lo << "-" << std::setw(4)
+              << (i + 1 < kSpacingClasses.size() ? kSpacingClasses[i] : 9999.0) << " px  image rows "
+              << std::setw(7) << n << "  crda_ordered " << (n > 0 ? t.by_spacing[i] / n : 0.0) << '\n';
+    lo = kSpacingClasses[i];
+  }
+}
+
+struct Args {
+  fs::path labels, rows, categories_file;
+  bool per_image = false, shape = false, by_spacing = false;
+  double snap = 0.0;
+};
+
+// The command line; false (after a message) when it is not usable.
+bool ParseArgs(int argc, char** argv, Args& a) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    const bool value = i + 1 < argc;
+    if (s == "--labels" && value) a.labels = argv[++i];
+    else if (s == "--rows" && value) a.rows = argv[++i];
+    else if (s == "--categories" && value) a.categories_file = argv[++i];
+    else if (s == "--per-image") a.per_image = true;
+    else if (s == "--shape") a.shape = true;
+    else if (s == "--by-spacing") a.by_spacing = true;
+    else if (s == "--snap" && value) a.snap = std::stod(argv[++i]);
+    else {
+      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]\n";
+      return false;
+    }
+  }
+  if (a.labels.empty() || a.rows.empty() || !fs::is_directory(a.labels) || !fs::is_directory(a.rows)) {
+    std::cerr << "crda_score: --labels and --rows must be folders\n";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  fs::path labels, rows, categories_file;
-  bool per_image = false, shape = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--labels" && i + 1 < argc) labels = argv[++i];
-    else if (a == "--rows" && i + 1 < argc) rows = argv[++i];
-    else if (a == "--categories" && i + 1 < argc) categories_file = argv[++i];
-    else if (a == "--per-image") per_image = true;
-    else if (a == "--shape") shape = true;
-    else {
-      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image]\n";
-      return 2;
-    }
-  }
-  if (labels.empty() || rows.empty() || !fs::is_directory(labels) || !fs::is_directory(rows)) {
-    std::cerr << "crda_score: --labels and --rows must be folders\n";
-    return 2;
-  }
+  Args args;
+  if (!ParseArgs(argc, argv, args)) return 2;
+  const auto& [labels, rows, categories_file, per_image, shape, by_spacing, snap] = args;
   const std::map<std::string, std::string> category_of = ReadCategories(categories_file);
   const std::vector<fs::path> files = LabelFiles(labels);
   std::map<std::string, Tally> tallies;
@@ -302,7 +369,7 @@ int main(int argc, char** argv) {
       ++errors;
       continue;
     }
-    const Score s = ScoreImage(label, det);
+    const Score s = ScoreImage(label, det, snap);
     if (s.rows == 0) continue;  // nothing labelled with three rows
     const std::string category = shape ? LabelShape(label, 0.05) : CategoryOf(name, category_of);
     for (Tally* t : {&tallies[category], &all}) {
@@ -310,6 +377,7 @@ int main(int argc, char** argv) {
       t->found += det.found ? 1 : 0;
       t->ordered += s.ordered;
       t->nearest += s.nearest;
+      AddBySpacing(*t, s);
     }
     if (per_image) {
       std::cout << "image " << name << " crda_ordered " << s.ordered << " crda_nearest " << s.nearest
@@ -320,6 +388,7 @@ int main(int argc, char** argv) {
     for (const auto& [category, t] : tallies) PrintTally(category, t);
   }
   PrintTally("overall", all);
+  if (by_spacing) PrintBySpacing(all);
   if (errors > 0) std::cout << errors << " error(s)\n";
   return all.images > 0 ? 0 : 2;
 }

@@ -4,7 +4,8 @@
 // confidence) as detect-rows writes them, for crda_score, plus
 // NAME_rows.png overlays with --overlays. A development aid for tuning
 // (quick to build); the figures in docs/results come from detect-rows.
-// usage: rows_dev IMAGES OUT [--overlays [--labels DIR]] [--straight] [--set key=value]...
+// usage: rows_dev IMAGES OUT [--overlays [--labels DIR]] [--masks] [--straight] [--set key=value]...
+// --masks: NAME_mask.png, the plant mask the detector was given.
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -42,6 +43,19 @@ void SetOption(rows::RowDetectorOptions& options, const std::string& kv) {
   else if (key == "bands") options.curve.bands = static_cast<int>(value);
   else if (key == "max_scale") options.curve.max_scale = value;
   else if (key == "max_phase_jump") options.curve.max_phase_jump = static_cast<int>(value);
+  else if (key == "centring") options.centring.enabled = value != 0.0;
+  else if (key == "centring_bands") options.centring.bands = static_cast<int>(value);
+  else if (key == "window_fraction") options.centring.window_fraction = value;
+  else if (key == "centring_iterations") options.centring.iterations = static_cast<int>(value);
+  else if (key == "max_shift") options.centring.max_shift = value;
+  else if (key == "centring_degree") options.centring.degree = static_cast<int>(value);
+  else if (key == "spacing_degree") options.centring.spacing_degree = static_cast<int>(value);
+  else if (key == "row_ridge") options.centring.row_ridge = value;
+  else if (key == "shared_ridge") options.centring.shared_ridge = value;
+  else if (key == "min_band_matter") options.centring.min_band_matter = value;
+  else if (key == "min_row_bands") options.centring.min_row_bands = static_cast<int>(value);
+  else if (key == "outlier_scale") options.centring.outlier_scale = value;
+  else if (key == "robust_iterations") options.centring.robust_iterations = static_cast<int>(value);
   else throw std::runtime_error("unknown key " + key);
 }
 
@@ -95,15 +109,16 @@ void WriteOverlay(const cv::Mat& image, const fs::path& label_file, const rows::
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::cerr << "usage: rows_dev IMAGES OUT [--overlays [--labels DIR]] [--straight]\n";
+    std::cerr << "usage: rows_dev IMAGES OUT [--overlays [--labels DIR]] [--masks] [--straight] [--set key=value]...\n";
     return 2;
   }
-  bool overlays = false;
+  bool overlays = false, masks = false;
   fs::path labels;
   rows::RowDetectorOptions options;
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--overlays") overlays = true;
+    if (a == "--masks") masks = true;
     if (a == "--straight") options.curves = false;
     if (a == "--labels" && i + 1 < argc) labels = argv[++i];
     if (a == "--set" && i + 1 < argc) SetOption(options, argv[++i]);
@@ -120,12 +135,14 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       cv::Mat input;
       vision::Segmenter segmenter(app::PhotoSegmenterOptions(app::SegmentPhotosRequest{}, image, input));
-      const rows::RowDetection det = detector.Detect(segmenter.Process(input).mask);
+      const cv::Mat mask = segmenter.Process(input).mask;
+      const rows::RowDetection det = detector.Detect(mask);
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ++n;
       const std::string out = (fs::path(argv[2]) / file.stem()).string();
       WriteRows(det, out);
       if (det.confidence > 0.0) ++found;
+      if (masks) cv::imwrite(out + "_mask.png", mask);
       if (overlays) WriteOverlay(image, labels.empty() ? fs::path() : labels / file.filename(), det, out);
     } catch (const std::exception& e) {
       std::cerr << file << ": " << e.what() << '\n';

@@ -42,6 +42,7 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "orientation_floor", orientation_floor, 0.0, 1.0);
   if (orientation_candidates < 0) e.push_back({"orientation_candidates", "must be >= 0"});
   for (const OptionError& c : curve.Validate()) e.push_back({"curve." + c.key, c.reason});
+  for (const OptionError& c : centring.Validate()) e.push_back({"centring." + c.key, c.reason});
   RequireInRange(e, "min_curve_coherence", min_curve_coherence, 0.0, 1.0);
   RequireInRange(e, "min_curve_gain", min_curve_gain, -1.0, 1.0);
   RequireInRange(e, "curve_gain_per_confidence", curve_gain_per_confidence, 0.0, 10.0);
@@ -65,6 +66,12 @@ std::pair<double, double> CurveAt(const std::vector<CurveKnot>& knots, double v)
 }  // namespace
 
 double RowDetection::U(int n, double v_px) const {
+  const double u = CombU(n, v_px);
+  if (centring.empty()) return u;
+  return u + SpacingAt(v_px) * centring.Offset(n, v_px);
+}
+
+double RowDetection::CombU(int n, double v_px) const {
   if (curve.size() >= 2) {
     const auto [c, d] = CurveAt(curve, v_px);
     return c + n * d;
@@ -95,6 +102,22 @@ RowDetector::RowDetector(RowDetector&&) noexcept = default;
 RowDetector& RowDetector::operator=(RowDetector&&) noexcept = default;
 
 RowDetection RowDetector::Detect(const cv::Mat& plant) {
+  RowDetection det = DetectComb(plant);
+  if (options_.centring.enabled && det.confidence > 0.0 && !det.rows.empty()) Centre(det);
+  return det;
+}
+
+void RowDetector::Centre(RowDetection& det) const {
+  const cv::Mat& fit = straight_->fit_image();
+  if (fit.empty()) return;
+  const double kfw = static_cast<double>(det.width_px) / fit.cols;
+  const double kfh = static_cast<double>(det.height_px) / fit.rows;
+  const std::vector<CentreObservation> obs = ObserveCentres(fit, kfw, kfh, det, options_.centring);
+  det.centring = FitCentres(obs, det, options_.centring);
+  for (DetectedRow& row : det.rows) row.bottom_u_px = det.U(row.n, det.bottom_v_px());
+}
+
+RowDetection RowDetector::DetectComb(const cv::Mat& plant) {
   if (plant.empty()) throw DataError("row detector: empty image");
   if (plant.type() != CV_8UC1 && plant.type() != CV_32FC1) {
     throw DataError("row detector: plant image must be CV_8UC1 or CV_32FC1");

@@ -63,6 +63,7 @@
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/rows/centre_refine.h"
 #include "engine/rows/curve_fit.h"
 
 namespace plantscale::rows {
@@ -114,6 +115,8 @@ struct RowDetectorOptions {
   // model's: 0 only where the straight model found no rows, 1 instead of it,
   // 2 both, the more coherent curve wins.
   int curve_free_prior = 0;
+  // Each found row centred on its own plant matter (centre_refine.h).
+  CentreRefineOptions centring;
 
   OptionErrors Validate() const;
 };
@@ -144,14 +147,19 @@ struct RowDetection {
   std::vector<CurveKnot> curve;
   double curve_coherence = 0.0;
   bool curve_prior_straight = false;  // the curve's prior was the straight model above
+  // Each row's centring on its plant matter (centre_refine.h), in local
+  // spacings from the comb above; empty: the comb's rows as they are.
+  CentreRefinement centring;
 
   double bottom_v_px() const { return height_px - 0.5; }
-  // u of comb row n at image height v (continuous; v = row index + 0.5);
-  // beyond the image sides too.
+  // u of row n at image height v (continuous; v = row index + 0.5);
+  // beyond the image sides too: the comb's, moved by the centring.
   double U(int n, double v_px) const;
-  // The central row's u (c) and the spacing (d) at image height v.
+  // u of comb row n (the straight model or the curve, without the centring).
+  double CombU(int n, double v_px) const;
+  // The central row's u at image height v.
   double CentreAt(double v_px) const;
-  // Row spacing at image height v.
+  // The comb's row spacing at image height v.
   double SpacingAt(double v_px) const;
   // (u, v) of the straight model's vanishing point; nullopt when the rows are parallel.
   std::optional<Eigen::Vector2d> VanishingPoint() const;
@@ -174,6 +182,10 @@ class RowDetector {
   const RowDetectorOptions& options() const { return options_; }
 
  private:
+  // The comb: the straight model, or the curve where it does better.
+  RowDetection DetectComb(const cv::Mat& plant);
+  // `det`'s rows centred on the plant matter of the fit image.
+  void Centre(RowDetection& det) const;
   // The curve fit on the plant image at the refit resolution, with the
   // straight detection `det` as its prior (or the free prior).
   CurveFit FitCurve(const cv::Mat& fit, const RowDetection& det, CurvePrior& prior);
