@@ -147,6 +147,21 @@ TEST(VehicleRunner, PipelineStageSchedulesNozzlesFromTheTrackedGrid) {
     EXPECT_GT(p.position_m.y(), bar_y);
   }
   EXPECT_GE(not_reached, 5);  // the camera looks 2–4 m past the bar, 3 rows
+  // The records still in the last view were judged on the frames they had
+  // (a plant line is in view over some 3 m): each confirmed crop among them
+  // that the last list carries is a crop there.
+  int judged = 0, judged_crops = 0;
+  for (const treatment::PlantRecord& r : system.registry().records()) {
+    if (!r.judged_at_end) continue;
+    ++judged;
+    if (!r.confirmed() || !r.crop()) continue;
+    ++judged_crops;
+    for (const PlantObservation& p : snap.plants) {
+      if (p.id == r.id) EXPECT_EQ(p.kind, PlantKind::kCrop) << r.id;
+    }
+  }
+  EXPECT_GE(judged_crops, 9);  // 3 rows × at least 3 lines in the last view
+  EXPECT_GT(judged, judged_crops);
   // The tiles: treated cells where the bar sprayed, soil only where the
   // camera looked (the map behind the start is unknown, not soil).
   std::map<int, int> cells;

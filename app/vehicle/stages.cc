@@ -413,13 +413,17 @@ void PipelineStage::PublishNozzles(int64_t utime, Publisher& publisher) {
   publisher.Publish(channels::kNozzles, ToLcm(bar, utime));
 }
 
-// The run's end: the plant records changed since the last list, and every
-// plant the mode would spray that the bar had not yet reached, so that the
-// station, log and report tell them from misses; then the last tile rows.
+// The run's end: the records in the last view judged on the frames they
+// had (TreatmentSystem::FlushRecordsInView), the plant records changed
+// since the last list, and every plant the mode would spray that the bar
+// had not yet reached, so that the station, log and report tell them from
+// misses; then the last tile rows.
 void PipelineStage::Finish(int64_t utime, Publisher& publisher) {
   const double bar_y = BarY();
   const bool spray_crop = system().options().scheduler.mode == treatment::SprayMode::kCrop;
   NoteNewlySprayed();
+  const std::vector<int> judged = pipeline_.treatment()->FlushRecordsInView();
+  changed_plants_.insert(changed_plants_.end(), judged.begin(), judged.end());
   const std::vector<int> ids = TakeChangedPlants();
   std::vector<PlantObservation> plants;
   const std::vector<treatment::PlantRecord>& records = system().registry().records();

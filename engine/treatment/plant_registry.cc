@@ -85,6 +85,22 @@ void PlantRegistry::MarkSprayed(const NozzleTarget& s, std::vector<int>* newly) 
   }
 }
 
+namespace {
+
+// Why a record is what it is, in words (for its `why`).
+const char* ReasonOf(const PlantRecord& r) {
+  return r.crop_at_end ? "in the last view when the run ended, as large as a crop at a predicted crop that had no record: that crop, not yet associated"
+         : r.undersized ? "in a predicted crop's place, under the crops' size: a weed where a crop is missing"
+         : r.crop() && r.small && r.grid_plant
+             ? "below the size filter, alone in a predicted crop's region"
+         : r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
+         : r.crop()          ? "associated with a predicted crop"
+         : r.small           ? "below the size filter"
+                             : "outside every crop association region";
+}
+
+}  // namespace
+
 void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
                             const classify::ClassifierOptions& c) {
   for (PlantRecord& r : records_) {
@@ -94,13 +110,7 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
       r.map_class = map.ClassOf(column, row);
     }
     char text[384];
-    const char* reason = r.undersized ? "in a predicted crop's place, under the crops' size: a weed where a crop is missing"
-                         : r.crop() && r.small && r.grid_plant
-                             ? "below the size filter, alone in a predicted crop's region"
-                         : r.crop() && r.small ? "below the size filter, a leaf of a crop found beside it"
-                         : r.crop()          ? "associated with a predicted crop"
-                         : r.small           ? "below the size filter"
-                                             : "outside every crop association region";
+    const char* reason = ReasonOf(r);
     std::snprintf(text, sizeof text,
                   "%s (%d crop / %d weed votes): %s; area %.4f m2 (filter %.4f), "
                   "gamma2 %.2f (gate %.2f), %.0f mm from the predicted crop; cell counters "
@@ -160,6 +170,49 @@ int PlantRegistry::confirmed() const {
   int n = let_go_confirmed_;
   for (const PlantRecord& r : records_) n += r.confirmed();
   return n;
+}
+
+// A record as large as a crop (not below the undersized line), seen in 3
+// frames at least, held a weed and not a crop yet.
+bool PlantRegistry::CropSizedWeed(const PlantRecord& r) const {
+  const double fraction = std::max(0.0, 1.0 - 3.0 * options_.crop_size_sd_fraction);
+  const double limit = fraction * fraction * crop_median_m2_;
+  const bool sized = r.sizes.size() >= static_cast<size_t>(options_.min_size_frames);
+  return !r.crop() && !r.undersized && sized && r.observations >= 3 && limit > 0.0 && r.area_m2 >= limit;
+}
+
+std::vector<int> PlantRegistry::FlushInView(const Quad& view, std::span<const Eigen::Vector2d> predicted,
+                                            double reach_m) {
+  std::vector<PlantRecord*> in_view;
+  for (PlantRecord& r : Recent()) {
+    if (InsideQuad(view, r.bed_m)) in_view.push_back(&r);
+  }
+  std::vector<int> changed;
+  for (PlantRecord* r : in_view) {
+    const bool was = r->confirmed();
+    r->judged_at_end = true;
+    if (r->confirmed() != was) changed.push_back(r->id);
+  }
+  // Each predicted crop in view without a confirmed crop record within
+  // reach takes the most seen crop-sized weed record within reach.
+  const auto near = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q) { return (p - q).norm() < reach_m; };
+  for (const Eigen::Vector2d& p : predicted) {
+    if (!InsideQuad(view, p)) continue;
+    const bool has_crop = std::ranges::any_of(in_view, [&](const PlantRecord* r) {
+      return r->confirmed() && r->crop() && near(r->grid_plant ? r->grid_bed_m : r->bed_m, p);
+    });
+    if (has_crop) continue;
+    PlantRecord* best = nullptr;
+    for (PlantRecord* r : in_view) {
+      if (CropSizedWeed(*r) && near(r->bed_m, p) && (!best || r->observations > best->observations)) best = r;
+    }
+    if (!best) continue;
+    best->crop_at_end = true;
+    changed.push_back(best->id);
+  }
+  std::sort(changed.begin(), changed.end());
+  changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+  return changed;
 }
 
 void PlantRegistry::CountView(const Quad& view) {

@@ -23,6 +23,19 @@
 // than the crops around it (below (1 − 3 s)² of their median size, s the
 // crop profile's spread of the leaf-tip radius) is a weed where a crop is
 // missing, not that crop: it is `undersized` and not a crop().
+//
+// When the run ends, the records still in the last view have not finished
+// their passage under the camera: a plant line far in the view has been
+// seen only far away, where blobs are small, often cut into leaves and
+// often not associated with their predicted crop, so its crops hold too few
+// sightings to be confirmed or are held weeds. FlushInView judges them on
+// the frames they had (`judged_at_end`): a crop record seen in at least 3
+// frames is confirmed, and a predicted crop of the last frame with no
+// confirmed crop record near takes the most seen record near it that is as
+// large as a crop (not below the `undersized` line; seen in 3 frames or
+// more) as that crop, seen where the grid had not yet associated it
+// (`crop_at_end`). Without this the stand of the run ends in a false gap
+// at the last lines in view.
 
 #include <Eigen/Core>
 #include <limits>
@@ -53,6 +66,8 @@ struct PlantRecord {
   };
   std::vector<FrameSize> sizes;  // per-frame sizes, oldest first
   bool undersized = false;  // in a crop's place, far smaller than the crops (above)
+  bool judged_at_end = false;  // in the last view of the run (FlushInView)
+  bool crop_at_end = false;    // ... and judged the crop the grid had not associated
   double gamma2 = std::numeric_limits<double>::infinity();  // smallest to a predicted crop
   double distance_m = std::numeric_limits<double>::infinity();
   bool small = false;  // its largest unclipped view failed the size filter
@@ -65,13 +80,16 @@ struct PlantRecord {
   Eigen::Vector2d grid_bed_m{0.0, 0.0};
   std::string why;
 
-  bool crop() const { return crop_votes >= weed_votes && crop_votes > 0 && !undersized; }
+  bool crop() const { return crop_at_end || (crop_votes >= weed_votes && crop_votes > 0 && !undersized); }
   // A plant rather than a passing detection (a speck, a stone's glint, a leaf
   // cut off for a frame or two): seen in at least 3 frames and in at least
   // 40 % of the (8 or more) frames that looked at its place: crops are seen
-  // in nearly every frame that looks at them, passing detections in few.
+  // in nearly every frame that looks at them, passing detections in few. A
+  // crop judged at the run's end (FlushInView) needs the 3 frames only.
   bool confirmed() const {
-    return observations >= 3 && frames_in_view >= 8 && observations >= 0.4 * frames_in_view;
+    const bool seen = observations >= 3;
+    if (judged_at_end && crop() && seen) return true;
+    return seen && frames_in_view >= 8 && observations >= 0.4 * frames_in_view;
   }
 };
 
@@ -131,6 +149,12 @@ class PlantRegistry {
   // The frame's blobs are all in: each record seen whole adds its size of
   // this frame, and the crops' median size and who is undersized follow.
   void EndFrame();
+  // The run ended with `view` the last frame's view (on the bed) and
+  // `predicted` its predicted crops (bed positions): the records inside the
+  // view are judged on the frames they had (above); a record is "at" a
+  // predicted crop within `reach_m`. Returns the ids of the records whose
+  // kind or confirmation changed (to publish them again).
+  std::vector<int> FlushInView(const Quad& view, std::span<const Eigen::Vector2d> predicted, double reach_m);
   // The median size of the crop records measured (0: none yet).
   double crop_median_m2() const { return crop_median_m2_; }
   // Lets go of the oldest records whose counts are final (TakeFinalCounts):
@@ -165,6 +189,7 @@ class PlantRegistry {
 
   PlantRecord* Mutable(int id);
   void UpdateUndersized();
+  bool CropSizedWeed(const PlantRecord& r) const;
 
   RegistryOptions options_;
   std::vector<std::pair<int, SizeSample>> frame_sizes_;  // this frame's, by record id

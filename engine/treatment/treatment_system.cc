@@ -313,6 +313,10 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   }
   if (seen) registry_.CountView(*seen);
   registry_.EndFrame();
+  last_view_ = seen;
+  last_predicted_bed_.clear();
+  for (const classify::PredictedCrop& c : crops) last_predicted_bed_.push_back(VehicleToBed(pose, c.ground_m));
+  last_plant_spacing_m_ = state.plant_spacing_m;
   PlacePlantFootprints(plants, tracker, pose);
   // Plants long out of view stay where they were last placed.
   std::erase_if(followed_,
@@ -334,6 +338,7 @@ void TreatmentSystem::StartFrame(int64_t utime, const tracking::GridTracker& tra
     // A new bed frame: what was mapped before cannot be placed in it.
     map_.Clear();
     registry_.Clear();
+    last_view_.reset();
     followed_.clear();
     frame_.map_reset = true;
     ++map_resets_;
@@ -451,6 +456,11 @@ void TreatmentSystem::PlacePlantFootprints(const std::vector<PlantFootprint>& pl
                      tracker.PlantOffsetCovariance(p.m, p.n).has_value());
     }
   }
+}
+
+std::vector<int> TreatmentSystem::FlushRecordsInView() {
+  if (!last_view_) return {};
+  return registry_.FlushInView(*last_view_, last_predicted_bed_, 0.5 * last_plant_spacing_m_);
 }
 
 void TreatmentSystem::ForgetBehind(double bed_y_m) {

@@ -216,6 +216,11 @@ class TreatmentSystem {
 
   const TreatmentMap& map() const { return map_; }
   const PlantRegistry& registry() const { return registry_; }
+  // The run ended: the records in the last frame's view are judged on the
+  // frames they had (PlantRegistry::FlushInView, against that frame's
+  // predicted crops, a record within half the grid's plant spacing of one
+  // at it). Returns the ids whose kind or confirmation changed.
+  std::vector<int> FlushRecordsInView();
   // Ids of the records sprayed since the last call (for publishing them again).
   std::vector<int> TakeNewlySprayed() { return std::exchange(newly_sprayed_, {}); }
   const TreatmentOptions& options() const { return options_; }
@@ -315,6 +320,9 @@ class TreatmentSystem {
   std::vector<uint8_t> split_part_crop_;
   std::vector<uint8_t> beyond_;  // per split pixel: beyond every prediction's radius
   int64_t last_frame_utime_ = -1;
+  std::optional<Quad> last_view_;  // the last classified frame's view, on the bed
+  std::vector<Eigen::Vector2d> last_predicted_bed_;  // ... and its predicted crops
+  double last_plant_spacing_m_ = 0.0;
   int map_resets_ = 0;
   // Crop plants whose footprints follow them, by (line counted from the
   // tracker's initialisation, row): their footprints' column spans with the

@@ -747,6 +747,77 @@ TEST(PlantRegistry, AWeedInAGapIsNotTheMissingCrop) {
   }
 }
 
+// The run ends with plant lines far in the view: their records have been
+// seen only far away. FlushInView judges the records inside the last view
+// on the frames they had: a predicted crop's record seen in 3 of 12 frames
+// is confirmed; a predicted crop with no crop record within reach takes the
+// more seen of two crop-sized records held weeds near it; a crop-sized
+// record near a predicted crop that has its record, or beyond reach of
+// every prediction, or outside the view, stays as it was.
+TEST(PlantRegistry, TheLastViewIsJudgedOnTheFramesItHad) {
+  RegistryOptions o;
+  o.crop_size_sd_fraction = 0.15;  // crops >= 0.3025 of the median are crop-sized
+  PlantRegistry reg(o);
+  classify::BlobDecision crop, weed;
+  crop.crop = crop.associated = true;
+  crop.gamma2 = 1.0;
+  const auto sample = [](double area) {
+    SizeSample s;
+    s.area_m2 = area;
+    s.ground_m = {0.0, 2.0};
+    s.covariance_m2 = 0.001 * Eigen::Matrix2d::Identity();
+    return s;
+  };
+  // Twelve crops along x = 0 at 0.45 m (median size 0.05 m²), seen in all 12 frames.
+  const Quad view{Eigen::Vector2d(-1.0, 4.4), Eigen::Vector2d(1.0, 4.4), Eigen::Vector2d(1.0, 8.0),
+                  Eigen::Vector2d(-1.0, 8.0)};
+  int late = -1, big = -1, twin = -1, beside = -1, outside = -1;
+  for (int frame = 0; frame < 12; ++frame) {
+    for (int m = 0; m < 12; ++m) {
+      const Eigen::Vector2d at(0.0, 0.45 * m);
+      reg.AddSize(reg.Observe(at, crop, at), sample(0.05));
+    }
+    if (frame % 4 == 0) {  // seen in 3 of the 12 frames
+      const Eigen::Vector2d at(0.45, 6.0);
+      late = reg.Observe(at, crop, at);
+      reg.AddSize(late, sample(0.045));
+      big = reg.Observe({-0.45, 6.3}, weed);  // as large as a crop, not associated
+      reg.AddSize(big, sample(0.04));
+      outside = reg.Observe({-0.45, 3.0}, weed);  // the same, behind the last view
+      reg.AddSize(outside, sample(0.04));
+    }
+    if (frame % 3 == 0) {  // seen in 4 of the 12 frames: the more seen of the two
+      twin = reg.Observe({-0.45, 6.4}, weed);
+      reg.AddSize(twin, sample(0.04));
+      beside = reg.Observe({0.1, 5.1}, weed);  // 0.18 m from the crop at y = 4.95
+      reg.AddSize(beside, sample(0.05));
+    }
+    reg.CountView(Quad{Eigen::Vector2d(-1.0, 0.0), Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(1.0, 8.0),
+                       Eigen::Vector2d(-1.0, 8.0)});
+    reg.EndFrame();
+  }
+  EXPECT_NEAR(reg.crop_median_m2(), 0.05, 1e-9);
+  const auto rec = [&](int id) { return *reg.Find(id); };
+  EXPECT_FALSE(rec(late).confirmed());  // 3 of 12 frames
+  EXPECT_FALSE(rec(twin).crop());
+  const std::vector<Eigen::Vector2d> predicted{{0.0, 4.5},  {0.0, 4.95}, {0.45, 6.0},
+                                               {-0.45, 6.35}, {0.0, 5.4}, {-0.45, 3.0}};
+  const std::vector<int> changed = reg.FlushInView(view, predicted, 0.225);
+  EXPECT_TRUE(rec(late).judged_at_end);
+  EXPECT_TRUE(rec(late).confirmed());
+  EXPECT_TRUE(rec(late).crop());
+  EXPECT_TRUE(rec(twin).crop_at_end);  // 4 sightings beat 3
+  EXPECT_TRUE(rec(twin).crop());
+  EXPECT_TRUE(rec(twin).confirmed());
+  EXPECT_FALSE(rec(big).crop());  // the less seen at the same prediction
+  EXPECT_FALSE(rec(beside).crop());  // 0.18 m from a crop that has its record, 0.32 m from one that has none
+  EXPECT_FALSE(rec(outside).judged_at_end);
+  EXPECT_FALSE(rec(outside).crop());
+  EXPECT_EQ(changed, (std::vector<int>{late, twin}));
+  EXPECT_TRUE(reg.records()[11].judged_at_end);  // the crop at 4.95 m, still confirmed
+  EXPECT_TRUE(reg.records()[11].confirmed());
+}
+
 // Spray-weed mode's segmentation joins no blobs by soil growth, so that a
 // weed against a crop's rim keeps its own blob; the rest of the options is
 // the caller's.
