@@ -157,7 +157,9 @@ TEST(VehicleRunner, PipelineStageSchedulesNozzlesFromTheTrackedGrid) {
     if (!r.confirmed() || !r.crop()) continue;
     ++judged_crops;
     for (const PlantObservation& p : snap.plants) {
-      if (p.id == r.id) EXPECT_EQ(p.kind, PlantKind::kCrop) << r.id;
+      if (p.id == r.id) {
+        EXPECT_EQ(p.kind, PlantKind::kCrop) << r.id;
+      }
     }
   }
   EXPECT_GE(judged_crops, 9);  // 3 rows × at least 3 lines in the last view

@@ -60,7 +60,8 @@ Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& o
       options_(WithCropMargins(options)),
       segmenter_(options_.segmenter),
       tracker_(camera, options_.tracker),
-      visual_scale_(options_.motion) {
+      visual_scale_(options_.motion),
+      wheel_guard_(options_.tracker.slip_guard) {
   if (options_.treat) {
     system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
   }
@@ -124,11 +125,27 @@ const PoseResult& Pipeline::AddOdometry(const OdometrySample& o) {
   const int64_t previous = last_wheel_utime_;
   if (o.utime > last_wheel_utime_) last_wheel_utime_ = o.utime;
   if (!visual_) return DeadReckon(o, options_.tracker.wheel_sd_fraction);
-  const OdometrySample s = Fused(o, previous);
-  // The camera's own σ when it stands in.
-  const double sd = last_source_ == FusedSource::kCamera
-                        ? WheelSdFraction(driven_, options_.tracker.track_width_m)
-                        : options_.tracker.wheel_sd_fraction;
+  // The wheels as the tracker's slip guard would read them (a stalled
+  // encoder read from the other wheel, a spin held at the ground speed
+  // before it), then weighed against the camera: the raw wheels would be
+  // refuted by the camera while it is fresh and fed raw when it is not, an
+  // alternation in which the tracker's own guard never sees a steady fault.
+  OdometrySample guarded = o;
+  const double dt = previous >= 0 && o.utime > previous ? (o.utime - previous) * 1e-6 : 0.0;
+  if (std::isfinite(o.left_m_s) && std::isfinite(o.right_m_s)) {
+    const tracking::WheelSpeeds w = wheel_guard_.Filter({o.left_m_s, o.right_m_s}, dt);
+    guarded.left_m_s = w.left_m_s;
+    guarded.right_m_s = w.right_m_s;
+  }
+  const OdometrySample s = Fused(guarded, previous);
+  // The camera's own σ when it stands in; a wheel read from the other with
+  // the tracker's wheel-fault σ (the held turn rate is a guess).
+  double sd = last_source_ == FusedSource::kCamera
+                  ? WheelSdFraction(driven_, options_.tracker.track_width_m)
+                  : options_.tracker.wheel_sd_fraction;
+  if (last_source_ != FusedSource::kCamera && wheel_guard_.faulty_wheel() != 0) {
+    sd = std::hypot(sd, tracking::kWheelFaultSdFraction);
+  }
   return DeadReckon(s, sd);
 }
 

@@ -214,14 +214,6 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
   ShiftReference(ignored);
 }
 
-namespace {
-// The sd of a faulty wheel's increment read from the other, as a fraction
-// of the distance driven: the vehicle's steering over a few metres, which
-// the held turn rate does not follow (field preset, tuning seeds 1–3 with
-// the encoder stalled for 10 m: 0.1 and 0.3 alike).
-constexpr double kWheelFaultSdFraction = 0.1;
-}  // namespace
-
 InputStatus GridTracker::AddOdometry(int64_t utime, double left_m_s, double right_m_s) {
   return AddOdometry(utime, left_m_s, right_m_s, options_.wheel_sd_fraction);
 }

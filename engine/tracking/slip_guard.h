@@ -50,6 +50,12 @@ struct SlipGuardOptions {
   OptionErrors Validate() const;
 };
 
+// The σ of a faulty wheel's increment read from the other, as a fraction
+// of the distance driven: the vehicle's steering over a few metres, which
+// the held turn rate does not follow (field preset, tuning seeds 1–3 with
+// the encoder stalled for 10 m: 0.1 and 0.3 alike).
+inline constexpr double kWheelFaultSdFraction = 0.1;
+
 struct WheelSpeeds {
   double left_m_s = 0.0;
   double right_m_s = 0.0;
