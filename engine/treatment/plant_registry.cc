@@ -175,8 +175,7 @@ int PlantRegistry::confirmed() const {
 // A record as large as a crop (not below the undersized line), seen in 3
 // frames at least, held a weed and not a crop yet.
 bool PlantRegistry::CropSizedWeed(const PlantRecord& r) const {
-  const double fraction = std::max(0.0, 1.0 - 3.0 * options_.crop_size_sd_fraction);
-  const double limit = fraction * fraction * crop_median_m2_;
+  const double limit = UndersizedLimitM2();
   const bool sized = r.sizes.size() >= static_cast<size_t>(options_.min_size_frames);
   return !r.crop() && !r.undersized && sized && r.observations >= 3 && limit > 0.0 && r.area_m2 >= limit;
 }
@@ -282,6 +281,13 @@ void PlantRegistry::EndFrame() {
   UpdateUndersized();
 }
 
+// 3σ of the crops' radius below their median, as an area: (1 − 3s)² of the
+// median (s = crop_size_sd_fraction).
+double PlantRegistry::UndersizedLimitM2() const {
+  const double radius_fraction = std::max(0.0, 1.0 - 3.0 * options_.crop_size_sd_fraction);
+  return radius_fraction * radius_fraction * crop_median_m2_;
+}
+
 // The crops' median size over the records that can still be in view, and
 // which records in a crop's place fall far below it.
 void PlantRegistry::UpdateUndersized() {
@@ -299,8 +305,7 @@ void PlantRegistry::UpdateUndersized() {
     crop_median_m2_ = sizes[sizes.size() / 2];
   }
   if (!(crop_median_m2_ > 0.0)) return;
-  const double radius_fraction = std::max(0.0, 1.0 - 3.0 * s);
-  const double limit = radius_fraction * radius_fraction * crop_median_m2_;
+  const double limit = UndersizedLimitM2();
   for (PlantRecord& r : Recent()) {
     if (r.sizes.size() >= min_frames) r.undersized = voted_crop(r) && r.area_m2 < limit;
   }

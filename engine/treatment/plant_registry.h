@@ -189,6 +189,7 @@ class PlantRegistry {
 
   PlantRecord* Mutable(int id);
   void UpdateUndersized();
+  double UndersizedLimitM2() const;  // the area below which a crop-place record is undersized
   bool CropSizedWeed(const PlantRecord& r) const;
 
   RegistryOptions options_;
