@@ -6,11 +6,11 @@
 // wheel odometry (pipeline.h) and to stand in for it when the wheels spin,
 // stall, read a wrong scale or stop reporting.
 //
-// The search is centred on the motion the caller expects (the fused speed
-// and turn rate it drove with, from the wheels while they agree with the
-// camera): with 5–6 cm of travel between frames and plant contours whose
-// dominant points lie 2–5 cm apart, the smoothed previous motion alone puts
-// a wrong neighbour as near as the right one.
+// The search is centred on the motion the caller expects (the pipeline:
+// the crop grid's own motion over the last frames, which the plants hold
+// whatever the wheels read): with 5–6 cm of travel between frames and plant
+// contours whose dominant points lie 2–5 cm apart, the smoothed previous
+// motion alone puts a wrong neighbour as near as the right one.
 //
 // A frame pair that does not give a trustworthy motion makes the estimate
 // invalid with the reason (no features, a blurred or covered frame, all

@@ -251,11 +251,15 @@ void Pipeline::UpdateVisualMotion() {
   if (!visual_) return;
   const bool silent = last_wheel_utime_ >= 0 &&
                       (frame_.utime - last_wheel_utime_) * 1e-6 > options_.motion.substitute_after_s;
-  // The search's prior: the speeds driven with, from the wheels while they
-  // report; once they are silent the grid's own motion over the last
-  // frames (the plants hold it), not the camera's last estimate, whose
-  // error the search would otherwise carry on from frame to frame.
-  const std::optional<PlanarSpeed> grid = silent ? GridMotion() : std::nullopt;
+  // The search's prior: the grid's own motion over the last frames (the
+  // plants hold it) while the tracker holds the grid, else the speeds
+  // driven with. Not the wheels: the search's gate is a few millimetres a
+  // frame, and wheels spinning 30 % or reading 20 % short put the prior
+  // 12–19 mm off, so the camera found no motion or the wheels' own, and
+  // confirmed the fault it is there to refute. Not the camera's last
+  // estimate either, whose error the search would carry on from frame to
+  // frame once the wheels are silent.
+  const std::optional<PlanarSpeed> grid = GridMotion();
   const PlanarSpeed prior = grid ? *grid : driven_;
   frame_.visual = visual_->Update(frame_.utime, frame_.blobs, prior.speed_m_s / visual_scale_.ratio(),
                                   prior.yaw_rate_rad_s);

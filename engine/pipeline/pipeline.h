@@ -182,9 +182,8 @@ class Pipeline {
   int64_t last_wheel_utime_ = -1;  // newest sample from the wheels themselves
   VisualScale visual_scale_;
   tracking::SlipGuard wheel_guard_;  // the raw wheels read before the camera weighs them
-  // The grid's motion between the last two frames the tracker held it
-  // (forward distance and bearing at capture): the camera's search prior
-  // while the wheels are silent.
+  // The grid's motion between the last frames the tracker held it (forward
+  // distance and bearing at capture): the camera's search prior.
   struct GridAt {
     int64_t utime = -1;
     double forward_m = 0.0, bearing_rad = 0.0;
