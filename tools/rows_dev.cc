@@ -56,8 +56,6 @@ void SetOption(rows::RowDetectorOptions& options, const std::string& kv) {
   else if (key == "min_row_bands") options.centring.min_row_bands = static_cast<int>(value);
   else if (key == "outlier_scale") options.centring.outlier_scale = value;
   else if (key == "robust_iterations") options.centring.robust_iterations = static_cast<int>(value);
-  else if (key == "stem_weight") options.centring.stem_weight = value;
-  else if (key == "stem_depth") options.centring.stem_depth = value;
   else throw std::runtime_error("unknown key " + key);
 }
 

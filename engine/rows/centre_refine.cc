@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 
 #include "engine/rows/row_detector.h"
 
@@ -22,8 +21,6 @@ OptionErrors CentreRefineOptions::Validate() const {
   RequireInRange(e, "min_band_matter", min_band_matter, 0.0, 1e3);
   if (min_row_bands < 1) e.push_back({"min_row_bands", "must be >= 1"});
   RequireInRange(e, "outlier_scale", outlier_scale, 0.0, 10.0, false);
-  RequireInRange(e, "stem_weight", stem_weight, 0.0, 1.0);
-  RequireInRange(e, "stem_depth", stem_depth, 0.0, 10.0);
   if (robust_iterations < 0) e.push_back({"robust_iterations", "must be >= 0"});
   return e;
 }
@@ -95,43 +92,7 @@ std::pair<double, double> MeanShift(const Profile& profile, double x0, double h,
   return {mass, x};
 }
 
-// 1 where `plant` has plant matter within `depth` local spacings of the
-// bottom of its blob (8-connected), blobs touching the image's bottom edge
-// left out; 0 elsewhere.
-cv::Mat BlobBottoms(const cv::Mat& plant, const RowDetection& det, double depth) {
-  cv::Mat binary, labels, stats, centroids;
-  cv::compare(plant, plant.type() == CV_8UC1 ? 0.0 : 0.5, binary, cv::CMP_GT);
-  const int blobs = cv::connectedComponentsWithStats(binary, labels, stats, centroids, 8, CV_32S);
-  std::vector<int> bottom(static_cast<size_t>(blobs), -1);
-  for (int l = 1; l < blobs; ++l) {
-    const int b = stats.at<int>(l, cv::CC_STAT_TOP) + stats.at<int>(l, cv::CC_STAT_HEIGHT) - 1;
-    if (b < plant.rows - 1) bottom[static_cast<size_t>(l)] = b;
-  }
-  cv::Mat out(plant.size(), CV_32F, cv::Scalar(0));
-  const double px_per_image_px = static_cast<double>(plant.rows) / det.height_px;
-  for (int v = 0; v < plant.rows; ++v) {
-    const int* l = labels.ptr<int>(v);
-    float* o = out.ptr<float>(v);
-    const double reach = depth * det.SpacingAt((v + 0.5) / px_per_image_px) * px_per_image_px;
-    for (int u = 0; u < plant.cols; ++u) {
-      const int b = bottom[static_cast<size_t>(l[u])];
-      if (b >= 0 && b - v <= reach) o[u] = 1.0F;
-    }
-  }
-  return out;
-}
-
 }  // namespace
-
-cv::Mat CentringImage(const cv::Mat& plant, const cv::Mat& fit, const RowDetection& det,
-                      const CentreRefineOptions& o) {
-  if (!(o.stem_weight > 0.0) || plant.empty() || fit.empty()) return fit;
-  cv::Mat bottoms;
-  cv::resize(BlobBottoms(plant, det, o.stem_depth), bottoms, fit.size(), 0, 0, cv::INTER_AREA);
-  cv::Mat mixed;
-  cv::addWeighted(fit, 1.0 - o.stem_weight, bottoms, o.stem_weight, 0.0, mixed);
-  return mixed;
-}
 
 std::vector<CentreObservation> ObserveCentres(const cv::Mat& plant, double kfw, double kfh,
                                               const RowDetection& det, const CentreRefineOptions& o) {

@@ -25,21 +25,6 @@
 //     leaves the even spacing only where its own plants say so), weighted
 //     by each band's plant matter, with a Tukey reweighting of outliers.
 //
-// The plant image of step 1 weights the lowest part of every blob of plant
-// matter (`stem_weight` of the image; the rest is the plant matter itself):
-// a row's line runs through its plants' stems, and the stem of an upright
-// plant seen from above and behind is at its blob's bottom, while its
-// leaves, nearer the camera, are seen higher up and further out from the
-// camera's own track (by the plant's height over the camera's), and a big
-// leaf spreads its mass to one side. On photographs the mass centres of
-// the side rows lie outwards of the stems and the spacing comes out a few
-// per cent too wide; the blobs' bottoms do not (docs/results/2026-11-27-
-// rows-curves.md, session 27). "Lowest" is measured in local row spacings
-// (`stem_depth`), so that it scales with the perspective and the camera;
-// a blob cut by the image's bottom edge has no bottom in view and counts
-// by its mass alone. For a camera looking straight down, the lowest part
-// of a plant is still on its stem's column when its leaves are symmetric.
-//
 // The refined rows are u_n(v) + d(v)·e_n(t), t held in the fitted range
 // beyond it (R_n in its own row's range: a row entering from the image's
 // side is not extrapolated along a cubic); rows without enough bands of
@@ -67,8 +52,6 @@ struct CentreRefineOptions {
   int min_row_bands = 3;           // bands a row needs for its own R_n
   double outlier_scale = 0.3;      // Tukey's c, in spacings
   int robust_iterations = 3;
-  double stem_weight = 0.85;       // share of the blobs' lowest parts in the centring image
-  double stem_depth = 0.08;        // ... the part within this × local spacing of a blob's bottom
 
   OptionErrors Validate() const;
 };
@@ -95,12 +78,6 @@ struct CentreObservation {
 
 struct RowDetection;
 
-// The image step 1 centres on: `fit` (CV_32F plant fraction at the fit
-// resolution) mixed with the lowest parts of the blobs of `plant` (the
-// detector's input, CV_8UC1 or CV_32FC1), area-averaged to fit's size.
-// `fit` itself when stem_weight is 0.
-cv::Mat CentringImage(const cv::Mat& plant, const cv::Mat& fit, const RowDetection& det,
-                      const CentreRefineOptions& o);
 // Mean-shift centre observations of `det`'s rows on `plant` (CV_32F plant
 // fraction, the image scaled by kfw, kfh image pixels per column and row).
 std::vector<CentreObservation> ObserveCentres(const cv::Mat& plant, double kfw, double kfh,

@@ -103,13 +103,13 @@ RowDetector& RowDetector::operator=(RowDetector&&) noexcept = default;
 
 RowDetection RowDetector::Detect(const cv::Mat& plant) {
   RowDetection det = DetectComb(plant);
-  if (options_.centring.enabled && det.confidence > 0.0 && !det.rows.empty()) Centre(plant, det);
+  if (options_.centring.enabled && det.confidence > 0.0 && !det.rows.empty()) Centre(det);
   return det;
 }
 
-void RowDetector::Centre(const cv::Mat& plant, RowDetection& det) const {
-  if (straight_->fit_image().empty()) return;
-  const cv::Mat fit = CentringImage(plant, straight_->fit_image(), det, options_.centring);
+void RowDetector::Centre(RowDetection& det) const {
+  const cv::Mat& fit = straight_->fit_image();
+  if (fit.empty()) return;
   const double kfw = static_cast<double>(det.width_px) / fit.cols;
   const double kfh = static_cast<double>(det.height_px) / fit.rows;
   const std::vector<CentreObservation> obs = ObserveCentres(fit, kfw, kfh, det, options_.centring);

@@ -184,9 +184,8 @@ class RowDetector {
  private:
   // The comb: the straight model, or the curve where it does better.
   RowDetection DetectComb(const cv::Mat& plant);
-  // `det`'s rows centred on the plant matter of the fit image and the
-  // lowest parts of the blobs of `plant` (centre_refine.h).
-  void Centre(const cv::Mat& plant, RowDetection& det) const;
+  // `det`'s rows centred on the plant matter of the fit image.
+  void Centre(RowDetection& det) const;
   // The curve fit on the plant image at the refit resolution, with the
   // straight detection `det` as its prior (or the free prior).
   CurveFit FitCurve(const cv::Mat& fit, const RowDetection& det, CurvePrior& prior);
