@@ -15,7 +15,7 @@
 //            rows (a missing neighbour scores 0);
 //   nearest  each true row is matched to the detected row nearest it.
 //
-// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]
+// usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing] [--errors]
 //   --shape: categories "curved" and "straight" from the labels themselves
 //   (the central label line departs from a straight line by more than 5 %
 //   of the spacing somewhere, or not).
@@ -23,6 +23,8 @@
 //   spacing of a label line is scored as if it lay on it.
 //   --by-spacing: the ordered CRDA over all labelled image rows by the
 //   label spacing there (pixels of the photograph).
+//   --errors: the signed centring error (u_detected − u_label) / spacing of
+//   the ordered matching by row (n = −1, 0, +1) and height in the image.
 //   DIR of labels: NAME.{jpg,png}; DIR of rows: NAME_rows.csv, NAME_rows.json.
 //   --categories: lines "NAME,category"; otherwise the category is the
 //   file name up to its first digit ("" → "all").
@@ -112,6 +114,32 @@ bool ReadDetected(const fs::path& csv, const fs::path& json, Detected& d, std::s
 // Label spacing classes of --by-spacing (upper bounds, pixels of the photograph).
 constexpr std::array<double, 4> kSpacingClasses = {40.0, 80.0, 160.0, 1e9};
 
+// --errors: the signed centring error (u_detected − u_label) / d of the
+// ordered matching, by which row (n = −1, 0, +1) and by the image row's
+// height in the photograph (kErrorBins bins, bottom first), over matches
+// within half a spacing; and the detected spacing over the label's.
+constexpr int kErrorBins = 5;
+struct ErrorStats {
+  std::array<std::array<std::vector<double>, kErrorBins>, 3> e;  // [n + 1][bin]
+  std::array<std::vector<double>, kErrorBins> spacing_ratio;
+  std::array<double, 3> se{}, ss{}, ee{};  // Σ slope·e, Σ slope², Σ e² by n
+  std::array<std::vector<double>, 3> image_e;            // the current image's errors by n
+  std::array<std::vector<double>, 3> row_means, row_residuals;  // by n, over images
+  // The current image's errors into each row's mean and residuals about it.
+  void EndImage() {
+    for (size_t n = 0; n < 3; ++n) {
+      if (image_e[n].size() >= 10) {
+        double m = 0.0;
+        for (const double x : image_e[n]) m += x;
+        m /= static_cast<double>(image_e[n].size());
+        row_means[n].push_back(m);
+        for (const double x : image_e[n]) row_residuals[n].push_back(x - m);
+      }
+      image_e[n].clear();
+    }
+  }
+};
+
 struct Score {
   double ordered = 0.0, nearest = 0.0;
   int rows = 0;
@@ -183,7 +211,35 @@ void SnapToLabels(std::vector<double>& us, const std::vector<double>& centres, d
   }
 }
 
-Score ScoreImage(const cv::Mat& label, const Detected& det, double snap) {
+// The ordered matching's signed errors of one image row into `stats`.
+void AddErrors(const std::vector<double>& us, const std::vector<double>& above, const std::vector<double>& centres,
+               size_t c, double d, double height_fraction, ErrorStats& stats) {
+  if (us.empty()) return;
+  size_t j = 0;
+  for (size_t i = 0; i < us.size(); ++i) {
+    if (std::abs(us[i] - centres[c]) < std::abs(us[j] - centres[c])) j = i;
+  }
+  const int bin = std::clamp(static_cast<int>((1.0 - height_fraction) * kErrorBins), 0, kErrorBins - 1);
+  for (int n = -1; n <= 1; ++n) {
+    if ((n < 0 && j == 0) || (n > 0 && j + 1 >= us.size())) continue;
+    const auto at = [n](size_t i) { return static_cast<size_t>(static_cast<std::ptrdiff_t>(i) + n); };
+    const double e = (us[at(j)] - centres[at(c)]) / d;
+    if (std::abs(e) > 0.5) continue;
+    stats.e[static_cast<size_t>(n + 1)][static_cast<size_t>(bin)].push_back(e);
+    stats.image_e[static_cast<size_t>(n + 1)].push_back(e);
+    if (above.size() == us.size()) {
+      const double slope = (above[at(j)] - us[at(j)]) / 4.0;  // du per pixel upwards
+      stats.se[static_cast<size_t>(n + 1)] += slope * e;
+      stats.ss[static_cast<size_t>(n + 1)] += slope * slope;
+      stats.ee[static_cast<size_t>(n + 1)] += e * e;
+    }
+  }
+  if (j > 0 && j + 1 < us.size()) {
+    stats.spacing_ratio[static_cast<size_t>(bin)].push_back(0.5 * (us[j + 1] - us[j - 1]) / d);
+  }
+}
+
+Score ScoreImage(const cv::Mat& label, const Detected& det, double snap, ErrorStats* stats) {
   Score s;
   const double sx = static_cast<double>(det.width) / label.cols;
   const double sy = static_cast<double>(det.height) / label.rows;
@@ -196,6 +252,11 @@ Score ScoreImage(const cv::Mat& label, const Detected& det, double snap) {
     std::vector<double> us = DetectedAt(det, v);
     if (snap > 0.0) SnapToLabels(us, centres, d, snap);
     const auto [ordered, nearest] = ScoreRow(us, centres, c, d);
+    if (stats != nullptr) {
+      std::vector<double> above = DetectedAt(det, std::max(0, v - 4));
+      if (snap > 0.0) above.clear();
+      AddErrors(us, above, centres, c, d, (y + 0.5) / label.rows, *stats);
+    }
     s.ordered += ordered / 3.0;
     s.nearest += nearest / 3.0;
     ++s.rows;
@@ -314,9 +375,60 @@ void PrintBySpacing(const Tally& t) {
   }
 }
 
+double Quantile(std::vector<double> x, double q) {
+  if (x.empty()) return std::nan("");
+  const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(x.size() - 1));
+  std::nth_element(x.begin(), x.begin() + k, x.end());
+  return x[static_cast<size_t>(k)];
+}
+
+double Mean(const std::vector<double>& x) {
+  double sum = 0.0;
+  for (const double v : x) sum += v;
+  return x.empty() ? std::nan("") : sum / static_cast<double>(x.size());
+}
+
+// The mean CRDA of errors e (in spacings).
+double MeanCrda(const std::vector<double>& e) {
+  double sum = 0.0;
+  for (const double x : e) sum += Crda(x, 0.0, 1.0);
+  return e.empty() ? std::nan("") : sum / static_cast<double>(e.size());
+}
+
+void PrintErrors(const ErrorStats& stats) {
+  std::cout << "signed error (u_detected - u_label) / spacing, matches within 0.5 spacing\n";
+  for (int b = 0; b < kErrorBins; ++b) {
+    std::cout << "height " << static_cast<double>(b) / kErrorBins << "-" << static_cast<double>(b + 1) / kErrorBins
+              << " (from bottom)";
+    for (int n = -1; n <= 1; ++n) {
+      const std::vector<double>& e = stats.e[static_cast<size_t>(n + 1)][static_cast<size_t>(b)];
+      std::vector<double> a(e.size());
+      std::transform(e.begin(), e.end(), a.begin(), [](double x) { return std::abs(x); });
+      std::cout << "  n=" << std::showpos << n << std::noshowpos << " N " << e.size() << " mean " << std::showpos
+                << Mean(e) << " median " << Quantile(e, 0.5) << std::noshowpos << " |e| median "
+                << Quantile(a, 0.5) << " q90 " << Quantile(a, 0.9) << " crda " << MeanCrda(e);
+    }
+    const auto& r = stats.spacing_ratio[static_cast<size_t>(b)];
+    std::cout << "  spacing ratio median " << Quantile(r, 0.5) << " mean " << Mean(r) << '\n';
+  }
+  for (int n = -1; n <= 1; ++n) {
+    const auto& m = stats.row_means[static_cast<size_t>(n + 1)];
+    const auto& r = stats.row_residuals[static_cast<size_t>(n + 1)];
+    std::vector<double> am(m.size()), ar(r.size());
+    std::transform(m.begin(), m.end(), am.begin(), [](double x) { return std::abs(x); });
+    std::transform(r.begin(), r.end(), ar.begin(), [](double x) { return std::abs(x); });
+    const size_t i = static_cast<size_t>(n + 1);
+    std::cout << "n=" << std::showpos << n << std::noshowpos << " e ~ b * du/dv(up): b " << stats.se[i] / stats.ss[i]
+              << " variance explained " << stats.se[i] * stats.se[i] / stats.ss[i] / stats.ee[i] << '\n';
+    std::cout << "n=" << std::showpos << n << std::noshowpos << " rows " << m.size() << ": |row mean error| median "
+              << Quantile(am, 0.5) << " q90 " << Quantile(am, 0.9) << "; |error - row mean| median "
+              << Quantile(ar, 0.5) << " q90 " << Quantile(ar, 0.9) << '\n';
+  }
+}
+
 struct Args {
   fs::path labels, rows, categories_file;
-  bool per_image = false, shape = false, by_spacing = false;
+  bool per_image = false, shape = false, by_spacing = false, errors = false;
   double snap = 0.0;
 };
 
@@ -331,9 +443,10 @@ bool ParseArgs(int argc, char** argv, Args& a) {
     else if (s == "--per-image") a.per_image = true;
     else if (s == "--shape") a.shape = true;
     else if (s == "--by-spacing") a.by_spacing = true;
+    else if (s == "--errors") a.errors = true;
     else if (s == "--snap" && value) a.snap = std::stod(argv[++i]);
     else {
-      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing]\n";
+      std::cerr << "usage: crda_score --labels DIR --rows DIR [--categories FILE | --shape] [--per-image] [--snap F] [--by-spacing] [--errors]\n";
       return false;
     }
   }
@@ -349,7 +462,8 @@ bool ParseArgs(int argc, char** argv, Args& a) {
 int main(int argc, char** argv) {
   Args args;
   if (!ParseArgs(argc, argv, args)) return 2;
-  const auto& [labels, rows, categories_file, per_image, shape, by_spacing, snap] = args;
+  const auto& [labels, rows, categories_file, per_image, shape, by_spacing, errors_wanted, snap] = args;
+  ErrorStats error_stats;
   const std::map<std::string, std::string> category_of = ReadCategories(categories_file);
   const std::vector<fs::path> files = LabelFiles(labels);
   std::map<std::string, Tally> tallies;
@@ -369,7 +483,8 @@ int main(int argc, char** argv) {
       ++errors;
       continue;
     }
-    const Score s = ScoreImage(label, det, snap);
+    const Score s = ScoreImage(label, det, snap, errors_wanted ? &error_stats : nullptr);
+    error_stats.EndImage();
     if (s.rows == 0) continue;  // nothing labelled with three rows
     const std::string category = shape ? LabelShape(label, 0.05) : CategoryOf(name, category_of);
     for (Tally* t : {&tallies[category], &all}) {
@@ -389,6 +504,7 @@ int main(int argc, char** argv) {
   }
   PrintTally("overall", all);
   if (by_spacing) PrintBySpacing(all);
+  if (errors_wanted) PrintErrors(error_stats);
   if (errors > 0) std::cout << errors << " error(s)\n";
   return all.images > 0 ? 0 : 2;
 }
