@@ -124,8 +124,10 @@ struct TreatmentOptions {
   // each 8-connected part (of at least min_weed_part_m2) of an associated,
   // uncut crop blob's plant matter beyond its outline is a weed of its own
   // in the plant registry, at its centroid on the weeds' plane; with
-  // outline_weed_votes it also votes weed on the map with its bounding box.
-  bool outline_weed_votes = false;
+  // outline_weed_votes it also votes weed on the map with its bounding box
+  // there (in crop mode, slightly fewer weeds sprayed beside the crops and
+  // no crop missed: docs/results/2026-11-27-report.md, session 27).
+  bool outline_weed_votes = true;
   // Fail-safe on uncertainty (bar_uncertainty.h): the bar closes while the
   // 95 % ellipse of where the plants at the bar stand, as the grid is held
   // now and dead-reckoned until the spray lands, reaches further from them
