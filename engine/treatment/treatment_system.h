@@ -125,9 +125,11 @@ struct TreatmentOptions {
   // uncut crop blob's plant matter beyond its outline is a weed of its own
   // in the plant registry, at its centroid on the weeds' plane; with
   // outline_weed_votes it also votes weed on the map with its bounding box
-  // there (in crop mode, slightly fewer weeds sprayed beside the crops and
-  // no crop missed: docs/results/2026-11-27-report.md, session 27).
-  bool outline_weed_votes = true;
+  // there. Off: in weed mode those boxes, against the crops' leaves, are
+  // sprayed (the field's treated area doubles, the crops' edges hit); in
+  // crop mode they change next to nothing
+  // (docs/results/2026-11-27-report.md, session 27).
+  bool outline_weed_votes = false;
   // Fail-safe on uncertainty (bar_uncertainty.h): the bar closes while the
   // 95 % ellipse of where the plants at the bar stand, as the grid is held
   // now and dead-reckoned until the spray lands, reaches further from them
