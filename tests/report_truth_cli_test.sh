@@ -41,6 +41,8 @@ checks = [
     ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.35),
     ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.08),
     ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.42, 0.05),
+    # over the ground the crops' canopy leaves in view (session 27: -24.6 %)
+    ("weeds per m2 of the ground seen", a["weeds_per_m2_of_ground_seen"], t["weeds_per_m2"], -0.32, 0.05),
 ]
 bad = 0
 for name, got, want, lo, hi in checks:

@@ -128,8 +128,11 @@ TEST(TreatmentSystem, FieldSprayCrop) {
               1e-12);
   // Leaf fragments of one grid plant make one record (15818 before; 11900
   // before soil growth joined the halves of plants split by shade, 8324
-  // now).
-  EXPECT_LT(m.plants_recorded, 9500);
+  // before session 27). Weeds merged with a crop's blob are recorded since
+  // (TreatmentOptions::outline_weed_votes, ClassifierOptions::
+  // outline_limit_sd): 11557 now, the 3,233 more mostly weed parts seen in
+  // one or two frames, never confirmed; the confirmed ones are held below.
+  EXPECT_LT(m.plants_recorded, 12500);
   // Of those records, the plants (seen in ≥ 3 frames and ≥ 40 % of those
   // that looked at them, PlantRecord::confirmed) number about the plants
   // there are: 620 for 222 crops and 352 weeds on seed 1 (2692 records).

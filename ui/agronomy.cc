@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -64,6 +65,8 @@ OptionErrors AgronomyOptions::Validate() const {
   RequirePositive(e, "cell_length_m", cell_length_m);
   RequirePositive(e, "histogram_bin_m", histogram_bin_m);
   RequireInRange(e, "histogram_bins", histogram_bins, 1, 1000);
+  RequireInRange(e, "far_view_fraction", far_view_fraction, 0.0, 1.0);
+  RequireInRange(e, "unseen_canopy_fraction", unseen_canopy_fraction, 0.0, 1.0);
   return e;
 }
 
@@ -160,28 +163,106 @@ void FillCropCells(const RowsOfCrops& by_row, const AgronomyOptions& o, Agronomy
   }
 }
 
+// The band's crop records as leaf-tip discs, by bed y.
+struct CropDisc {
+  double y = 0.0, x = 0.0, radius_m = 0.0;
+};
+
+std::vector<CropDisc> CropDiscs(const RowsOfCrops& by_row, const AgronomyOptions& o) {
+  std::vector<CropDisc> out;
+  for (const auto& [n, v] : by_row) {
+    for (const PlantRecord* p : v) {
+      out.push_back({p->plant.position_m.y(), p->plant.position_m.x(),
+                     LeafTipRadius(p->plant.size_m2, o.outline_area_fraction)});
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const CropDisc& a, const CropDisc& b) { return a.y < b.y; });
+  return out;
+}
+
+// Whether some crop disc's centre lies within `reach(disc)` of p; reach is
+// at most `max_reach_m`.
+template <class Reach>
+bool NearACrop(const std::vector<CropDisc>& discs, const Eigen::Vector2d& p, double max_reach_m, Reach reach) {
+  auto it = std::lower_bound(discs.begin(), discs.end(), p.y() - max_reach_m,
+                             [](const CropDisc& d, double y) { return d.y < y; });
+  for (; it != discs.end() && it->y <= p.y() + max_reach_m; ++it) {
+    if (std::hypot(it->x - p.x(), it->y - p.y()) < reach(*it)) return true;
+  }
+  return false;
+}
+
+// The weed side of the plant figures: crop discs, the size above which a
+// weed record is as large as a crop, and how near its crop it then is.
+struct WeedContext {
+  std::vector<CropDisc> discs;
+  double crop_sized_m = 0.0;  // weed radius (∞: none)
+  double far_view_reach_m = 0.0;
+  double max_disc_m = 0.0;
+};
+
+WeedContext WeedContextOf(const RowsOfCrops& by_row, const AgronomySummary& a, const AgronomyOptions& o) {
+  WeedContext c;
+  c.discs = CropDiscs(by_row, o);
+  for (const CropDisc& d : c.discs) c.max_disc_m = std::max(c.max_disc_m, d.radius_m);
+  c.crop_sized_m = o.far_view_fraction > 0.0 ? o.far_view_fraction * a.crop_size.median_m
+                                             : std::numeric_limits<double>::infinity();
+  std::vector<double> spacing;
+  for (const RowAgronomy& r : a.rows) spacing.push_back(r.plant_spacing_m);
+  c.far_view_reach_m = 0.5 * Median(spacing);
+  return c;
+}
+
+bool FarViewOfCrop(const PlantRecord& w, const WeedContext& c) {
+  const double radius = std::sqrt(std::max(0.0, w.plant.size_m2) / std::numbers::pi);
+  return radius >= c.crop_sized_m && NearACrop(c.discs, w.plant.position_m, c.far_view_reach_m,
+                                               [&](const CropDisc&) { return c.far_view_reach_m; });
+}
+
+bool UnderACanopy(const Eigen::Vector2d& p, const WeedContext& c, double fraction) {
+  return NearACrop(c.discs, p, fraction * c.max_disc_m, [&](const CropDisc& d) { return fraction * d.radius_m; });
+}
+
+// A weed record's share of its row and heat cell.
+void AddWeedToCells(const PlantRecord& w, const std::map<int, size_t>& row_index, const AgronomyOptions& o,
+                    AgronomySummary& a) {
+  const Eigen::Vector2d& p = w.plant.position_m;
+  const auto it = row_index.find(static_cast<int>(std::lround(p.x() / a.row_spacing_m)));
+  if (it == row_index.end()) return;
+  const int c = std::clamp(static_cast<int>((p.y() - a.y0_m) / o.cell_length_m), 0, a.cells_along - 1);
+  HeatCell& h = a.cells[it->second * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
+  ++h.weeds;
+  h.weed_area_m2 += w.plant.size_m2;
+  ++a.rows[it->second].weeds;
+}
+
 // Weeds within the surveyed band [x_lo, x_hi] × the stand: their count,
-// sizes, density, and their rows' and cells' shares.
-void CountWeeds(const std::vector<const PlantRecord*>& weeds, double x_lo, double x_hi,
-                const AgronomyOptions& o, AgronomySummary& a) {
+// sizes, density (over the band and over the ground seen), and their rows'
+// and cells' shares; crop-sized records beside a crop counted apart.
+void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops& by_row, double x_lo,
+                double x_hi, const AgronomyOptions& o, AgronomySummary& a) {
   const double rs = a.row_spacing_m;
   std::map<int, size_t> row_index;
   for (size_t i = 0; i < a.rows.size(); ++i) row_index[a.rows[i].row] = i;
+  const WeedContext context = WeedContextOf(by_row, a, o);
   std::vector<double> weed_radii;
+  int seen = 0;
   for (const PlantRecord* w : weeds) {
     const Eigen::Vector2d& p = w->plant.position_m;
     if (p.x() < x_lo || p.x() > x_hi || p.y() < a.y0_m || p.y() > a.y1_m) continue;
+    if (FarViewOfCrop(*w, context)) {
+      ++a.far_views_of_crops;
+      continue;
+    }
     ++a.weeds;
+    seen += !UnderACanopy(p, context, o.unseen_canopy_fraction);
     weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));
-    const auto it = row_index.find(static_cast<int>(std::lround(p.x() / rs)));
-    if (it == row_index.end()) continue;
-    const int c = std::clamp(static_cast<int>((p.y() - a.y0_m) / o.cell_length_m), 0, a.cells_along - 1);
-    HeatCell& h = a.cells[it->second * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
-    ++h.weeds;
-    h.weed_area_m2 += w->plant.size_m2;
-    ++a.rows[it->second].weeds;
+    AddWeedToCells(*w, row_index, o, a);
   }
   a.weeds_per_m2 = a.surveyed_area_m2 > 0.0 ? a.weeds / a.surveyed_area_m2 : 0.0;
+  for (const CropDisc& d : context.discs) a.unseen_canopy_m2 += std::numbers::pi * std::pow(o.unseen_canopy_fraction * d.radius_m, 2);
+  const double seen_m2 = a.surveyed_area_m2 - a.unseen_canopy_m2;
+  a.weeds_per_m2_seen = seen_m2 > 0.0 ? seen / seen_m2 : 0.0;
   const double length = std::max(0.0, a.y1_m - a.y0_m);
   for (RowAgronomy& r : a.rows) {
     const double area = rs * (r.stand_length_m > 0.0 ? length : 0.0);
@@ -247,7 +328,7 @@ void AddPlantFigures(AgronomySummary& a, const std::map<int64_t, PlantRecord>& p
   a.plants_per_m = row_metres > 0.0 ? a.crop / row_metres : 0.0;
   a.crop_size = SizeStatsOf(all_radii, o.histogram_bin_m, o.histogram_bins);
   FillCropCells(by_row, o, a);
-  CountWeeds(weeds, x_lo, x_hi, o, a);
+  CountWeeds(weeds, by_row, x_lo, x_hi, o, a);
 }
 
 std::string AgronomyCsv(const AgronomySummary& a) {

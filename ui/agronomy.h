@@ -20,7 +20,18 @@
 //    f = (1−d)² + (4/π)(1−d)d + d²/2, 0.832 for lobe depth d = 0.25); weeds
 //    as the radius of a disc of the same area;
 //  - weeds per m² over the surveyed band: the crop rows' span across plus
-//    r̄/2 on each side, times the stand length.
+//    r̄/2 on each side, times the stand length. A weed record at least
+//    `far_view_fraction` of the crops' median leaf-tip radius in radius
+//    (as large as a crop: no weed of the crop profiles grows so) within
+//    half a plant spacing of a crop record of its row is a far view of
+//    that crop, recorded before the grid associated it (the crop is
+//    recorded already): it is not a weed and is counted apart;
+//  - weeds per m² of the ground seen: the weeds outside the crops' unseen
+//    ground over the band less that ground. A crop's canopy hides the
+//    ground under it from every view; it is taken as the disc of
+//    `unseen_canopy_fraction` of each crop record's leaf-tip radius. Weeds
+//    stand on the ground whatever covers it, so this is the estimate of the
+//    whole band's density where the canopy hides some of it.
 
 #include <map>
 #include <optional>
@@ -38,6 +49,13 @@ struct AgronomyOptions {
   double cell_length_m = 1.0;          // heat map cells along the row
   double histogram_bin_m = 0.01;       // plant-size histogram bin (radius)
   int histogram_bins = 25;
+  // Crop-sized weed records (above): (1 − 3 × 0.15) of the crops' median
+  // leaf-tip radius, 0.15 the crop profiles' plant-to-plant spread (the
+  // registry's undersized line). 0: every weed record counts.
+  double far_view_fraction = 0.55;
+  // The ground no view sees under a crop (above): within this fraction of
+  // its leaf-tip radius (docs/results/2026-11-27-report.md, session 27).
+  double unseen_canopy_fraction = 0.75;
 
   OptionErrors Validate() const;
 };
@@ -86,6 +104,9 @@ struct AgronomySummary {
   SizeStats crop_size;
   int weeds = 0;
   double weeds_per_m2 = 0.0;
+  int far_views_of_crops = 0;        // crop-sized weed records beside their crop (above), not in `weeds`
+  double unseen_canopy_m2 = 0.0;     // ground under the crops that no view sees (above)
+  double weeds_per_m2_seen = 0.0;    // weeds per m² of the ground seen (above)
   SizeStats weed_size;
   std::optional<double> area_treated_m2;
   std::optional<double> product_l;

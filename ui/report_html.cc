@@ -84,7 +84,12 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
                                          " cm)");
     Row(out, "weeds", std::to_string(a.weeds) + ", " + Fixed(a.weeds_per_m2, 2) + " per m² over " +
                           Fixed(a.surveyed_area_m2, 1) + " m²; median radius " + Fixed(100 * a.weed_size.median_m, 1) +
-                          " cm");
+                          " cm; " + std::to_string(a.far_views_of_crops) +
+                          " crop-sized records beside a crop not counted (far views of that crop)");
+    Row(out, "weeds per m² of the ground seen",
+        Fixed(a.weeds_per_m2_seen, 2) + " over the " + Fixed(a.surveyed_area_m2 - a.unseen_canopy_m2, 1) +
+            " m² that the crops' canopy leaves in view: the estimate of the band's density (under a canopy "
+            "weeds are unseen, not absent)");
   }
   Row(out, "area treated", a.area_treated_m2 ? Fixed(*a.area_treated_m2, 2) + " m²" : std::string("n/a (no map tiles)"));
   Row(out, "product used", a.product_l ? Fixed(*a.product_l, 3) + " L at " + Fixed(a.rate_l_ha, 0) + " L/ha"
@@ -106,6 +111,7 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
     line("gaps", a.gaps, truth->gaps, 0);
     line("median crop leaf-tip radius, cm", 100 * a.crop_size.median_m, 100 * truth->median_radius_m, 2);
     line("weeds per m²", a.weeds_per_m2, truth->weeds_per_m2, 2);
+    line("weeds per m² of the ground seen, as the band's", a.weeds_per_m2_seen, truth->weeds_per_m2, 2);
     out << "</table>\n";
   }
   if (a.rows.empty()) return;
@@ -263,6 +269,9 @@ std::string ReportJson(const std::string& log_name, const RunSummary& s, const A
                    {"crop_radius", SizeJson(a.crop_size)},
                    {"weeds", a.weeds},
                    {"weeds_per_m2", a.weeds_per_m2},
+                   {"weeds_per_m2_of_ground_seen", a.weeds_per_m2_seen},
+                   {"unseen_canopy_area_m2", a.unseen_canopy_m2},
+                   {"weed_records_far_views_of_crops", a.far_views_of_crops},
                    {"weed_radius", SizeJson(a.weed_size)},
                    {"area_treated_m2", opt(a.area_treated_m2)},
                    {"product_l", opt(a.product_l)},

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -165,6 +166,49 @@ TEST(Agronomy, SizeQuartiles) {
   EXPECT_NEAR(s.q3_m, 0.04, 1e-12);
   EXPECT_EQ(s.histogram, (std::vector<int>{0, 1, 1, 3}));  // the last bin open-ended
   EXPECT_NEAR(LeafTipRadius(M_PI * 0.832 * 0.1 * 0.1, 0.832), 0.1, 1e-12);
+}
+
+TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
+  // Two rows 0.5 m apart, a crop of leaf-tip radius 0.1 m every 0.5 m over
+  // 10 m, and weeds: a crop-sized record 0.1 m from its crop (a far view of
+  // it), one as large between the rows (a weed: no crop within half a
+  // spacing), one small under a canopy and four clear.
+  std::map<int64_t, PlantRecord> plants;
+  const auto add = [&](telemetry::PlantKind kind, double x, double y, double area_m2) {
+    PlantRecord& r = plants[static_cast<int64_t>(plants.size())];
+    r.plant.kind = kind;
+    r.plant.position_m = {x, y};
+    r.plant.size_m2 = area_m2;
+  };
+  const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1, big_m2 = M_PI * 0.08 * 0.08, small_m2 = M_PI * 0.01 * 0.01;
+  for (int i = 0; i <= 20; ++i) {
+    add(telemetry::PlantKind::kCrop, 0.0, 0.5 * i, crop_m2);
+    add(telemetry::PlantKind::kCrop, 0.5, 0.5 * i, crop_m2);
+  }
+  add(telemetry::PlantKind::kWeed, 0.0, 2.1, big_m2);
+  add(telemetry::PlantKind::kWeed, 0.25, 5.25, big_m2);
+  add(telemetry::PlantKind::kWeed, 0.5, 3.05, small_m2);
+  for (int i = 1; i <= 4; ++i) add(telemetry::PlantKind::kWeed, 0.25, i + 0.3, small_m2);
+  AgronomySummary a;
+  a.row_spacing_m = 0.5;
+  AddPlantFigures(a, plants);
+  EXPECT_NEAR(a.surveyed_area_m2, 1.0 * 10.0, 1e-9);
+  EXPECT_NEAR(a.crop_size.median_m, 0.1, 1e-9);
+  EXPECT_EQ(a.far_views_of_crops, 1);
+  EXPECT_EQ(a.weeds, 6);
+  EXPECT_NEAR(a.weeds_per_m2, 0.6, 1e-9);
+  // Unseen: 42 discs of 0.75 × 0.1 m; seen: the 5 weeds outside them.
+  const double unseen_m2 = 42 * M_PI * 0.075 * 0.075;
+  EXPECT_NEAR(a.unseen_canopy_m2, unseen_m2, 1e-9);
+  EXPECT_NEAR(a.weeds_per_m2_seen, 5.0 / (10.0 - unseen_m2), 1e-9);
+  // Off: every weed record counts.
+  AgronomySummary all;
+  all.row_spacing_m = 0.5;
+  AgronomyOptions o;
+  o.far_view_fraction = 0.0;
+  AddPlantFigures(all, plants, o);
+  EXPECT_EQ(all.far_views_of_crops, 0);
+  EXPECT_EQ(all.weeds, 7);
 }
 
 TEST(Report, NoDisplayStillReports) {

@@ -451,5 +451,76 @@ TEST(CropClassifier, ACutBlobWithinACropsReachOfItsPredictionIsThatCrop) {
   EXPECT_EQ(shorter.SplitMerged(ground, area, true, crops, geometry::Matrix5d::Zero(), crop), 0);
 }
 
+// Points on a 2 mm grid inside a lobed outline R(θ) = R(1 − d + d|cos(kθ/2)|)
+// about `centre` (d = 0: a disc).
+std::vector<Eigen::Vector2d> Outline(const Eigen::Vector2d& centre, double r, double d, int lobes) {
+  std::vector<Eigen::Vector2d> out;
+  for (double x = -r; x <= r; x += 0.002) {
+    for (double y = -r; y <= r; y += 0.002) {
+      const double rt = r * (1.0 - d + d * std::abs(std::cos(0.5 * lobes * std::atan2(y, x))));
+      if (std::hypot(x, y) <= rt) out.push_back(centre + Eigen::Vector2d(x, y));
+    }
+  }
+  return out;
+}
+
+TEST(BeyondCropOutline, AWholeCropHasNothingBeyond) {
+  std::vector<uint8_t> beyond;
+  // A disc reaches 2.0 sd of its outline ellipse, a lobed outline of lobe
+  // depth 0.25 (the crop profiles') 2.16 sd at its leaf tips.
+  EXPECT_EQ(BeyondCropOutline(Outline({0.3, 1.0}, 0.1, 0.0, 0), 2.2, beyond), 0);
+  EXPECT_EQ(BeyondCropOutline(Outline({0.3, 1.0}, 0.1, 0.25, 7), 2.2, beyond), 0);
+  // Stretched along the line of sight (the oblique view): the ellipse follows.
+  std::vector<Eigen::Vector2d> stretched = Outline({0.0, 0.0}, 0.1, 0.25, 7);
+  for (Eigen::Vector2d& p : stretched) p.y() *= 1.4;
+  EXPECT_EQ(BeyondCropOutline(stretched, 2.2, beyond), 0);
+  // Beyond 1.9 sd of a lobed outline: its leaf tips.
+  EXPECT_GT(BeyondCropOutline(Outline({0.3, 1.0}, 0.1, 0.25, 7), 1.9, beyond), 0);
+}
+
+TEST(BeyondCropOutline, AWeedMergedAtTheLeafTipsIsBeyond) {
+  std::vector<Eigen::Vector2d> points = Outline({0.0, 0.0}, 0.1, 0.25, 7);
+  const size_t crop_points = points.size();
+  const Eigen::Vector2d weed(0.0, 0.125);  // a 2 cm weed against the leaf tips
+  for (const Eigen::Vector2d& p : Outline(weed, 0.02, 0.0, 0)) {
+    if (p.norm() > 0.1) points.push_back(p);  // where the crop's leaves are not
+  }
+  std::vector<uint8_t> beyond;
+  const int n = BeyondCropOutline(points, 2.2, beyond);
+  ASSERT_EQ(beyond.size(), points.size());
+  int in_weed = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!beyond[i]) continue;
+    EXPECT_LT((points[i] - weed).norm(), 0.021) << "flagged a crop point at " << points[i].transpose();
+    in_weed += i >= crop_points;
+  }
+  EXPECT_EQ(in_weed, n);
+  // The weed's outer part: its points beyond 0.12 m (2.2 sd of the lobed
+  // outline, sd 0.046 m with the weed, is about 0.105 m) are all flagged.
+  int outer = 0, outer_flagged = 0;
+  for (size_t i = crop_points; i < points.size(); ++i) {
+    if (points[i].norm() > 0.12) ++outer, outer_flagged += beyond[i];
+  }
+  EXPECT_GT(outer, 20);
+  EXPECT_EQ(outer_flagged, outer);
+}
+
+TEST(BeyondCropOutline, OffOrTooFewPointsFlagsNothing) {
+  std::vector<uint8_t> beyond;
+  std::vector<Eigen::Vector2d> points = Outline({0.0, 0.0}, 0.1, 0.0, 0);
+  points.emplace_back(0.5, 0.0);
+  EXPECT_EQ(BeyondCropOutline(points, 0.0, beyond), 0);
+  EXPECT_EQ(beyond.size(), points.size());
+  const std::vector<Eigen::Vector2d> few(points.begin(), points.begin() + 7);
+  EXPECT_EQ(BeyondCropOutline(few, 2.2, beyond), 0);
+  // All on one line: no ellipse.
+  std::vector<Eigen::Vector2d> line;
+  for (int i = 0; i < 20; ++i) line.emplace_back(0.01 * i, 0.0);
+  EXPECT_EQ(BeyondCropOutline(line, 2.2, beyond), 0);
+  // A lone point far off is beyond.
+  EXPECT_EQ(BeyondCropOutline(points, 2.2, beyond), 1);
+  EXPECT_EQ(beyond.back(), 1);
+}
+
 }  // namespace
 }  // namespace plantscale::classify

@@ -31,6 +31,7 @@ OptionErrors ClassifierOptions::Validate() const {
     e.push_back({"crop_size_min_samples", "must be in [1, crop_size_window]"});
   }
   RequireInRange(e, "lone_crop_fraction", lone_crop_fraction, 0.0, 1.0);
+  RequireNonNegative(e, "outline_limit_sd", outline_limit_sd);
   return e;
 }
 
@@ -238,6 +239,48 @@ int CropClassifier::SplitMerged(std::span<const Eigen::Vector2d> ground_m,
     if (part[i] >= 0) crop[i] = part_crop[static_cast<size_t>(part[i])];
   }
   return parts;
+}
+
+namespace {
+
+// Flags the points beyond `limit_sd` of the ellipse of the points not yet
+// flagged. False when that ellipse is degenerate.
+bool FlagBeyondEllipse(std::span<const Eigen::Vector2d> p, double limit_sd, std::vector<uint8_t>& beyond) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
+  double n = 0.0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (beyond[i]) continue;
+    sum += p[i];
+    outer += p[i] * p[i].transpose();
+    n += 1.0;
+  }
+  if (n < 8.0) return false;
+  const Eigen::Vector2d mean = sum / n;
+  const Eigen::Matrix2d cov = outer / n - mean * mean.transpose();
+  if (!(cov.determinant() > 1e-18) || !(cov.trace() > 0.0)) return false;
+  const Eigen::Matrix2d inv = cov.inverse();
+  const double limit2 = limit_sd * limit_sd;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector2d d = p[i] - mean;
+    beyond[i] = d.dot(inv * d) > limit2 ? 1 : 0;
+  }
+  return true;
+}
+
+}  // namespace
+
+int BeyondCropOutline(std::span<const Eigen::Vector2d> ground_m, double limit_sd,
+                      std::vector<uint8_t>& beyond) {
+  beyond.assign(ground_m.size(), 0);
+  if (!(limit_sd > 0.0) || ground_m.size() < 8) return 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (!FlagBeyondEllipse(ground_m, limit_sd, beyond)) {
+      beyond.assign(ground_m.size(), 0);
+      return 0;
+    }
+  }
+  return static_cast<int>(std::count(beyond.begin(), beyond.end(), uint8_t{1}));
 }
 
 }  // namespace plantscale::classify

@@ -94,6 +94,13 @@ struct ClassifierOptions {
   // missed crops had mostly been voted weed in the frames that saw them
   // small.
   double lone_crop_fraction = 0.25;
+  // Weeds merged with a crop's blob (BeyondCropOutline): plant matter of an
+  // associated crop blob beyond this many standard deviations of the blob's
+  // own outline ellipse is not that crop. A crop's lobed outline reaches
+  // 2.16 sd at its leaf tips (a disc 2.0); lower limits take leaf tips for
+  // weeds (docs/results/2026-11-27-report.md, session 27). 0: off (the
+  // whole blob is crop).
+  double outline_limit_sd = 2.2;
 
   OptionErrors Validate() const;
 };
@@ -132,6 +139,20 @@ struct BlobDecision {
   int m = 0, n = 0;  // the nearest prediction's grid indices (valid when gamma2 is finite)
   Eigen::Vector2d predicted_ground_m{0.0, 0.0};  // and its position (vehicle frame)
 };
+
+// Weeds merged with a crop (the oblique view joins a weed beside a crop, or
+// one seen past the crop's leaf tips, to the crop's blob): flags the points
+// (`ground_m`, a crop blob's pixels on the crops' plane) that lie beyond
+// `limit_sd` standard deviations of the blob's outline, the ellipse of its
+// second moments about its centroid. The ellipse is the crop as the camera
+// sees it: its leaf-tip disc at the leaf height, lengthened along the line
+// of sight by the flank below its near leaf tips, and its own size rather
+// than the crops' typical one. It is taken twice, the second time over the
+// points inside the first, so that a merged weed widens it little. No point
+// is flagged when there are fewer than 8 or the ellipse is degenerate.
+// Returns the number flagged.
+int BeyondCropOutline(std::span<const Eigen::Vector2d> ground_m, double limit_sd,
+                      std::vector<uint8_t>& beyond);
 
 // The two-parameter rule alone (for sweeps): size filter, then association.
 bool IsCrop(double area_m2, bool clipped, double gamma2, double min_crop_area_m2,

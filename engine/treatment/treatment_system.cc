@@ -250,13 +250,14 @@ void TreatmentSystem::AddDoubt(const BedPose& pose, const vision::Blob& b) {
   if (const std::optional<Quad> q = BoxOnCropPlane(b)) map_.AddDoubt(VehicleToBed(pose, *q));
 }
 
-void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
-                                    std::span<const uint8_t> weed, double pixel_area_m2) {
+std::vector<vision::Blob> TreatmentSystem::WeedParts(std::span<const cv::Point> pixels,
+                                                    std::span<const uint8_t> weed, double pixel_area_m2) {
+  std::vector<vision::Blob> out;
   cv::Rect box;
   for (size_t q = 0; q < pixels.size(); ++q) {
     if (weed[q]) box |= cv::Rect(pixels[q].x, pixels[q].y, 1, 1);
   }
-  if (box.empty()) return;
+  if (box.empty()) return out;
   parts_.create(box.height, box.width, CV_8UC1);
   parts_.setTo(0);
   for (size_t q = 0; q < pixels.size(); ++q) {
@@ -264,16 +265,67 @@ void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Poi
   }
   const int n = cv::connectedComponentsWithStats(parts_, components_, stats_, centroids_, 8, CV_32S);
   const double min_px = options_.min_weed_part_m2 / pixel_area_m2;
+  std::vector<int> part_of(static_cast<size_t>(n), -1);  // per label
   for (int k = 1; k < n; ++k) {
     if (stats_.at<int>(k, cv::CC_STAT_AREA) < min_px) continue;
-    const cv::Rect part(box.x + stats_.at<int>(k, cv::CC_STAT_LEFT),
-                        box.y + stats_.at<int>(k, cv::CC_STAT_TOP),
-                        stats_.at<int>(k, cv::CC_STAT_WIDTH), stats_.at<int>(k, cv::CC_STAT_HEIGHT));
+    part_of[static_cast<size_t>(k)] = static_cast<int>(out.size());
+    vision::Blob& b = out.emplace_back();
+    b.area_px = stats_.at<int>(k, cv::CC_STAT_AREA);
+    b.bbox_px = cv::Rect(box.x + stats_.at<int>(k, cv::CC_STAT_LEFT), box.y + stats_.at<int>(k, cv::CC_STAT_TOP),
+                         stats_.at<int>(k, cv::CC_STAT_WIDTH), stats_.at<int>(k, cv::CC_STAT_HEIGHT));
     // Pixel centres at +0.5, as the blobs' centroids.
-    const Eigen::Vector2d centroid(box.x + centroids_.at<double>(k, 0) + 0.5,
-                                   box.y + centroids_.at<double>(k, 1) + 0.5);
-    AddFootprint(pose, centroid, part, false);
+    b.centroid_px = Eigen::Vector2d(box.x + centroids_.at<double>(k, 0) + 0.5,
+                                    box.y + centroids_.at<double>(k, 1) + 0.5);
   }
+  for (size_t q = 0; q < pixels.size(); ++q) {
+    const int j = weed[q] ? part_of[static_cast<size_t>(components_.at<int>(pixels[q] - box.tl()))] : -1;
+    if (j < 0) continue;
+    vision::Blob& b = out[static_cast<size_t>(j)];
+    const Eigen::Vector2d d(pixels[q].x + 0.5 - b.centroid_px.x(), pixels[q].y + 0.5 - b.centroid_px.y());
+    b.covariance_px2 += d * d.transpose() / static_cast<double>(b.area_px);
+  }
+  return out;
+}
+
+void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
+                                    std::span<const uint8_t> weed, double pixel_area_m2) {
+  for (const vision::Blob& part : WeedParts(pixels, weed, pixel_area_m2)) {
+    AddFootprint(pose, part.centroid_px, part.bbox_px, false);
+  }
+}
+
+int TreatmentSystem::ObserveWeedsBeyondOutline(const vision::Blob& blob, const classify::BlobDecision& d,
+                                               const cv::Mat& mask, const BedPose& pose) {
+  const double limit = classifier_.options().outline_limit_sd;
+  if (!(limit > 0.0) || !d.crop || !d.associated || d.clipped || d.fragment || d.lone || mask.empty() ||
+      !BlobPixels(mask, blob, split_pixels_)) {
+    return 0;
+  }
+  const double h = CropPlaneHeight(blob.centroid_px);
+  split_ground_.clear();
+  std::vector<cv::Point> pixels;
+  for (const cv::Point& p : split_pixels_) {
+    if (const auto g = camera_.ImageToPlane({p.x + 0.5, p.y + 0.5}, h)) {
+      split_ground_.push_back(*g);
+      pixels.push_back(p);
+    }
+  }
+  if (classify::BeyondCropOutline(split_ground_, limit, beyond_) == 0) return 0;
+  int observed = 0;
+  for (vision::Blob& part : WeedParts(pixels, beyond_, d.area_m2 / static_cast<double>(blob.area_px))) {
+    const std::optional<Eigen::Vector2d> low = camera_.ImageToPlane(part.centroid_px, options_.weed_height_m);
+    const std::optional<Eigen::Vector2d> on_plane = camera_.ImageToPlane(part.centroid_px, h);
+    if (!low || !on_plane) continue;
+    part.ground_m = *on_plane;
+    classify::BlobDecision w;
+    w.area_m2 = d.area_m2 * part.area_px / static_cast<double>(blob.area_px);
+    w.size_filter_m2 = d.size_filter_m2;
+    const int id = registry_.Observe(VehicleToBed(pose, *low), w);
+    registry_.AddSize(id, SizeSampleOf(part, w));
+    if (options_.outline_weed_votes) AddFootprint(pose, part.centroid_px, part.bbox_px, false);
+    ++observed;
+  }
+  return observed;
 }
 
 const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::GridTracker& tracker,
@@ -310,6 +362,7 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
         d.associated ? std::optional<Eigen::Vector2d>(VehicleToBed(pose, d.predicted_ground_m))
                      : std::nullopt);
     registry_.AddSize(frame_.plant_ids[i], SizeSampleOf(blob, d));
+    ObserveWeedsBeyondOutline(blob, d, mask, pose);
   }
   if (seen) registry_.CountView(*seen);
   registry_.EndFrame();

@@ -120,6 +120,16 @@ struct TreatmentOptions {
   // left blocks of weed cells beside the crops on the map.
   bool merged_weed_parts_only = true;
   double min_weed_part_m2 = 0.0003;  // a disk of 10 mm radius: the field's smallest weeds
+  // Weeds merged with a crop's blob (ClassifierOptions::outline_limit_sd):
+  // each 8-connected part (of at least min_weed_part_m2) of an associated,
+  // uncut crop blob's plant matter beyond its outline is a weed of its own
+  // in the plant registry, at its centroid on the weeds' plane; with
+  // outline_weed_votes it also votes weed on the map with its bounding box
+  // there. Off: in weed mode those boxes, against the crops' leaves, are
+  // sprayed (the field's treated area doubles, the crops' edges hit); in
+  // crop mode they change next to nothing
+  // (docs/results/2026-11-27-report.md, session 27).
+  bool outline_weed_votes = false;
   // Fail-safe on uncertainty (bar_uncertainty.h): the bar closes while the
   // 95 % ellipse of where the plants at the bar stand, as the grid is held
   // now and dead-reckoned until the spray lands, reaches further from them
@@ -295,6 +305,15 @@ class TreatmentSystem {
   // min_weed_part_m2: its own bounding box about its centroid.
   void VoteWeedParts(const BedPose& pose, std::span<const cv::Point> pixels,
                      std::span<const uint8_t> weed, double pixel_area_m2);
+  // The 8-connected parts of the pixels flagged in `weed` of at least
+  // min_weed_part_m2 (each pixel standing for pixel_area_m2), as blobs
+  // (area, centroid, second moments, box; not projected).
+  std::vector<vision::Blob> WeedParts(std::span<const cv::Point> pixels, std::span<const uint8_t> weed,
+                                      double pixel_area_m2);
+  // Weeds merged with crop blob `blob` (outline_limit_sd): each part beyond
+  // its outline is observed as a weed; returns how many.
+  int ObserveWeedsBeyondOutline(const vision::Blob& blob, const classify::BlobDecision& d,
+                                const cv::Mat& mask, const BedPose& pose);
 
   // Where a crop blob centred at centroid_px stands: the tracker's centroid
   // height there (TrackerOptions::crop_radius_m), else the virtual plane,
