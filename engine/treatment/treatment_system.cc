@@ -303,16 +303,16 @@ int TreatmentSystem::ObserveWeedsBeyondOutline(const vision::Blob& blob, const c
   }
   const double h = CropPlaneHeight(blob.centroid_px);
   split_ground_.clear();
-  std::vector<cv::Point> pixels;
+  outline_pixels_.clear();
   for (const cv::Point& p : split_pixels_) {
     if (const auto g = camera_.ImageToPlane({p.x + 0.5, p.y + 0.5}, h)) {
       split_ground_.push_back(*g);
-      pixels.push_back(p);
+      outline_pixels_.push_back(p);
     }
   }
   if (classify::BeyondCropOutline(split_ground_, limit, beyond_) == 0) return 0;
   int observed = 0;
-  for (vision::Blob& part : WeedParts(pixels, beyond_, d.area_m2 / static_cast<double>(blob.area_px))) {
+  for (vision::Blob& part : WeedParts(outline_pixels_, beyond_, d.area_m2 / static_cast<double>(blob.area_px))) {
     const std::optional<Eigen::Vector2d> low = camera_.ImageToPlane(part.centroid_px, options_.weed_height_m);
     const std::optional<Eigen::Vector2d> on_plane = camera_.ImageToPlane(part.centroid_px, h);
     if (!low || !on_plane) continue;

@@ -338,6 +338,7 @@ class TreatmentSystem {
   std::vector<int> split_part_;
   std::vector<uint8_t> split_part_crop_;
   std::vector<uint8_t> beyond_;  // per split pixel: beyond every prediction's radius
+  std::vector<cv::Point> outline_pixels_;  // ObserveWeedsBeyondOutline's pixels on the crop plane
   int64_t last_frame_utime_ = -1;
   std::optional<Quad> last_view_;  // the last classified frame's view, on the bed
   std::vector<Eigen::Vector2d> last_predicted_bed_;  // ... and its predicted crops
