@@ -16,6 +16,9 @@ OptionErrors MotionFusionOptions::Validate() const {
   RequirePositive(e, "scale_memory_m", scale_memory_m);
   RequirePositive(e, "scale_min_distance_m", scale_min_distance_m);
   RequireInRange(e, "scale_bound", scale_bound, 0.0, 1.0, false, false);
+  RequireInRange(e, "persistence_frames", persistence_frames, 2,
+                 PersistentDisagreement::kMaxFrames);
+  RequirePositive(e, "persistence_z", persistence_z);
   return e;
 }
 
@@ -34,9 +37,49 @@ void VisualScale::Add(double wheel_speed_m_s, double camera_speed_m_s, double dt
   camera_m_ = keep * camera_m_ + c;
 }
 
+bool VisualScale::learnt() const {
+  return camera_m_ >= options_.scale_min_distance_m && wheel_m_ > 0.0;
+}
+
 double VisualScale::ratio() const {
-  if (camera_m_ < options_.scale_min_distance_m || wheel_m_ <= 0.0) return 1.0;
+  if (!learnt()) return 1.0;
   return std::clamp(wheel_m_ / camera_m_, 1.0 - options_.scale_bound, 1.0 + options_.scale_bound);
+}
+
+void PersistentDisagreement::Add(int64_t camera_utime, const PlanarSpeed& wheels,
+                                 const PlanarSpeed& camera) {
+  if (camera_utime == last_utime_) return;
+  const double d = wheels.speed_m_s - camera.speed_m_s;
+  const double var = wheels.speed_sd_m_s * wheels.speed_sd_m_s + camera.speed_sd_m_s * camera.speed_sd_m_s;
+  if (!std::isfinite(d) || !(var > 0.0)) return;
+  last_utime_ = camera_utime;
+  difference_[next_] = d;
+  variance_[next_] = var;
+  next_ = (next_ + 1) % options_.persistence_frames;
+  count_ = std::min(count_ + 1, options_.persistence_frames);
+}
+
+double PersistentDisagreement::z() const {
+  if (count_ < options_.persistence_frames) return 0.0;
+  double sum = 0.0, var = 0.0;
+  for (int i = 0; i < count_; ++i) {
+    sum += difference_[i];
+    var += variance_[i];
+  }
+  return sum / std::sqrt(var);
+}
+
+PlanarSpeed PersistentDisagreement::Corrected(const PlanarSpeed& wheels) const {
+  if (count_ == 0) return wheels;
+  double sum = 0.0, var = 0.0;
+  for (int i = 0; i < count_; ++i) {
+    sum += difference_[i];
+    var += variance_[i];
+  }
+  PlanarSpeed out = wheels;
+  out.speed_m_s -= sum / count_;
+  out.speed_sd_m_s = std::hypot(wheels.speed_sd_m_s, std::sqrt(var) / count_);
+  return out;
 }
 
 PlanarSpeed WheelSpeed(double left_m_s, double right_m_s, double scale, double track_width_m,

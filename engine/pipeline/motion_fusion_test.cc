@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace plantscale::pipeline {
@@ -96,6 +97,63 @@ TEST(VisualScale, StaysWithinItsBoundsAndRefusesNonsense) {
   EXPECT_NEAR(other.ratio(), 1.0, 1e-12);
 }
 
+// Frame-to-frame camera noise of σ 0.03 m/s about the true 0.70 m/s (a fixed
+// pseudo-random sequence), wheels of σ 0.02 m/s.
+double CameraNoise(int i) { return 0.03 * std::sin(12.9898 * i + 4.1) * 1.41; }
+
+TEST(PersistentDisagreement, AScaleErrorEachFrameWithinTheGateStandsOutOverTheWindow) {
+  MotionFusionOptions o;  // 12 frames, 4σ
+  PersistentDisagreement window(o);
+  for (int i = 0; i < 11; ++i) {
+    // Wheels 20 % short (0.56) against a camera reading 0.64 ± noise: each
+    // frame's χ² is (0.08 / 0.036)² ≈ 5, within the per-sample gate of 13.8.
+    const PlanarSpeed wheels{0.56, 0.0, 0.02, 0.02};
+    const PlanarSpeed camera{0.64 + 0.3 * CameraNoise(i), 0.0, 0.03, 0.02};
+    EXPECT_EQ(Fuse(wheels, &camera, o.gate_chi2).source, FusedSource::kFused) << i;
+    window.Add(1000 * i, wheels, camera);
+    EXPECT_FALSE(window.wheels_off()) << "not before the window is full, frame " << i;
+  }
+  window.Add(11000, {0.56, 0.0, 0.02, 0.02}, {0.64, 0.0, 0.03, 0.02});
+  // Mean difference −0.08 over 12 frames of σ √(0.02² + 0.03²) = 0.036:
+  // z = −0.08 · 12 / (0.036 · √12) ≈ −7.7.
+  EXPECT_NEAR(window.z(), -0.08 * 12.0 / std::sqrt(12.0 * 13e-4), 0.3);
+  EXPECT_TRUE(window.wheels_off());
+}
+
+TEST(PersistentDisagreement, SoundWheelsAndANoisyCameraAreNotCondemned) {
+  MotionFusionOptions o;
+  PersistentDisagreement window(o);
+  double largest = 0.0;
+  for (int i = 0; i < 500; ++i) {
+    window.Add(1000 * i, {0.70, 0.0, 0.02, 0.02}, {0.70 + CameraNoise(i), 0.0, 0.03, 0.02});
+    largest = std::max(largest, std::abs(window.z()));
+    EXPECT_FALSE(window.wheels_off()) << i;
+  }
+  EXPECT_GT(largest, 0.3);  // the statistic moves with the noise
+}
+
+TEST(PersistentDisagreement, OneEstimateCountsOnceAndTheWindowForgets) {
+  MotionFusionOptions o;
+  o.persistence_frames = 4;
+  PersistentDisagreement window(o);
+  const PlanarSpeed wheels{0.56, 0.0, 0.02, 0.02}, camera{0.70, 0.0, 0.03, 0.02};
+  // Five odometry samples against the same camera estimate: one frame.
+  for (int i = 0; i < 5; ++i) window.Add(7, wheels, camera);
+  EXPECT_DOUBLE_EQ(window.z(), 0.0);
+  for (int i = 1; i < 4; ++i) window.Add(7 + i, wheels, camera);
+  EXPECT_NEAR(window.z(), -0.14 * 4.0 / std::sqrt(4.0 * 13e-4), 1e-9);
+  EXPECT_TRUE(window.wheels_off());
+  // The wheels at the camera's speed, with the σ of the window's mean added.
+  const PlanarSpeed corrected = window.Corrected(wheels);
+  EXPECT_NEAR(corrected.speed_m_s, 0.70, 1e-12);
+  EXPECT_NEAR(corrected.speed_sd_m_s, std::sqrt(4e-4 + 4.0 * 13e-4 / 16.0), 1e-12);
+  EXPECT_DOUBLE_EQ(corrected.yaw_rate_rad_s, wheels.yaw_rate_rad_s);
+  // The wheels back in agreement: after four frames the fault is forgotten.
+  for (int i = 4; i < 8; ++i) window.Add(7 + i, camera, camera);
+  EXPECT_NEAR(window.z(), 0.0, 1e-12);
+  EXPECT_FALSE(window.wheels_off());
+}
+
 TEST(MotionFusion, OptionsExplainWhatIsWrong) {
   MotionFusionOptions o;
   o.gate_chi2 = 0.0;
@@ -106,6 +164,10 @@ TEST(MotionFusion, OptionsExplainWhatIsWrong) {
   bound.scale_bound = 1.0;
   ASSERT_EQ(bound.Validate().size(), 1U);
   EXPECT_EQ(bound.Validate()[0].key, "scale_bound");
+  MotionFusionOptions window;
+  window.persistence_frames = PersistentDisagreement::kMaxFrames + 1;
+  ASSERT_EQ(window.Validate().size(), 1U);
+  EXPECT_EQ(window.Validate()[0].key, "persistence_frames");
 }
 
 }  // namespace

@@ -61,6 +61,7 @@ Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& o
       segmenter_(options_.segmenter),
       tracker_(camera, options_.tracker),
       visual_scale_(options_.motion),
+      disagreement_(options_.motion),
       wheel_guard_(options_.tracker.slip_guard) {
   if (options_.treat) {
     system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
@@ -105,7 +106,15 @@ OdometrySample Pipeline::Fused(const OdometrySample& o, int64_t previous_utime) 
   if (v && (o.utime - v->utime) * 1e-6 > options_.motion.max_visual_age_s) v = nullptr;
   const PlanarSpeed camera = v ? Scaled(VisualSpeed(*v), visual_scale_.ratio()) : PlanarSpeed{};
   const bool finite = std::isfinite(o.left_m_s) && std::isfinite(o.right_m_s);
-  const FusedSpeed f = Fuse(wheels, v && finite ? &camera : nullptr, options_.motion.gate_chi2);
+  FusedSpeed f = Fuse(wheels, v && finite ? &camera : nullptr, options_.motion.gate_chi2);
+  if (v && finite && visual_scale_.learnt()) {
+    disagreement_.Add(v->utime, wheels, camera);
+    if (f.source == FusedSource::kFused && disagreement_.wheels_off()) {
+      // The wheels at fault: at the camera's scale, weighed with it.
+      f = Fuse(disagreement_.Corrected(wheels), &camera, options_.motion.gate_chi2);
+      f.source = FusedSource::kCamera;
+    }
+  }
   if (f.source == FusedSource::kFused && previous_utime >= 0 && o.utime > previous_utime) {
     visual_scale_.Add(wheels.speed_m_s, v->speed_m_s, (o.utime - previous_utime) * 1e-6);
   }

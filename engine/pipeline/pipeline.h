@@ -181,6 +181,7 @@ class Pipeline {
   int camera_substitutions_ = 0;
   int64_t last_wheel_utime_ = -1;  // newest sample from the wheels themselves
   VisualScale visual_scale_;
+  PersistentDisagreement disagreement_;
   tracking::SlipGuard wheel_guard_;  // the raw wheels read before the camera weighs them
   // The grid's motion between the last frames the tracker held it (forward
   // distance and bearing at capture): the camera's search prior.
