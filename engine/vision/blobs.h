@@ -43,7 +43,7 @@ struct Blob {
   Eigen::Vector2d ground_m{0.0, 0.0};
   double ground_area_m2 = 0.0;  // area_px × the pixel's footprint at the centroid
   // The part of it the mask held before the segmenter grew it (hull and
-  // soil growth, segmenter.h: SetCores): its pixel count, centroid and
+  // soil growth, segmenter.h; BlobExtractor::SetCores): its pixel count, centroid and
   // second central moments. Growth adds the shaded rim and a ring of soil
   // lit by the smoothing; a plant's size is read on the core. core_area_px
   // < 0: no growth known, the core is the blob itself (CoreOf).
