@@ -10,8 +10,9 @@
 # a synthetic bed with known gaps and sizes); what it summarises is the
 # vehicle's plant records (docs/results/2026-11-27-report.md). A record's
 # size is the median over its nearer frames of its blobs' area at the leaf
-# tips, the oblique stretch taken out (leaf-tip radius now about 5 % high,
-# was 30 %), and a record far under the crops' size in a crop's place is a
+# tips, the oblique stretch taken out, read on the mask before the
+# segmenter's growth (leaf-tip radius now within 1 %; 5 % high on the grown
+# blobs, 30 % on the largest blob), and a record far under the crops' size in a crop's place is a
 # weed in a gap (missing plants were 15 % low; at 40 m one plant is 17 %);
 # about a third of the weeds still have no record (under and against the
 # crops' canopy, or never confirmed). Those three are held to the bounds
@@ -39,7 +40,7 @@ if t is None:
 checks = [
     ("crop plants", a["crop_plants"], t["crop_plants"], -0.05, 0.05),
     ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.35),
-    ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.08),
+    ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.03),
     ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.42, 0.05),
     # over the ground the crops' canopy leaves in view (session 27: -24.6 %)
     ("weeds per m2 of the ground seen", a["weeds_per_m2_of_ground_seen"], t["weeds_per_m2"], -0.32, 0.05),

@@ -274,6 +274,7 @@ void PlantRegistry::EndFrame() {
     if (r == nullptr || clipped) continue;
     double distance = 0.0;
     const double area = UnstretchedArea(blobs, &distance);
+    if (!(area > 0.0)) continue;  // all of it grown rim: nothing measured
     r->sizes.push_back({static_cast<float>(distance), static_cast<float>(area)});
     r->area_m2 = NearHalfMedian(r->sizes);
   }

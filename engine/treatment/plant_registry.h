@@ -11,12 +11,15 @@
 // A record's size (area_m2) is robust to the view: each frame that saw the
 // plant whole (no blob of it cut by the image border) measures the area of
 // all its blobs of that frame together, so a crop split into leaves counts
-// whole, and takes out the stretch of the oblique view: the camera looks
-// down at about 45°, so the plant's height (the flank under its near leaf
-// tips) lengthens its outline on the ground along the line of sight while
-// its extent across that line is kept; the area is scaled by the ratio of
-// the two spreads (second moments), which a plant of symmetric outline has
-// equal. The size is the median of those per-frame areas over the nearer
+// whole, each blob read on its core (the mask before the segmenter's hull
+// and soil growth, vision::Blob::core_area_px: growth adds a one-pixel ring
+// of soil that the smoothing lit and the shaded flank under the leaf tips,
+// neither in the leaf-tip outline), and takes out the stretch of the
+// oblique view: the camera looks down at about 45°, so the plant's height
+// (the flank under its near leaf tips) lengthens its outline on the ground
+// along the line of sight while its extent across that line is kept; the
+// area is scaled by the ratio of the two spreads (second moments), which
+// a plant of symmetric outline has equal. The size is the median of those per-frame areas over the nearer
 // half of the frames (the plant closest to the camera, seen most steeply,
 // where what the stretch leaves is least), not the largest (which picked
 // the most stretched view and a neighbour touching for a frame). A record standing in a predicted crop's place but much smaller

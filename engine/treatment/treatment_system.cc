@@ -398,8 +398,11 @@ void TreatmentSystem::StartFrame(int64_t utime, const tracking::GridTracker& tra
   }
 }
 
-// The blob's share of its record's size: its area and its pixels'
-// covariance on the plane of the leaf tips (outline_height_m). A ray's
+// The blob's share of its record's size: the area and the pixels'
+// covariance of its core (the mask before the segmenter's growth,
+// vision::Blob::core_area_px: growth adds a ring of soil the smoothing
+// lit and the shaded flank below the leaf tips, neither in the leaf-tip
+// outline) on the plane of the leaf tips (outline_height_m). A ray's
 // footprint on a horizontal plane grows with the plane's depth below the
 // camera, so lengths on it scale by (C − z) / (C − h) from the virtual
 // plane at h, C the camera's height.
@@ -407,8 +410,12 @@ SizeSample TreatmentSystem::SizeSampleOf(const vision::Blob& blob, const classif
   const double h = camera_.options().virtual_plane_height_m, c = camera_.options().height_m;
   const double z = options_.outline_height_m > 0.0 ? options_.outline_height_m : h;
   const double scale = (c - z) / (c - h), scale2 = scale * scale;
-  const Eigen::Matrix2d j = camera_.ImageToPlaneJacobian(blob.centroid_px, h);
-  return {d.area_m2 * scale2, blob.ground_m, scale2 * j * blob.covariance_px2 * j.transpose(), d.clipped};
+  const vision::BlobCore core = vision::CoreOf(blob);
+  const double area = blob.area_px > 0 ? d.area_m2 * core.area_px / blob.area_px : d.area_m2;
+  const std::optional<Eigen::Vector2d> centre = camera_.ImageToPlane(core.centroid_px, h);
+  const Eigen::Matrix2d j = camera_.ImageToPlaneJacobian(core.centroid_px, h);
+  return {area * scale2, centre ? *centre : blob.ground_m, scale2 * j * core.covariance_px2 * j.transpose(),
+          d.clipped};
 }
 
 // Pixels of plant (m, n): one footprint per plant and frame.

@@ -38,6 +38,26 @@ int NextBoundaryDirection(const cv::Mat& mask, cv::Point c, int back) {
   return -1;  // an isolated pixel
 }
 
+// Run r's pixels into the moments m: n, Σu, Σv, Σu², Σv², Σuv (pixel centres).
+void AddRun(const detail::RowRun& r, double* m) {
+  const double n = r.u_end - r.u_begin, vc = r.v + 0.5;
+  const double su = n * (r.u_begin + r.u_end) / 2.0;
+  m[0] += n;
+  m[1] += su;
+  m[2] += n * vc;
+  m[3] += SumOfSquares(r.u_begin + 0.5, n);
+  m[4] += n * vc * vc;
+  m[5] += su * vc;
+}
+
+// Centroid and second central moments from AddRun's sums (m[0] > 0).
+void MomentsToCentroid(const double* m, Eigen::Vector2d& centroid, Eigen::Matrix2d& covariance) {
+  centroid = {m[1] / m[0], m[2] / m[0]};
+  const double cu = centroid.x(), cv_ = centroid.y();
+  covariance << m[3] / m[0] - cu * cu, m[5] / m[0] - cu * cv_, m[5] / m[0] - cu * cv_,
+      m[4] / m[0] - cv_ * cv_;
+}
+
 }  // namespace
 
 OptionErrors BlobOptions::Validate() const {
@@ -49,6 +69,33 @@ OptionErrors BlobOptions::Validate() const {
 
 BlobExtractor::BlobExtractor(const BlobOptions& options) : options_(options) {
   ThrowIfInvalid("blob options", options_.Validate());
+}
+
+BlobCore CoreOf(const Blob& blob) {
+  if (blob.core_area_px < 0) return {static_cast<double>(blob.area_px), blob.centroid_px, blob.covariance_px2};
+  return {static_cast<double>(blob.core_area_px), blob.core_centroid_px, blob.core_covariance_px2};
+}
+
+void BlobExtractor::SetCores(std::span<const detail::RowRun> core) {
+  std::vector<double>& m = core_moments_;
+  m.assign(6 * static_cast<size_t>(count_), 0.0);
+  size_t j = 0;
+  for (const Run& c : core) {
+    while (j < runs_.size() && (runs_[j].v < c.v || (runs_[j].v == c.v && runs_[j].u_end <= c.u_begin))) ++j;
+    if (j == runs_.size()) break;
+    const Run& r = runs_[j];
+    if (r.v != c.v || r.u_begin > c.u_begin || r.u_end < c.u_end) continue;  // not inside: no blob of it
+    const int b = slot_blob_[static_cast<size_t>(run_blob_[static_cast<size_t>(parent_[j])])];
+    if (b >= 0) AddRun(c, &m[6 * static_cast<size_t>(b)]);
+  }
+  for (int i = 0; i < count_; ++i) {
+    Blob& blob = pool_[static_cast<size_t>(i)];
+    const double* s = &m[6 * static_cast<size_t>(i)];
+    blob.core_area_px = static_cast<int>(s[0]);
+    blob.core_centroid_px = blob.centroid_px;
+    blob.core_covariance_px2.setZero();
+    if (s[0] > 0.0) MomentsToCentroid(s, blob.core_centroid_px, blob.core_covariance_px2);
+  }
 }
 
 void BlobExtractor::FindRuns(const cv::Mat& mask) {
@@ -78,29 +125,21 @@ void BlobExtractor::Accumulate(const cv::Mat& mask) {
       first_run_.push_back(static_cast<int>(i));
     }
     const auto s = static_cast<size_t>(run_blob_[root]);
-    const double n = r.u_end - r.u_begin, vc = r.v + 0.5;
-    const double su = n * (r.u_begin + r.u_end) / 2.0;
-    double* m = &moments_[6 * s];
-    m[0] += n;
-    m[1] += su;
-    m[2] += n * vc;
-    m[3] += SumOfSquares(r.u_begin + 0.5, n);
-    m[4] += n * vc * vc;
-    m[5] += su * vc;
+    AddRun(r, &moments_[6 * s]);
     boxes_[s] |= cv::Rect(r.u_begin, r.v, r.u_end - r.u_begin, 1);
   }
   count_ = 0;
+  slot_blob_.assign(static_cast<size_t>(slots), -1);
   for (int s = 0; s < slots; ++s) {
     const double* m = &moments_[6 * static_cast<size_t>(s)];
     if (m[0] < options_.min_area_px) continue;
     if (pool_.size() <= static_cast<size_t>(count_)) pool_.emplace_back();
+    slot_blob_[static_cast<size_t>(s)] = count_;
     Blob& b = pool_[static_cast<size_t>(count_++)];
     b.id = count_;
     b.area_px = static_cast<int>(m[0]);
-    b.centroid_px = {m[1] / m[0], m[2] / m[0]};
-    const double cu = b.centroid_px.x(), cv_ = b.centroid_px.y();
-    b.covariance_px2 << m[3] / m[0] - cu * cu, m[5] / m[0] - cu * cv_,
-        m[5] / m[0] - cu * cv_, m[4] / m[0] - cv_ * cv_;
+    MomentsToCentroid(m, b.centroid_px, b.covariance_px2);
+    b.core_area_px = -1;
     b.bbox_px = boxes_[static_cast<size_t>(s)];
     b.on_ground = false;
     b.contour.clear();

@@ -42,7 +42,23 @@ struct Blob {
   bool on_ground = false;
   Eigen::Vector2d ground_m{0.0, 0.0};
   double ground_area_m2 = 0.0;  // area_px × the pixel's footprint at the centroid
+  // The part of it the mask held before the segmenter grew it (hull and
+  // soil growth, segmenter.h; BlobExtractor::SetCores): its pixel count, centroid and
+  // second central moments. Growth adds the shaded rim and a ring of soil
+  // lit by the smoothing; a plant's size is read on the core. core_area_px
+  // < 0: no growth known, the core is the blob itself (CoreOf).
+  int core_area_px = -1;
+  Eigen::Vector2d core_centroid_px{0.0, 0.0};
+  Eigen::Matrix2d core_covariance_px2 = Eigen::Matrix2d::Zero();
 };
+
+// A blob's core (above): its pixel count, centroid and covariance.
+struct BlobCore {
+  double area_px = 0.0;
+  Eigen::Vector2d centroid_px{0.0, 0.0};
+  Eigen::Matrix2d covariance_px2 = Eigen::Matrix2d::Zero();
+};
+BlobCore CoreOf(const Blob& blob);
 
 class BlobExtractor {
  public:
@@ -62,6 +78,13 @@ class BlobExtractor {
                                         std::span<const int> parent,
                                         const geometry::CameraModel* camera = nullptr);
 
+  // The last extraction's runs (raster order).
+  std::span<const detail::RowRun> runs() const { return runs_; }
+  // Sets every blob's core (Blob::core_area_px...) from `core`, the runs of
+  // the mask before growth in raster order, each inside a run of the last
+  // extraction's mask (growth only adds pixels).
+  void SetCores(std::span<const detail::RowRun> core);
+
   const BlobOptions& options() const { return options_; }
 
  private:
@@ -78,6 +101,8 @@ class BlobExtractor {
   std::vector<double> moments_;   // per blob: n, Σu, Σv, Σu², Σv², Σuv (6 each)
   std::vector<cv::Rect> boxes_;
   std::vector<int> first_run_;
+  std::vector<int> slot_blob_;    // per blob slot: its index in pool_, -1 when dropped
+  std::vector<double> core_moments_;  // SetCores' sums, per blob
   std::vector<Blob> pool_;        // blob storage kept across frames
   int count_ = 0;
 };

@@ -117,6 +117,38 @@ TEST(Blobs, ExtractLabelledEqualsExtractOnTheSameMask) {
   EXPECT_ANY_THROW(traced.ExtractLabelled(grower.mask_runs(), grower.mask_parent()));
 }
 
+// A blob's core is the part of it an earlier mask held: two rectangles
+// joined by grown pixels make one blob whose core is both rectangles.
+TEST(Blobs, CoresAreThePixelsOfTheMaskBeforeGrowth) {
+  cv::Mat core(20, 30, CV_8UC1, cv::Scalar(0));
+  core(cv::Rect(2, 3, 4, 5)).setTo(255);   // 20 px, centre (4, 5.5)
+  core(cv::Rect(10, 3, 6, 5)).setTo(255);  // 30 px, centre (13, 5.5)
+  cv::Mat grown = core.clone();
+  grown(cv::Rect(1, 2, 16, 7)).setTo(255);  // a ring and the bridge: one blob
+  grown(cv::Rect(22, 12, 3, 3)).setTo(255);  // grown alone: no core
+  BlobExtractor before, after;
+  before.Extract(core);
+  const auto blobs = after.Extract(grown);
+  ASSERT_EQ(blobs.size(), 2u);
+  EXPECT_EQ(CoreOf(blobs[0]).area_px, blobs[0].area_px);  // no cores set: the blob itself
+  after.SetCores(before.runs());
+  EXPECT_EQ(blobs[0].area_px, 16 * 7);
+  EXPECT_EQ(blobs[0].core_area_px, 50);
+  const BlobCore c = CoreOf(blobs[0]);
+  EXPECT_NEAR(c.centroid_px.x(), (20.0 * 4.0 + 30.0 * 13.0) / 50.0, 1e-12);
+  EXPECT_NEAR(c.centroid_px.y(), 5.5, 1e-12);
+  // Rows 3..7 (variance (25 − 1)/12); along u the two rectangles' own
+  // variances plus their centres' spread about the mean.
+  const double mu = c.centroid_px.x();
+  const double var_u = (20.0 * ((16.0 - 1.0) / 12.0 + (4.0 - mu) * (4.0 - mu)) +
+                        30.0 * ((36.0 - 1.0) / 12.0 + (13.0 - mu) * (13.0 - mu))) / 50.0;
+  EXPECT_NEAR(c.covariance_px2(0, 0), var_u, 1e-9);
+  EXPECT_NEAR(c.covariance_px2(1, 1), 2.0, 1e-9);
+  EXPECT_NEAR(c.covariance_px2(0, 1), 0.0, 1e-9);
+  EXPECT_EQ(blobs[1].core_area_px, 0);
+  EXPECT_EQ(CoreOf(blobs[1]).area_px, 0.0);
+}
+
 TEST(Blobs, ContourOfASquareAndItsFreemanCode) {
   cv::Mat mask(8, 8, CV_8UC1, cv::Scalar(0));
   mask(cv::Rect(2, 2, 3, 3)).setTo(255);

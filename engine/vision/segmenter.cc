@@ -204,6 +204,7 @@ const Segmentation& Segmenter::Process(const cv::Mat& image,
     }
   }
   result_.blobs = extract(blobs_);
+  if (grows) blobs_.SetCores(track_blobs_.runs());  // what the mask held before growth
   if (!grows) result_.track_blobs = result_.blobs;
   return result_;
 }

@@ -80,7 +80,7 @@ struct Segmentation {
   cv::Mat mask;         // CV_8UC1, 255 plant, 0 soil
   double threshold_at_top = 0.0;     // grey-level threshold used at the top row
   double threshold_at_bottom = 0.0;  // ... and at the bottom row (differ for kAdaptive)
-  std::span<const Blob> blobs;
+  std::span<const Blob> blobs;  // with their cores (Blob::core_area_px) when grown
   // The blobs before hull and soil growth (SegmenterOptions::hull_gain,
   // soil_growth; the same as `blobs` without them): what the grid tracker
   // measures: grown blobs of touching plants (preset A) pull the tracker's

@@ -179,6 +179,18 @@ TEST(Segmenter, SoilGrowthOnlyAddsAndKeepsTheTrackersBlobs) {
   for (size_t i = 0; i < a.track_blobs.size(); ++i) {
     EXPECT_EQ(a.track_blobs[i].area_px, b.track_blobs[i].area_px);
   }
+  // Each grown blob's core is what the mask held before growth inside it:
+  // together every pixel of the trackers' blobs, none of the growth.
+  int cores = 0;
+  for (const Blob& blob : b.blobs) {
+    EXPECT_GE(blob.core_area_px, 0);
+    EXPECT_LE(blob.core_area_px, blob.area_px);
+    cores += blob.core_area_px;
+  }
+  int before = 0;
+  for (const Blob& blob : b.track_blobs) before += blob.area_px;
+  EXPECT_EQ(cores, before);
+  EXPECT_LT(cores, cv::countNonZero(b.mask) - gained / 2);
 }
 
 }  // namespace
