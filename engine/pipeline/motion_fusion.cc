@@ -50,7 +50,8 @@ void PersistentDisagreement::Add(int64_t camera_utime, const PlanarSpeed& wheels
                                  const PlanarSpeed& camera) {
   if (camera_utime == last_utime_) return;
   const double d = wheels.speed_m_s - camera.speed_m_s;
-  const double var = wheels.speed_sd_m_s * wheels.speed_sd_m_s + camera.speed_sd_m_s * camera.speed_sd_m_s;
+  const double var = wheels.speed_sd_m_s * wheels.speed_sd_m_s +
+                     camera.speed_sd_m_s * camera.speed_sd_m_s;
   if (!std::isfinite(d) || !(var > 0.0)) return;
   last_utime_ = camera_utime;
   difference_[next_] = d;

@@ -19,11 +19,12 @@
 // (the flank under its near leaf tips) lengthens its outline on the ground
 // along the line of sight while its extent across that line is kept; the
 // area is scaled by the ratio of the two spreads (second moments), which
-// a plant of symmetric outline has equal. The size is the median of those per-frame areas over the nearer
-// half of the frames (the plant closest to the camera, seen most steeply,
-// where what the stretch leaves is least), not the largest (which picked
-// the most stretched view and a neighbour touching for a frame). A record standing in a predicted crop's place but much smaller
-// than the crops around it (below (1 − 3 s)² of their median size, s the
+// a plant of symmetric outline has equal. The size is the median of those
+// per-frame areas over the nearer half of the frames (the plant closest to
+// the camera, seen most steeply, where what the stretch leaves is least),
+// not the largest (which picked the most stretched view and a neighbour
+// touching for a frame). A record standing in a predicted crop's place but
+// much smaller than the crops around it (below (1 − 3 s)² of their median size, s the
 // crop profile's spread of the leaf-tip radius) is a weed where a crop is
 // missing, not that crop: it is `undersized` and not a crop().
 //
