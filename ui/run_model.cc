@@ -1,6 +1,8 @@
 #include "ui/run_model.h"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <sstream>
 
@@ -94,6 +96,10 @@ void RunModel::Observe(const std::string& channel, bool applied, const tm::Telem
   if (channel == kThumbnail) thumbnail_ = s.thumbnail;
   if (channel == kOdometry && s.odometry) {
     distance_m_ = std::max(distance_m_, s.odometry->distance_m);
+    if (odometry_history_.empty() || s.odometry->utime > odometry_history_.back().first) {
+      odometry_history_.emplace_back(s.odometry->utime, distance_m_);
+      if (odometry_history_.size() > kOdometryHistory) odometry_history_.pop_front();
+    }
     speed_m_s_ = 0.5 * (s.odometry->left_m_s + s.odometry->right_m_s);
   }
   if (channel == kNozzles && s.nozzles) {
@@ -102,10 +108,24 @@ void RunModel::Observe(const std::string& channel, bool applied, const tm::Telem
   }
 }
 
+double RunModel::DistanceAt(int64_t utime) const {
+  if (utime <= 0 || odometry_history_.empty() || utime >= odometry_history_.back().first) {
+    return distance_m_;
+  }
+  const auto after = std::lower_bound(
+      odometry_history_.begin(), odometry_history_.end(), utime,
+      [](const std::pair<int64_t, double>& h, int64_t t) { return h.first < t; });
+  if (after == odometry_history_.begin()) return after->second;
+  const auto before = std::prev(after);
+  const double f = static_cast<double>(utime - before->first) /
+                   static_cast<double>(after->first - before->first);
+  return before->second + f * (after->second - before->second);
+}
+
 void RunModel::ObserveGrid(const tm::GridEstimate& g, std::vector<TraceSample>& trace) {
   TraceSample t;
   t.utime = g.utime;
-  t.distance_m = distance_m_;
+  t.distance_m = DistanceAt(g.utime);
   t.offset_m = g.state.offset_m;
   t.offset_sigma_m = std::sqrt(std::max(0.0, g.covariance(0, 0)));
   t.bearing_rad = g.state.bearing_rad;

@@ -7,6 +7,7 @@
 // No VTK here: the scene pieces read this.
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -140,6 +141,9 @@ class RunModel {
 
  private:
   void ObserveGrid(const telemetry::GridEstimate& grid, std::vector<TraceSample>& trace);
+  // The distance driven at `utime` from the odometry heard (interpolated),
+  // the newest when `utime` is at or past it or unknown (0).
+  double DistanceAt(int64_t utime) const;
   void ObservePlants(const telemetry::TelemetrySnapshot& state);
   void ObserveTiles(const telemetry::TelemetrySnapshot& state);
   void NoteMapFront(const telemetry::MapTileDelta& tile);
@@ -172,6 +176,12 @@ class RunModel {
   std::map<std::string, telemetry::ChannelStats> channels_;
   int64_t unknown_messages_ = 0;
   double distance_m_ = 0.0;
+  // The last odometry (utime, distance): a grid estimate arrives after its
+  // frame was processed (and over a live link after the network's delay),
+  // the truth at the capture; each is drawn at the distance of its own
+  // time, or the two traces slide apart by the speed times the delay.
+  static constexpr size_t kOdometryHistory = 4096;  // 80 s at 50 Hz
+  std::deque<std::pair<int64_t, double>> odometry_history_;
   double speed_m_s_ = 0.0;
   int64_t first_boot_utime_ = 0;
   int64_t last_message_utime_ = 0;

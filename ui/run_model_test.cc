@@ -80,6 +80,34 @@ TEST(RunModel, TraceCarriesOffsetSigmaAndDistance) {
   EXPECT_NEAR(model.trace()[0].bearing_sigma_rad, 0.01, 1e-12);
 }
 
+// A grid estimate arrives after its frame was processed, and over a live
+// link after the network's delay: drawn at the distance of its arrival,
+// the tracker's trace would run ahead of the simulator's truth (published
+// at the capture) by the speed times that delay. Each is drawn at the
+// distance of its own time (here an estimate 16 s late, 11.2 m).
+TEST(RunModel, ATraceSampleIsAtTheDistanceOfItsCaptureNotOfItsArrival) {
+  tm::Subscriber sub;
+  RunModel model;
+  model.Follow(sub);
+  // Odometry every 20 ms at 0.7 m/s from 2,600 m for 20 s.
+  for (int i = 0; i <= 1000; ++i) {
+    plantscale_odometry_t odo{};
+    odo.utime = 1'000'000 + 20'000 * i;
+    odo.distance_m = 2600.0 + 0.7 * 0.02 * i;
+    odo.valid = 1;
+    const tm::Bytes o = tm::Encode(odo);
+    sub.Feed(tm::channels::kOdometry, o.data(), o.size(), odo.utime);
+  }
+  // The estimate of a frame captured at 5.01 s (2,602.807 m) arrives at the end.
+  tm::GridEstimate g;
+  g.utime = 5'010'000;
+  const tm::Bytes b = tm::Encode(tm::ToLcm(g));
+  sub.Feed(tm::channels::kGrid, b.data(), b.size(), 21'000'000);
+  ASSERT_EQ(model.trace().size(), 1u);
+  EXPECT_NEAR(model.distance_m(), 2614.0, 1e-9);
+  EXPECT_NEAR(model.trace()[0].distance_m, 2600.0 + 0.7 * 4.01, 1e-6);
+}
+
 TEST(RunModel, NoMessagesIsSaid) {
   RunModel model;
   EXPECT_EQ(model.Link(123).level, LinkLevel::kNoMessages);
