@@ -13,10 +13,14 @@
 #include <vtkPen.h>
 #include <vtkPlot.h>
 #include <vtkPlotArea.h>
+#include <vtkStringArray.h>
 #include <vtkTextProperty.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numbers>
+#include <sstream>
 #include <string>
 
 namespace plantscale::ui {
@@ -136,7 +140,7 @@ void OffsetTrace::Rasterise() {
 
 // Rows of `trace` (decimated to max_points, limited to window_m) in display
 // units: offset mm, bearing degrees, bands at ±band_sigmas σ.
-void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) const {
+size_t OffsetTrace::WindowStart(const std::vector<TraceSample>& trace) const {
   size_t first = 0;
   if (params_.window_m > 0.0 && !trace.empty()) {
     while (first < trace.size() &&
@@ -144,6 +148,11 @@ void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) c
       ++first;
     }
   }
+  return first;
+}
+
+void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) const {
+  const size_t first = WindowStart(trace);
   const size_t n = trace.size() - first;
   const size_t step = std::max<size_t>(1, n / static_cast<size_t>(params_.max_points));
   const double k = params_.band_sigmas, deg = 180.0 / std::numbers::pi;
@@ -151,7 +160,7 @@ void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) c
   vtkIdType row = 0;
   for (size_t i = first; i < trace.size(); i += step, ++row) {
     const TraceSample& t = trace[i];
-    const double values[] = {t.distance_m,
+    const double values[] = {t.distance_m - origin_m_,
                              1e3 * t.offset_m,
                              1e3 * (t.offset_m - k * t.offset_sigma_m),
                              1e3 * (t.offset_m + k * t.offset_sigma_m),
@@ -163,12 +172,42 @@ void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) c
   table->Modified();
 }
 
+// Ticks at a round step (1, 2 or 5 × 10^k m) giving at most 8 over the
+// span, at their place less the origin, labelled with the distance itself.
+void OffsetTrace::SetDistanceTicks(double from_m, double to_m) {
+  const double span = std::max(to_m - from_m, 1e-3);
+  double step = std::pow(10.0, std::floor(std::log10(span / 8.0)));
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    if (span / (m * step) <= 8.0) {
+      step *= m;
+      break;
+    }
+  }
+  vtkNew<vtkDoubleArray> positions;
+  vtkNew<vtkStringArray> labels;
+  const int decimals = step < 1.0 ? 1 : 0;
+  for (double d = std::ceil(from_m / step) * step; d <= to_m + 1e-9; d += step) {
+    positions->InsertNextValue(d - origin_m_);
+    std::ostringstream label;
+    label << std::fixed << std::setprecision(decimals) << d;
+    labels->InsertNextValue(label.str());
+  }
+  chart_->GetAxis(vtkAxis::BOTTOM)->SetCustomTickPositions(positions, labels);
+}
+
 void OffsetTrace::Update(const RunModel& model) {
   // Without a tracker the simulator's truth stands in for the estimate.
   const bool tracker = !model.trace().empty();
   const std::vector<TraceSample>& estimate = tracker ? model.trace() : model.truth_trace();
   if (estimate.size() != seen_) {
     seen_ = estimate.size();
+    if (!estimate.empty()) {
+      const double from = estimate[WindowStart(estimate)].distance_m;
+      const double origin = 10.0 * std::floor(from / 10.0);
+      if (origin != origin_m_) seen_truth_ = static_cast<size_t>(-1);  // refilled below
+      origin_m_ = origin;
+      SetDistanceTicks(from, estimate.back().distance_m);
+    }
     Fill(estimate_, estimate);
     chart_->SetTitle(tracker ? "Row offset and bearing (tracker)"
                              : "Row offset and bearing (simulator truth; no tracker in log)");

@@ -41,12 +41,21 @@ class OffsetTrace {
   void Build();
   void Rasterise();
   void Fill(vtkTable* table, const std::vector<TraceSample>& trace) const;
+  size_t WindowStart(const std::vector<TraceSample>& trace) const;
+  // The distance axis's ticks, labelled in metres along the bed, over the
+  // drawn span [from_m, to_m].
+  void SetDistanceTicks(double from_m, double to_m);
 
   OffsetTraceParams params_;
   vtkNew<vtkContextActor> actor_;
   vtkNew<vtkChartXY> chart_;
   vtkNew<vtkTable> estimate_;
   vtkNew<vtkTable> truth_;
+  // Distances are drawn less this origin (a multiple of 10 m at the
+  // window's start) and labelled whole: the chart's area plots (the ±2σ
+  // bands) and its lines took kilometre-scale distances apart, the bands
+  // drawn metres behind their lines at 2.5 km (VTK 9.1's shift and scale).
+  double origin_m_ = 0.0;
   size_t seen_ = static_cast<size_t>(-1);
   size_t seen_truth_ = static_cast<size_t>(-1);
   size_t drawn_ = static_cast<size_t>(-1);
