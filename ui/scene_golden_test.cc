@@ -3,6 +3,10 @@
 // the camera model projects them, a red HUD on a lost link.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
 #include "engine/geometry/grid_model.h"
 #include "ui/camera_view.h"
 #include "ui/canvas.h"
@@ -15,6 +19,9 @@
 #include "ui/map_layer.h"
 #include "ui/station_timeline.h"
 #include "ui/synthetic_run.h"
+#include "telemetry/channels.h"
+#include "telemetry/codec.h"
+#include "telemetry/convert.h"
 
 #include <vtkPropCollection.h>
 #include <vtkNew.h>
@@ -119,6 +126,58 @@ TEST(SceneGolden, OffsetTraceChart) {
   trace.AddTo(canvas.AddRenderer(0, 0, 1, 1, {1, 1, 1}));
   trace.Update(run.model());
   EXPECT_TRUE(MatchesGolden(canvas.Render(), "offset_trace"));
+}
+
+// At 2.5 km along the bed the chart drew the ±2σ bands metres behind their
+// lines (VTK's area and line plots took kilometre-scale distances apart):
+// a sine offset of ±40 mm with a ±6 mm band over 2,450–2,470 m, the line
+// must lie within its band in the columns where both are drawn.
+TEST(SceneGolden, OffsetTraceLineWithinItsBandAtKilometres) {
+  PLANTSCALE_REQUIRE_DISPLAY();
+  namespace tm = telemetry;
+  tm::Subscriber sub;
+  RunModel model;
+  model.Follow(sub);
+  for (int i = 0; i <= 400; ++i) {
+    const double d = 2450.0 + 0.05 * i;
+    const int64_t utime = 1'000'000 + 80'000 * static_cast<int64_t>(i);
+    plantscale_odometry_t odo{};
+    odo.utime = utime;
+    odo.distance_m = d;
+    odo.valid = 1;
+    const tm::Bytes o = tm::Encode(odo);
+    sub.Feed(tm::channels::kOdometry, o.data(), o.size(), utime);
+    tm::GridEstimate g;
+    g.utime = utime;
+    g.mode = tm::FilterMode::kTracking;
+    g.state.offset_m = 0.04 * std::sin(2.0 * std::numbers::pi * d / 8.0);
+    g.covariance(0, 0) = 0.003 * 0.003;
+    g.state.bearing_rad = 0.02 * std::cos(2.0 * std::numbers::pi * d / 5.0);
+    g.covariance(2, 2) = 0.001 * 0.001;
+    const tm::Bytes b = tm::Encode(tm::ToLcm(g));
+    sub.Feed(tm::channels::kGrid, b.data(), b.size(), utime);
+  }
+  Canvas canvas(400, 300);
+  OffsetTrace trace;
+  trace.AddTo(canvas.AddRenderer(0, 0, 1, 1, {1, 1, 1}));
+  trace.Update(model);
+  const cv::Mat image = canvas.Render();  // BGR
+  int both = 0, within = 0;
+  for (int x = 45; x < 250; ++x) {
+    int line = -1, band_lo = image.rows, band_hi = -1;
+    for (int y = 0; y < image.rows; ++y) {
+      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+      const bool solid = std::abs(p[2] - 30) < 25 && std::abs(p[1] - 110) < 25 && p[0] > 190;
+      const bool light = p[2] > 150 && p[2] < 235 && p[1] > 180 && p[0] > 235;
+      if (solid && line < 0) line = y;
+      if (light) band_lo = std::min(band_lo, y), band_hi = std::max(band_hi, y);
+    }
+    if (line < 0 || band_hi < 0) continue;
+    ++both;
+    if (line >= band_lo - 2 && line <= band_hi + 2) ++within;
+  }
+  ASSERT_GT(both, 100);
+  EXPECT_GT(within, 0.9 * both) << within << " of " << both << " columns";
 }
 
 TEST(SceneGolden, CameraViewGridAtProjectedColumns) {
