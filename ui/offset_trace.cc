@@ -140,15 +140,15 @@ void OffsetTrace::Rasterise() {
 
 // Rows of `trace` (decimated to max_points, limited to window_m) in display
 // units: offset mm, bearing degrees, bands at ±band_sigmas σ.
+// The first sample within window_m of the newest (distances never fall:
+// RunModel keeps the largest heard).
 size_t OffsetTrace::WindowStart(const std::vector<TraceSample>& trace) const {
-  size_t first = 0;
-  if (params_.window_m > 0.0 && !trace.empty()) {
-    while (first < trace.size() &&
-           trace[first].distance_m < trace.back().distance_m - params_.window_m) {
-      ++first;
-    }
-  }
-  return first;
+  if (params_.window_m <= 0.0 || trace.empty()) return 0;
+  const double from = trace.back().distance_m - params_.window_m;
+  const auto first = std::lower_bound(
+      trace.begin(), trace.end(), from,
+      [](const TraceSample& t, double d) { return t.distance_m < d; });
+  return static_cast<size_t>(first - trace.begin());
 }
 
 void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) const {
