@@ -20,7 +20,14 @@ leaf-tip disc) or clear; and of the unmatched, how many have an
 unconfirmed weed record near. Weed records with no true weed within
 max(5 cm, ...) are counted as false, split by whether they stand on a
 crop's canopy.
-usage: report_truth_breakdown.py --truth DIR/truth/plants.csv --summary summary.json --plants plants.csv [--records dump.csv]
+
+The bed frame is registered on the field by one shift along the row, but
+the grid's plant spacing drifts against the field's over a run (crop
+records ±4 cm off their crops on a 40 m run), which this matching would
+count as lost weeds and false records. `--drift` takes it out: each record's
+y is moved by the median offset of the crop records from their true crops
+(nearest within 8 cm) in its 2 m of the run.
+usage: report_truth_breakdown.py --truth DIR/truth/plants.csv --summary summary.json --plants plants.csv [--records dump.csv] [--drift]
 """
 import argparse
 import csv
@@ -51,12 +58,33 @@ def near(points, x, y, reach):
     return [p for p in points if abs(p[1] - y) <= reach and math.hypot(p[0] - x, p[1] - y) <= reach]
 
 
+def drift_corrected(recs, crops, bin_m=2.0, reach_m=0.08):
+    offsets = {}
+    for x, y, c, k, r in recs:
+        if not k:
+            continue
+        near_crops = near(crops, x, y, reach_m)
+        if near_crops:
+            cx, cy, _ = min(near_crops, key=lambda p: math.hypot(p[0] - x, p[1] - y))
+            offsets.setdefault(math.floor(y / bin_m), []).append(y - cy)
+    med = {b: sorted(v)[len(v) // 2] for b, v in offsets.items()}
+
+    def shift(y):
+        b = math.floor(y / bin_m)
+        for d in (0, -1, 1, -2, 2):
+            if b + d in med:
+                return med[b + d]
+        return 0.0
+    return [(x, y - shift(y), c, k, r) for x, y, c, k, r in recs]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--truth", required=True)
     ap.add_argument("--summary", required=True)
     ap.add_argument("--plants", required=True)
     ap.add_argument("--records")
+    ap.add_argument("--drift", action="store_true")
     a = ap.parse_args()
     j = json.load(open(a.summary))
     ag = j["agronomy"]
@@ -74,6 +102,8 @@ def main():
         for r in csv.DictReader(f):
             published.add(int(r["plant_id"]))
             recs.append((float(r["field_x_m"]) + dx, float(r["field_y_m"]) + dy, 1, int(r["class"] == "crop"), r))
+    if a.drift:
+        recs = drift_corrected(recs, crops)
     crop_r = sorted(float(r["radius_m"]) for x, y, c, k, r in recs if k)
     big = 0.55 * crop_r[len(crop_r) // 2] if crop_r else math.inf  # (1 - 3 * 0.15) of the crops' median radius
     for r in load_records(a.records) if a.records else []:
