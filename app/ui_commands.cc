@@ -8,12 +8,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <iterator>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -146,7 +148,7 @@ std::optional<ui::AgronomyTruth> SimTruth(const std::string& run_config, const u
          << std::setprecision(2) << dy << " m";
   t.source = source.str();
   std::set<std::pair<int, int>> present;  // row, line
-  std::vector<double> radii;
+  std::vector<double> radii, weed_radii;
   const double x_lo = (first_row - 0.5) * stand.row_spacing_m, x_hi = (last_row + 0.5) * stand.row_spacing_m;
   for (const sim::Plant& p : field.plants()) {
     const double x = p.position_m.x(), y = p.position_m.y();
@@ -157,6 +159,10 @@ std::optional<ui::AgronomyTruth> SimTruth(const std::string& run_config, const u
       present.insert({p.row, p.line});
     } else if (x >= x_lo && x <= x_hi && y >= stand.y0_m + dy && y <= stand.y1_m + dy) {
       ++t.weeds;
+      // The outline r(θ) = R (1 − d + d |cos(kθ/2)|) (sim/plant_shape.cc)
+      // encloses π R² ((1 − d)² + (4/π)(1 − d) d + d²/2).
+      const double d = p.lobes > 0 ? p.lobe_depth : 0.0;
+      weed_radii.push_back(p.radius_m * std::sqrt((1 - d) * (1 - d) + 4 / std::numbers::pi * (1 - d) * d + d * d / 2));
     }
   }
   const std::vector<double>& lines = field.line_y_m();
@@ -170,11 +176,13 @@ std::optional<ui::AgronomyTruth> SimTruth(const std::string& run_config, const u
       in_gap = missing;
     }
   }
-  std::sort(radii.begin(), radii.end());
-  if (!radii.empty()) {
-    const size_t n = radii.size();
-    t.median_radius_m = n % 2 ? radii[n / 2] : 0.5 * (radii[n / 2 - 1] + radii[n / 2]);
-  }
+  const auto median = [](std::vector<double>& v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  };
+  t.median_radius_m = median(radii);
+  t.median_weed_radius_m = median(weed_radii);
   const double area = (x_hi - x_lo) * (stand.y1_m - stand.y0_m);
   t.weeds_per_m2 = area > 0.0 ? t.weeds / area : 0.0;
   return t;

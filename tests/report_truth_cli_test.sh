@@ -15,7 +15,8 @@
 # blobs, 30 % on the largest blob), and a record far under the crops' size in a crop's place is a
 # weed in a gap (missing plants were 15 % low; at 40 m one plant is 17 %);
 # about a third of the weeds still have no record (under and against the
-# crops' canopy, or never confirmed). Those three are held to the bounds
+# crops' canopy, or never confirmed). A weed's radius is that of the disc of
+# its outline's area on both sides. Those four are held to the bounds
 # they meet now (stated below, so that the old records' figures fail), the
 # crop count to 5 %. Needs no display (the report starts xvfb-run itself
 # when it can, and writes everything but the camera views without one).
@@ -42,6 +43,10 @@ checks = [
     ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.35),
     ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.03),
     ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.42, 0.05),
+    # a weed's record is its whole grown blob at the weeds' plane (session
+    # 30; on the core it was 25-39 % small); the weeds with a record are the
+    # larger ones (seeds 1000-1002: +4..+9 %)
+    ("median weed radius (m)", a["weed_radius"]["median_m"], t["median_weed_radius_m"], -0.10, 0.15),
     # over the ground the crops' canopy leaves in view (session 27: -24.6 %)
     ("weeds per m2 of the ground seen", a["weeds_per_m2_of_ground_seen"], t["weeds_per_m2"], -0.32, 0.05),
 ]

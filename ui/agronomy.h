@@ -145,6 +145,9 @@ struct AgronomyTruth {
   double median_radius_m = 0.0;
   double weeds_per_m2 = 0.0;
   int weeds = 0;
+  // Median radius of the disc with a weed's outline area (the report's weed
+  // radius is that of its record's area), weeds of the stand's rows.
+  double median_weed_radius_m = 0.0;
 };
 
 // CSV: one line per row and one for the whole run (row = "all").

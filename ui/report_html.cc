@@ -110,6 +110,8 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
     line("missing plants", a.missing, truth->missing, 0);
     line("gaps", a.gaps, truth->gaps, 0);
     line("median crop leaf-tip radius, cm", 100 * a.crop_size.median_m, 100 * truth->median_radius_m, 2);
+    line("median weed radius (disc of its area), cm", 100 * a.weed_size.median_m, 100 * truth->median_weed_radius_m,
+         2);
     line("weeds per m²", a.weeds_per_m2, truth->weeds_per_m2, 2);
     line("weeds per m² of the ground seen, as the band's", a.weeds_per_m2_seen, truth->weeds_per_m2, 2);
     out << "</table>\n";
@@ -285,7 +287,8 @@ std::string ReportJson(const std::string& log_name, const RunSummary& s, const A
                                       {"gaps", truth->gaps},
                                       {"median_radius_m", truth->median_radius_m},
                                       {"weeds", truth->weeds},
-                                      {"weeds_per_m2", truth->weeds_per_m2}}
+                                      {"weeds_per_m2", truth->weeds_per_m2},
+                                      {"median_weed_radius_m", truth->median_weed_radius_m}}
                      : nlohmann::json();
   j["problems"] = problems;
   return j.dump(2) + "\n";

@@ -11,10 +11,12 @@
 // A record's size (area_m2) is robust to the view: each frame that saw the
 // plant whole (no blob of it cut by the image border) measures the area of
 // all its blobs of that frame together, so a crop split into leaves counts
-// whole, each blob read on its core (the mask before the segmenter's hull
-// and soil growth, vision::Blob::core_area_px: growth adds a one-pixel ring
-// of soil that the smoothing lit and the shaded flank under the leaf tips,
-// neither in the leaf-tip outline), and takes out the stretch of the
+// whole, each crop blob read on its core (the mask before the segmenter's
+// hull and soil growth, vision::Blob::core_area_px: growth adds a one-pixel
+// ring of soil that the smoothing lit and the shaded flank under the leaf
+// tips, neither in the leaf-tip outline) and each weed blob whole (a weed a
+// few pixels across keeps about a third of its area in the core of the
+// smoothed image's threshold; the growth gives it back), and takes out the stretch of the
 // oblique view: the camera looks down at about 45°, so the plant's height
 // (the flank under its near leaf tips) lengthens its outline on the ground
 // along the line of sight while its extent across that line is kept; the

@@ -406,11 +406,19 @@ void TreatmentSystem::StartFrame(int64_t utime, const tracking::GridTracker& tra
 // footprint on a horizontal plane grows with the plane's depth below the
 // camera, so lengths on it scale by (C − z) / (C − h) from the virtual
 // plane at h, C the camera's height.
+// A crop is read on its blob's core at the leaf tips' plane; a weed on the
+// whole grown blob at the weeds' plane (treatment_system.h, weed_height_m):
+// thresholding the σ = 2 smoothed image cuts a weed a few pixels across
+// down to about a third of its area, which the growth gives back.
 SizeSample TreatmentSystem::SizeSampleOf(const vision::Blob& blob, const classify::BlobDecision& d) const {
   const double h = camera_.options().virtual_plane_height_m, c = camera_.options().height_m;
-  const double z = options_.outline_height_m > 0.0 ? options_.outline_height_m : h;
+  const double z = !d.crop                         ? options_.weed_height_m
+                   : options_.outline_height_m > 0.0 ? options_.outline_height_m
+                                                     : h;
   const double scale = (c - z) / (c - h), scale2 = scale * scale;
-  const vision::BlobCore core = vision::CoreOf(blob);
+  const vision::BlobCore core =
+      d.crop ? vision::CoreOf(blob)
+             : vision::BlobCore{static_cast<double>(blob.area_px), blob.centroid_px, blob.covariance_px2};
   const double area = blob.area_px > 0 ? d.area_m2 * core.area_px / blob.area_px : d.area_m2;
   const std::optional<Eigen::Vector2d> centre = camera_.ImageToPlane(core.centroid_px, h);
   const Eigen::Matrix2d j = camera_.ImageToPlaneJacobian(core.centroid_px, h);

@@ -48,9 +48,10 @@ struct TreatmentOptions {
   // 3 m ahead of a camera at 1.5 m lands 20 cm beyond where it is, and
   // slides towards the camera as it nears, leaving a trail of records.
   double weed_height_m = 0.005;
-  // A plant's size (PlantRegistry) is its outline at the leaf tips, which
+  // A crop's size (PlantRegistry) is its outline at the leaf tips, which
   // stand at this height: its blobs' areas, measured on the crops' virtual
-  // plane, are taken to this plane. 0: left on the virtual plane.
+  // plane, are taken to this plane. 0: left on the virtual plane. A weed's
+  // is taken to weed_height_m.
   double outline_height_m = 0.0;
   // Crop blobs of one frame associated with the same predicted plant are
   // its leaves, cut apart by segmentation: they mark one footprint, their
