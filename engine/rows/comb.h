@@ -18,6 +18,19 @@ struct CombFit {
   double coherence = 0.0;  // |Σ w e^{−2πi x/period}| / Σ w: 1 when every weight sits on a tooth
 };
 
+// Σ w_b e^{i(a0 + b·da)} over the weights w_b, and Σ w_b.
+struct Phasor {
+  double re = 0.0, im = 0.0, mass = 0.0;
+};
+// The phasor advances by a fixed rotation per weight (std::complex's
+// product checks for NaN at every step), in four interleaved chains
+// (weights b … b + 3, each rotated by four weights' angle) held as two
+// pairs of two-lane vectors, so the steps do not wait on each other and
+// each pair is one vector instruction. Every lane does what a scalar loop
+// would: the sums are the same to the last bit on any vector width.
+Phasor PhasorSum(std::span<const double> w, double a0, double da);
+Phasor PhasorSum(std::span<const float> w, double a0, double da);
+
 // Phase coherence of a histogram (bin b centred at x0 + b·bin_width) with the
 // comb of one period.
 CombFit CombAt(std::span<const double> histogram, double x0, double bin_width, double period);
