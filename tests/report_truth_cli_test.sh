@@ -40,7 +40,9 @@ if t is None:
 # name, report, truth, lowest and highest (report - truth) / truth allowed
 checks = [
     ("crop plants", a["crop_plants"], t["crop_plants"], -0.05, 0.05),
-    ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.35),
+    # a crop-sized weed record in a gap's place is the crop recorded as a
+    # weed (session 30: seed 1 8 -> 7 against 6 true)
+    ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.20),
     ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.03),
     ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.42, 0.05),
     # a weed's record is its whole grown blob at the weeds' plane (session

@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 namespace plantscale::ui {
@@ -125,13 +126,6 @@ RowAgronomy RowStats(int n, const std::vector<const PlantRecord*>& v, const Agro
   std::vector<double> steps, row_radii;
   for (size_t i = 1; i < v.size(); ++i) steps.push_back(v[i]->plant.position_m.y() - v[i - 1]->plant.position_m.y());
   r.plant_spacing_m = Median(steps);
-  for (size_t i = 1; i < v.size() && r.plant_spacing_m > 0.0; ++i) {
-    const int missing = static_cast<int>(std::lround(steps[i - 1] / r.plant_spacing_m)) - 1;
-    if (missing <= 0) continue;
-    ++r.gaps;
-    r.missing += missing;
-    if (missing > r.longest_gap) r.longest_gap = missing, r.longest_gap_at_m = v[i - 1]->plant.position_m.y();
-  }
   // Plants per metre of row: the plants that would stand at one spacing
   // each over the stand, so a run of n plants covers n·l̄.
   const double row_m = r.stand_length_m + r.plant_spacing_m;
@@ -140,6 +134,69 @@ RowAgronomy RowStats(int n, const std::vector<const PlantRecord*>& v, const Agro
   radii.insert(radii.end(), row_radii.begin(), row_radii.end());
   r.crop_size = SizeStatsOf(row_radii, o.histogram_bin_m, o.histogram_bins);
   return r;
+}
+
+// The row's gaps: between two neighbours round(Δy / l̄) − 1 places, evenly
+// between them; a place where `filled(place)` holds (a crop recorded as a
+// weed) is not missing and splits its gap.
+template <class Filled>
+void CountGaps(RowAgronomy& r, const std::vector<const PlantRecord*>& v, Filled filled) {
+  for (size_t i = 1; i < v.size() && r.plant_spacing_m > 0.0; ++i) {
+    const Eigen::Vector2d& a = v[i - 1]->plant.position_m;
+    const Eigen::Vector2d& b = v[i]->plant.position_m;
+    const int places = static_cast<int>(std::lround((b.y() - a.y()) / r.plant_spacing_m)) - 1;
+    int run = 0;
+    double run_at = a.y();
+    for (int k = 1; k <= places + 1; ++k) {
+      const bool missing = k <= places && !filled(a + (b - a) * (static_cast<double>(k) / (places + 1)));
+      if (missing) {
+        if (run == 0) run_at = k == 1 ? a.y() : a.y() + (b.y() - a.y()) * (k - 1.0) / (places + 1);
+        ++run;
+        continue;
+      }
+      if (run == 0) continue;
+      ++r.gaps;
+      r.missing += run;
+      if (run > r.longest_gap) r.longest_gap = run, r.longest_gap_at_m = run_at;
+      run = 0;
+    }
+  }
+}
+
+// Every row's gaps (CountGaps), a place filled by a crop-sized weed record
+// within half the row's plant spacing of it (each record fills one place);
+// the records that filled one.
+std::set<const PlantRecord*> CountAllGaps(const RowsOfCrops& by_row, const std::vector<const PlantRecord*>& weeds,
+                                          const AgronomyOptions& o, AgronomySummary& a) {
+  const double crop_sized = o.far_view_fraction > 0.0 ? o.far_view_fraction * a.crop_size.median_m
+                                                      : std::numeric_limits<double>::infinity();
+  std::vector<const PlantRecord*> large;  // crop-sized weed records by y
+  for (const PlantRecord* w : weeds) {
+    if (std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi) >= crop_sized) large.push_back(w);
+  }
+  std::sort(large.begin(), large.end(), [](const PlantRecord* p, const PlantRecord* q) {
+    return p->plant.position_m.y() < q->plant.position_m.y();
+  });
+  std::set<const PlantRecord*> used;
+  size_t i = 0;
+  for (const auto& [n, v] : by_row) {
+    RowAgronomy& r = a.rows[i++];
+    const double reach = 0.5 * r.plant_spacing_m;
+    CountGaps(r, v, [&](const Eigen::Vector2d& place) {
+      auto it = std::lower_bound(large.begin(), large.end(), place.y() - reach,
+                                 [](const PlantRecord* p, double y) { return p->plant.position_m.y() < y; });
+      for (; it != large.end() && (*it)->plant.position_m.y() <= place.y() + reach; ++it) {
+        if ((*it)->plant.position_m.x() < place.x() - reach || (*it)->plant.position_m.x() > place.x() + reach) continue;
+        if ((place - (*it)->plant.position_m).norm() < reach && used.insert(*it).second) return true;
+      }
+      return false;
+    });
+    a.gaps += r.gaps;
+    a.missing += r.missing;
+    a.longest_gap = std::max(a.longest_gap, r.longest_gap);
+  }
+  a.crops_recorded_as_weeds = static_cast<int>(used.size());
+  return used;
 }
 
 // The heat map: rows × cells along, the crops counted in.
@@ -240,7 +297,8 @@ void AddWeedToCells(const PlantRecord& w, const std::map<int, size_t>& row_index
 // sizes, density (over the band and over the ground seen), and their rows'
 // and cells' shares; crop-sized records beside a crop counted apart.
 void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops& by_row, double x_lo,
-                double x_hi, const AgronomyOptions& o, AgronomySummary& a) {
+                double x_hi, const std::set<const PlantRecord*>& crops_as_weeds, const AgronomyOptions& o,
+                AgronomySummary& a) {
   const double rs = a.row_spacing_m;
   std::map<int, size_t> row_index;
   for (size_t i = 0; i < a.rows.size(); ++i) row_index[a.rows[i].row] = i;
@@ -254,6 +312,7 @@ void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops&
       ++a.far_views_of_crops;
       continue;
     }
+    if (crops_as_weeds.count(w)) continue;  // a crop in a gap's place (CountGaps)
     ++a.weeds;
     seen += !UnderACanopy(p, context, o.unseen_canopy_fraction);
     weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));
@@ -320,15 +379,13 @@ void AddPlantFigures(AgronomySummary& a, const std::map<int64_t, PlantRecord>& p
     RowAgronomy r = RowStats(n, v, o, all_radii);
     row_metres += r.stand_length_m + r.plant_spacing_m;
     a.crop += r.crop;
-    a.gaps += r.gaps;
-    a.missing += r.missing;
-    a.longest_gap = std::max(a.longest_gap, r.longest_gap);
     a.rows.push_back(std::move(r));
   }
   a.plants_per_m = row_metres > 0.0 ? a.crop / row_metres : 0.0;
   a.crop_size = SizeStatsOf(all_radii, o.histogram_bin_m, o.histogram_bins);
+  const std::set<const PlantRecord*> crops_as_weeds = CountAllGaps(by_row, weeds, o, a);
   FillCropCells(by_row, o, a);
-  CountWeeds(weeds, by_row, x_lo, x_hi, o, a);
+  CountWeeds(weeds, by_row, x_lo, x_hi, crops_as_weeds, o, a);
 }
 
 std::string AgronomyCsv(const AgronomySummary& a) {

@@ -26,6 +26,11 @@
 //    half a plant spacing of a crop record of its row is a far view of
 //    that crop, recorded before the grid associated it (the crop is
 //    recorded already): it is not a weed and is counted apart;
+//  - a crop-sized weed record in a gap, within half a plant spacing of a
+//    missing plant's place in its row, is that crop recorded as a weed
+//    (a large weed merged with it moved the blob's centroid out of every
+//    association region): the place is not missing, and the record is
+//    neither a weed nor a gap (`crops_recorded_as_weeds`);
 //  - weeds per m² of the ground seen: the weeds outside the crops' unseen
 //    ground over the band less that ground. A crop's canopy hides the
 //    ground under it from every view; it is taken as the disc of
@@ -105,6 +110,7 @@ struct AgronomySummary {
   int weeds = 0;
   double weeds_per_m2 = 0.0;
   int far_views_of_crops = 0;        // crop-sized weed records beside their crop (above), not in `weeds`
+  int crops_recorded_as_weeds = 0;   // crop-sized weed records in a gap's place (above), in neither
   double unseen_canopy_m2 = 0.0;     // ground under the crops that no view sees (above)
   double weeds_per_m2_seen = 0.0;    // weeds per m² of the ground seen (above)
   SizeStats weed_size;

@@ -76,9 +76,13 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
                                          std::to_string(a.rows.size()) + " rows at " + Fixed(100 * a.row_spacing_m, 1) +
                                          " cm (" + a.row_spacing_source + ")");
     Row(out, "crop plants", std::to_string(a.crop) + ", " + Fixed(a.plants_per_m, 2) + " per metre of row");
-    Row(out, "gaps (missing plants)", std::to_string(a.gaps) + " gaps, " + std::to_string(a.missing) +
-                                          " plants missing (" + Pct(a.missing, a.missing + a.crop) +
-                                          "), longest " + std::to_string(a.longest_gap) + " plants");
+    Row(out, "gaps (missing plants)",
+        std::to_string(a.gaps) + " gaps, " + std::to_string(a.missing) + " plants missing (" +
+            Pct(a.missing, a.missing + a.crop) + "), longest " + std::to_string(a.longest_gap) + " plants" +
+            (a.crops_recorded_as_weeds > 0
+                 ? "; " + std::to_string(a.crops_recorded_as_weeds) +
+                       " places in gaps hold a crop-sized weed record, taken as the crop recorded as a weed"
+                 : std::string()));
     Row(out, "crop leaf-tip radius", "median " + Fixed(100 * a.crop_size.median_m, 1) + " cm (quartiles " +
                                          Fixed(100 * a.crop_size.q1_m, 1) + " – " + Fixed(100 * a.crop_size.q3_m, 1) +
                                          " cm)");
@@ -274,6 +278,7 @@ std::string ReportJson(const std::string& log_name, const RunSummary& s, const A
                    {"weeds_per_m2_of_ground_seen", a.weeds_per_m2_seen},
                    {"unseen_canopy_area_m2", a.unseen_canopy_m2},
                    {"weed_records_far_views_of_crops", a.far_views_of_crops},
+                   {"weed_records_crops_in_gaps", a.crops_recorded_as_weeds},
                    {"weed_radius", SizeJson(a.weed_size)},
                    {"area_treated_m2", opt(a.area_treated_m2)},
                    {"product_l", opt(a.product_l)},

@@ -211,6 +211,52 @@ TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
   EXPECT_EQ(all.weeds, 7);
 }
 
+TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
+  // One row, a crop of leaf-tip radius 0.1 m every 0.5 m over 10 m, with
+  // three gaps of one plant (y = 2, 5, 8) and one of two (3.5 and 4). In
+  // the gap at 2 a crop-sized weed record stands 4 cm off
+  // the place (the crop recorded as a weed); in the gap at 5 a small weed
+  // (a weed in a gap); in the gap at 3.5–4 a crop-sized record at 4: the
+  // gap is one plant shorter, at 3.5 alone.
+  std::map<int64_t, PlantRecord> plants;
+  const auto add = [&](telemetry::PlantKind kind, double x, double y, double area_m2) {
+    PlantRecord& r = plants[static_cast<int64_t>(plants.size())];
+    r.plant.kind = kind;
+    r.plant.position_m = {x, y};
+    r.plant.size_m2 = area_m2;
+  };
+  const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1, big_m2 = M_PI * 0.08 * 0.08, small_m2 = M_PI * 0.02 * 0.02;
+  for (int i = 0; i <= 20; ++i) {
+    const double y = 0.5 * i;
+    if (y == 2.0 || y == 3.5 || y == 4.0 || y == 5.0 || y == 8.0) continue;
+    add(telemetry::PlantKind::kCrop, 0.0, y, crop_m2);
+  }
+  add(telemetry::PlantKind::kWeed, 0.03, 2.03, big_m2);
+  add(telemetry::PlantKind::kWeed, 0.0, 5.0, small_m2);
+  add(telemetry::PlantKind::kWeed, -0.02, 4.04, big_m2);
+  AgronomySummary a;
+  a.row_spacing_m = 0.5;
+  AddPlantFigures(a, plants);
+  ASSERT_EQ(a.rows.size(), 1u);
+  EXPECT_EQ(a.crops_recorded_as_weeds, 2);
+  EXPECT_EQ(a.gaps, 3);     // 3.5, 5, 8
+  EXPECT_EQ(a.missing, 3);
+  EXPECT_EQ(a.longest_gap, 1);
+  EXPECT_EQ(a.weeds, 1);    // the small one; the two crop-sized records are crops
+  // Off (every weed record a weed): the gaps as the crop records leave them.
+  AgronomySummary all;
+  all.row_spacing_m = 0.5;
+  AgronomyOptions o;
+  o.far_view_fraction = 0.0;
+  AddPlantFigures(all, plants, o);
+  EXPECT_EQ(all.crops_recorded_as_weeds, 0);
+  EXPECT_EQ(all.gaps, 4);
+  EXPECT_EQ(all.missing, 5);
+  EXPECT_EQ(all.longest_gap, 2);
+  EXPECT_NEAR(all.rows[0].longest_gap_at_m, 3.0, 1e-9);  // the plant before the gap
+  EXPECT_EQ(all.weeds, 3);
+}
+
 TEST(Report, NoDisplayStillReports) {
   const char* display = std::getenv("DISPLAY");
   const std::string saved = display ? display : "";
