@@ -310,9 +310,13 @@ void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops&
     if (p.x() < x_lo || p.x() > x_hi || p.y() < a.y0_m || p.y() > a.y1_m) continue;
     if (FarViewOfCrop(*w, context)) {
       ++a.far_views_of_crops;
+      a.crop_sized_weed_ids.insert(w->plant.id);
       continue;
     }
-    if (crops_as_weeds.count(w)) continue;  // a crop in a gap's place (CountGaps)
+    if (crops_as_weeds.count(w)) {  // a crop in a gap's place (CountGaps)
+      a.crop_sized_weed_ids.insert(w->plant.id);
+      continue;
+    }
     ++a.weeds;
     seen += !UnderACanopy(p, context, o.unseen_canopy_fraction);
     weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));

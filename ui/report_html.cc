@@ -81,7 +81,10 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
             Pct(a.missing, a.missing + a.crop) + "), longest " + std::to_string(a.longest_gap) + " plants" +
             (a.crops_recorded_as_weeds > 0
                  ? "; " + std::to_string(a.crops_recorded_as_weeds) +
-                       " places in gaps hold a crop-sized weed record, taken as the crop recorded as a weed"
+                       (a.crops_recorded_as_weeds == 1
+                            ? " place in a gap holds a crop-sized weed record, taken as the crop recorded as a weed"
+                            : " places in gaps hold a crop-sized weed record each, taken as the crop recorded as "
+                              "a weed")
                  : std::string()));
     Row(out, "crop leaf-tip radius", "median " + Fixed(100 * a.crop_size.median_m, 1) + " cm (quartiles " +
                                          Fixed(100 * a.crop_size.q1_m, 1) + " – " + Fixed(100 * a.crop_size.q3_m, 1) +

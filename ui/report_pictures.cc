@@ -116,6 +116,14 @@ void DrawPlant(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
              cv::LINE_AA);
 }
 
+// A crop-sized weed record that the summary takes for a crop (agronomy.h):
+// a ring of the crop colour, the record's size.
+void DrawCropSeenAsWeed(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
+  const cv::Point2d c = w.At(p.position_m.x(), p.position_m.y());
+  const int r = std::max(2, static_cast<int>(std::lround(std::sqrt(p.size_m2 / M_PI) * w.ppm)));
+  cv::circle(img, c, r, Bgr(palette::kCrop), 2, cv::LINE_AA);
+}
+
 // The ellipse of covariance `c` (field x, y) at `centre`, `k` Mahalanobis
 // radii, magnified `mag` times about its centre.
 void DrawEllipse(cv::Mat& img, const cv::Point2d& centre, const Eigen::Matrix2d& c, double k, double mag,
@@ -263,7 +271,8 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
   const double ppm = (o.strip_width_px - 2 * left) / o.strip_length_m;
   const int strip_h = static_cast<int>(std::lround((x_hi - x_lo) * ppm));
   const int n = static_cast<int>(starts.size());
-  cv::Mat img(top + n * (strip_h + label_h + gap) + 40, o.strip_width_px, CV_8UC3, kWhite);
+  const int key_h = a.crop_sized_weed_ids.empty() ? 0 : 22;  // the crop-sized weed records' key
+  cv::Mat img(top + n * (strip_h + label_h + gap) + 40 + key_h, o.strip_width_px, CV_8UC3, kWhite);
   Text(img, "Bed, " + Fixed(o.strip_length_m, 0) + " m per strip, the run left to right; y along the bed", {left, 20},
        0.5);
   for (int s = 0; s < n; ++s) {
@@ -284,12 +293,16 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
     local.origin = {0, 0};
     for (const auto& [id, r] : model.plants()) {
       const double y = r.plant.position_m.y();
-      if (y >= w.y0_m - 0.2 && y <= y1 + 0.2) DrawPlant(roi, r.plant, local);
+      if (y < w.y0_m - 0.2 || y > y1 + 0.2) continue;
+      if (a.crop_sized_weed_ids.count(r.plant.id)) {
+        DrawCropSeenAsWeed(roi, r.plant, local);
+      } else {
+        DrawPlant(roi, r.plant, local);
+      }
     }
     cv::rectangle(img, frame, kInk, 1);
     DistanceTicks(img, w, w.y0_m, y1, 0.5, 2);
   }
-  (void)a;
   const int by = static_cast<int>(img.rows) - 14;
   ScaleBar(img, {left, by}, ppm, 1.0, "1 m");
   Legend(img, {left + static_cast<int>(ppm) + 60, by},
@@ -298,6 +311,12 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
           {Bgr(palette::kTreated), "treated (cells; ring: plant sprayed)"},
           {Bgr(palette::kSoil), "soil"},
           {Bgr(palette::kUnknownCell), "not mapped"}});
+  if (!a.crop_sized_weed_ids.empty()) {  // their key, on a line of its own
+    const cv::Point at{left, by - 22};
+    cv::circle(img, {at.x + 7, at.y - 4}, 6, Bgr(palette::kCrop), 2, cv::LINE_AA);
+    Text(img, "crop-sized weed record: a crop seen as a weed (far view, or in a gap's place), not counted as a weed",
+         {at.x + 19, at.y});
+  }
   return img;
 }
 

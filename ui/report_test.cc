@@ -168,30 +168,45 @@ TEST(Agronomy, SizeQuartiles) {
   EXPECT_NEAR(LeafTipRadius(M_PI * 0.832 * 0.1 * 0.1, 0.832), 0.1, 1e-12);
 }
 
+// A plant record of `kind` at (x, y) of ground area `area_m2`, its id the
+// next free one.
+void AddRecord(std::map<int64_t, PlantRecord>& plants, telemetry::PlantKind kind, double x, double y,
+               double area_m2) {
+  const auto id = static_cast<int64_t>(plants.size());
+  PlantRecord& r = plants[id];
+  r.plant.id = id;
+  r.plant.kind = kind;
+  r.plant.position_m = {x, y};
+  r.plant.size_m2 = area_m2;
+}
+
+// The plant figures of `plants` on rows 0.5 m apart, crop-sized weed
+// records at `far_view_fraction` of the crops' radius (0: none).
+AgronomySummary FiguresOnRowsHalfAMetreApart(const std::map<int64_t, PlantRecord>& plants, double far_view_fraction) {
+  AgronomySummary a;
+  a.row_spacing_m = 0.5;
+  AgronomyOptions o;
+  o.far_view_fraction = far_view_fraction;
+  AddPlantFigures(a, plants, o);
+  return a;
+}
+
 TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
   // Two rows 0.5 m apart, a crop of leaf-tip radius 0.1 m every 0.5 m over
   // 10 m, and weeds: a crop-sized record 0.1 m from its crop (a far view of
   // it), one as large between the rows (a weed: no crop within half a
   // spacing), one small under a canopy and four clear.
   std::map<int64_t, PlantRecord> plants;
-  const auto add = [&](telemetry::PlantKind kind, double x, double y, double area_m2) {
-    PlantRecord& r = plants[static_cast<int64_t>(plants.size())];
-    r.plant.kind = kind;
-    r.plant.position_m = {x, y};
-    r.plant.size_m2 = area_m2;
-  };
   const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1, big_m2 = M_PI * 0.08 * 0.08, small_m2 = M_PI * 0.01 * 0.01;
   for (int i = 0; i <= 20; ++i) {
-    add(telemetry::PlantKind::kCrop, 0.0, 0.5 * i, crop_m2);
-    add(telemetry::PlantKind::kCrop, 0.5, 0.5 * i, crop_m2);
+    AddRecord(plants, telemetry::PlantKind::kCrop, 0.0, 0.5 * i, crop_m2);
+    AddRecord(plants, telemetry::PlantKind::kCrop, 0.5, 0.5 * i, crop_m2);
   }
-  add(telemetry::PlantKind::kWeed, 0.0, 2.1, big_m2);
-  add(telemetry::PlantKind::kWeed, 0.25, 5.25, big_m2);
-  add(telemetry::PlantKind::kWeed, 0.5, 3.05, small_m2);
-  for (int i = 1; i <= 4; ++i) add(telemetry::PlantKind::kWeed, 0.25, i + 0.3, small_m2);
-  AgronomySummary a;
-  a.row_spacing_m = 0.5;
-  AddPlantFigures(a, plants);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 2.1, big_m2);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.25, 5.25, big_m2);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.5, 3.05, small_m2);
+  for (int i = 1; i <= 4; ++i) AddRecord(plants, telemetry::PlantKind::kWeed, 0.25, i + 0.3, small_m2);
+  const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
   EXPECT_NEAR(a.surveyed_area_m2, 1.0 * 10.0, 1e-9);
   EXPECT_NEAR(a.crop_size.median_m, 0.1, 1e-9);
   EXPECT_EQ(a.far_views_of_crops, 1);
@@ -202,11 +217,7 @@ TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
   EXPECT_NEAR(a.unseen_canopy_m2, unseen_m2, 1e-9);
   EXPECT_NEAR(a.weeds_per_m2_seen, 5.0 / (10.0 - unseen_m2), 1e-9);
   // Off: every weed record counts.
-  AgronomySummary all;
-  all.row_spacing_m = 0.5;
-  AgronomyOptions o;
-  o.far_view_fraction = 0.0;
-  AddPlantFigures(all, plants, o);
+  const AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0);
   EXPECT_EQ(all.far_views_of_crops, 0);
   EXPECT_EQ(all.weeds, 7);
 }
@@ -214,41 +225,30 @@ TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
 TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
   // One row, a crop of leaf-tip radius 0.1 m every 0.5 m over 10 m, with
   // three gaps of one plant (y = 2, 5, 8) and one of two (3.5 and 4). In
-  // the gap at 2 a crop-sized weed record stands 4 cm off
-  // the place (the crop recorded as a weed); in the gap at 5 a small weed
-  // (a weed in a gap); in the gap at 3.5–4 a crop-sized record at 4: the
-  // gap is one plant shorter, at 3.5 alone.
+  // the gap at 2 a crop-sized weed record stands 4 cm off the place (the
+  // crop recorded as a weed); in the gap at 5 a small weed (a weed in a
+  // gap); in the gap at 3.5–4 a crop-sized record at 4: the gap is one
+  // plant shorter, at 3.5 alone.
   std::map<int64_t, PlantRecord> plants;
-  const auto add = [&](telemetry::PlantKind kind, double x, double y, double area_m2) {
-    PlantRecord& r = plants[static_cast<int64_t>(plants.size())];
-    r.plant.kind = kind;
-    r.plant.position_m = {x, y};
-    r.plant.size_m2 = area_m2;
-  };
   const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1, big_m2 = M_PI * 0.08 * 0.08, small_m2 = M_PI * 0.02 * 0.02;
   for (int i = 0; i <= 20; ++i) {
     const double y = 0.5 * i;
     if (y == 2.0 || y == 3.5 || y == 4.0 || y == 5.0 || y == 8.0) continue;
-    add(telemetry::PlantKind::kCrop, 0.0, y, crop_m2);
+    AddRecord(plants, telemetry::PlantKind::kCrop, 0.0, y, crop_m2);
   }
-  add(telemetry::PlantKind::kWeed, 0.03, 2.03, big_m2);
-  add(telemetry::PlantKind::kWeed, 0.0, 5.0, small_m2);
-  add(telemetry::PlantKind::kWeed, -0.02, 4.04, big_m2);
-  AgronomySummary a;
-  a.row_spacing_m = 0.5;
-  AddPlantFigures(a, plants);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.03, 2.03, big_m2);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 5.0, small_m2);
+  AddRecord(plants, telemetry::PlantKind::kWeed, -0.02, 4.04, big_m2);
+  const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
   ASSERT_EQ(a.rows.size(), 1u);
   EXPECT_EQ(a.crops_recorded_as_weeds, 2);
+  EXPECT_EQ(a.crop_sized_weed_ids.size(), 2u);  // the bed picture draws the two as crops' rings
   EXPECT_EQ(a.gaps, 3);     // 3.5, 5, 8
   EXPECT_EQ(a.missing, 3);
   EXPECT_EQ(a.longest_gap, 1);
   EXPECT_EQ(a.weeds, 1);    // the small one; the two crop-sized records are crops
   // Off (every weed record a weed): the gaps as the crop records leave them.
-  AgronomySummary all;
-  all.row_spacing_m = 0.5;
-  AgronomyOptions o;
-  o.far_view_fraction = 0.0;
-  AddPlantFigures(all, plants, o);
+  const AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0);
   EXPECT_EQ(all.crops_recorded_as_weeds, 0);
   EXPECT_EQ(all.gaps, 4);
   EXPECT_EQ(all.missing, 5);
