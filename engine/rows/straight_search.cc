@@ -310,8 +310,10 @@ StraightSearch::Tallies StraightSearch::TallyBands(const Geometry& geo, double d
       const int n = n_lo + static_cast<int>(r);
       const double u = (sc + n * d) * shrink + geo.c * b.dv;
       density[r] = (u >= 0.0 && u <= W_) ? Window(p, u, half, b.rows, kw_, w_) : -1.0;
-      const double between = Window(p, u + 0.5 * d * shrink, half, b.rows, kw_, w_);
-      if (between >= 0.0 && u + 0.5 * d * shrink >= 0.0 && u + 0.5 * d * shrink <= W_) {
+      const double m = u + 0.5 * d * shrink;
+      if (m < 0.0 || m > W_) continue;  // the gap beyond this row is out of the image
+      const double between = Window(p, m, half, b.rows, kw_, w_);
+      if (between >= 0.0) {
         background += between;
         ++n_background;
         t.between_sum[r] += between;
