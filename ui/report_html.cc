@@ -76,16 +76,16 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
                                          std::to_string(a.rows.size()) + " rows at " + Fixed(100 * a.row_spacing_m, 1) +
                                          " cm (" + a.row_spacing_source + ")");
     Row(out, "crop plants", std::to_string(a.crop) + ", " + Fixed(a.plants_per_m, 2) + " per metre of row");
-    Row(out, "gaps (missing plants)",
-        std::to_string(a.gaps) + " gaps, " + std::to_string(a.missing) + " plants missing (" +
-            Pct(a.missing, a.missing + a.crop) + "), longest " + std::to_string(a.longest_gap) + " plants" +
-            (a.crops_recorded_as_weeds > 0
-                 ? "; " + std::to_string(a.crops_recorded_as_weeds) +
-                       (a.crops_recorded_as_weeds == 1
-                            ? " place in a gap holds a crop-sized weed record, taken as the crop recorded as a weed"
-                            : " places in gaps hold a crop-sized weed record each, taken as the crop recorded as "
-                              "a weed")
-                 : std::string()));
+    std::string gaps = std::to_string(a.gaps) + " gaps, " + std::to_string(a.missing) + " plants missing (" +
+                       Pct(a.missing, a.missing + a.crop) + "), longest " + std::to_string(a.longest_gap) +
+                       (a.longest_gap == 1 ? " plant" : " plants");
+    if (a.crops_recorded_as_weeds == 1) {
+      gaps += "; 1 place in a gap holds a crop-sized weed record, taken as the crop recorded as a weed";
+    } else if (a.crops_recorded_as_weeds > 1) {
+      gaps += "; " + std::to_string(a.crops_recorded_as_weeds) +
+              " places in gaps hold a crop-sized weed record each, taken as the crop recorded as a weed";
+    }
+    Row(out, "gaps (missing plants)", gaps);
     Row(out, "crop leaf-tip radius", "median " + Fixed(100 * a.crop_size.median_m, 1) + " cm (quartiles " +
                                          Fixed(100 * a.crop_size.q1_m, 1) + " – " + Fixed(100 * a.crop_size.q3_m, 1) +
                                          " cm)");
