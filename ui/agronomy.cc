@@ -150,7 +150,7 @@ void CountGaps(RowAgronomy& r, const std::vector<const PlantRecord*>& v, Filled 
     for (int k = 1; k <= places + 1; ++k) {
       const bool missing = k <= places && !filled(a + (b - a) * (static_cast<double>(k) / (places + 1)));
       if (missing) {
-        if (run == 0) run_at = k == 1 ? a.y() : a.y() + (b.y() - a.y()) * (k - 1.0) / (places + 1);
+        if (run == 0) run_at = a.y() + (b.y() - a.y()) * (k - 1.0) / (places + 1);  // the place before
         ++run;
         continue;
       }
@@ -163,16 +163,25 @@ void CountGaps(RowAgronomy& r, const std::vector<const PlantRecord*>& v, Filled 
   }
 }
 
+// A weed record's radius: the disc of its area.
+double DiscRadius(const PlantRecord& w) { return std::sqrt(std::max(0.0, w.plant.size_m2) / std::numbers::pi); }
+
+// The radius from which a weed record is as large as a crop (agronomy.h,
+// far_view_fraction; ∞: none is).
+double CropSizedRadius(const AgronomySummary& a, const AgronomyOptions& o) {
+  return o.far_view_fraction > 0.0 ? o.far_view_fraction * a.crop_size.median_m
+                                   : std::numeric_limits<double>::infinity();
+}
+
 // Every row's gaps (CountGaps), a place filled by a crop-sized weed record
 // within half the row's plant spacing of it (each record fills one place);
 // the records that filled one.
 std::set<const PlantRecord*> CountAllGaps(const RowsOfCrops& by_row, const std::vector<const PlantRecord*>& weeds,
                                           const AgronomyOptions& o, AgronomySummary& a) {
-  const double crop_sized = o.far_view_fraction > 0.0 ? o.far_view_fraction * a.crop_size.median_m
-                                                      : std::numeric_limits<double>::infinity();
+  const double crop_sized = CropSizedRadius(a, o);
   std::vector<const PlantRecord*> large;  // crop-sized weed records by y
   for (const PlantRecord* w : weeds) {
-    if (std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi) >= crop_sized) large.push_back(w);
+    if (DiscRadius(*w) >= crop_sized) large.push_back(w);
   }
   std::sort(large.begin(), large.end(), [](const PlantRecord* p, const PlantRecord* q) {
     return p->plant.position_m.y() < q->plant.position_m.y();
@@ -186,7 +195,6 @@ std::set<const PlantRecord*> CountAllGaps(const RowsOfCrops& by_row, const std::
       auto it = std::lower_bound(large.begin(), large.end(), place.y() - reach,
                                  [](const PlantRecord* p, double y) { return p->plant.position_m.y() < y; });
       for (; it != large.end() && (*it)->plant.position_m.y() <= place.y() + reach; ++it) {
-        if ((*it)->plant.position_m.x() < place.x() - reach || (*it)->plant.position_m.x() > place.x() + reach) continue;
         if ((place - (*it)->plant.position_m).norm() < reach && used.insert(*it).second) return true;
       }
       return false;
@@ -262,8 +270,7 @@ WeedContext WeedContextOf(const RowsOfCrops& by_row, const AgronomySummary& a, c
   WeedContext c;
   c.discs = CropDiscs(by_row, o);
   for (const CropDisc& d : c.discs) c.max_disc_m = std::max(c.max_disc_m, d.radius_m);
-  c.crop_sized_m = o.far_view_fraction > 0.0 ? o.far_view_fraction * a.crop_size.median_m
-                                             : std::numeric_limits<double>::infinity();
+  c.crop_sized_m = CropSizedRadius(a, o);
   std::vector<double> spacing;
   for (const RowAgronomy& r : a.rows) spacing.push_back(r.plant_spacing_m);
   c.far_view_reach_m = 0.5 * Median(spacing);
@@ -271,8 +278,7 @@ WeedContext WeedContextOf(const RowsOfCrops& by_row, const AgronomySummary& a, c
 }
 
 bool FarViewOfCrop(const PlantRecord& w, const WeedContext& c) {
-  const double radius = std::sqrt(std::max(0.0, w.plant.size_m2) / std::numbers::pi);
-  return radius >= c.crop_sized_m && NearACrop(c.discs, w.plant.position_m, c.far_view_reach_m,
+  return DiscRadius(w) >= c.crop_sized_m && NearACrop(c.discs, w.plant.position_m, c.far_view_reach_m,
                                                [&](const CropDisc&) { return c.far_view_reach_m; });
 }
 
@@ -319,7 +325,7 @@ void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops&
     }
     ++a.weeds;
     seen += !UnderACanopy(p, context, o.unseen_canopy_fraction);
-    weed_radii.push_back(std::sqrt(std::max(0.0, w->plant.size_m2) / std::numbers::pi));
+    weed_radii.push_back(DiscRadius(*w));
     AddWeedToCells(*w, row_index, o, a);
   }
   a.weeds_per_m2 = a.surveyed_area_m2 > 0.0 ? a.weeds / a.surveyed_area_m2 : 0.0;

@@ -107,10 +107,16 @@ cv::Scalar PlantColour(const tm::PlantObservation& p) {
                                           : Bgr(palette::kUnknownPlant);
 }
 
+// A plant marker's radius: the disc of the plant's area, at least 2 px.
+int MarkerRadiusPx(const tm::PlantObservation& p, const Window& w) {
+  return std::max(2, static_cast<int>(std::lround(std::sqrt(p.size_m2 / M_PI) * w.ppm)));
+}
+
 // Plant marker: a disc of the plant's area (at least 2 px), ringed blue when sprayed.
+
 void DrawPlant(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
   const cv::Point2d c = w.At(p.position_m.x(), p.position_m.y());
-  const int r = std::max(2, static_cast<int>(std::lround(std::sqrt(p.size_m2 / M_PI) * w.ppm)));
+  const int r = MarkerRadiusPx(p, w);
   cv::circle(img, c, r, PlantColour(p), cv::FILLED, cv::LINE_AA);
   cv::circle(img, c, r + (p.sprayed ? 1 : 0), p.sprayed ? Bgr(palette::kTreated) : kBlack, p.sprayed && r > 4 ? 2 : 1,
              cv::LINE_AA);
@@ -119,9 +125,8 @@ void DrawPlant(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
 // A crop-sized weed record that the summary takes for a crop (agronomy.h):
 // a ring of the crop colour, the record's size.
 void DrawCropSeenAsWeed(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
-  const cv::Point2d c = w.At(p.position_m.x(), p.position_m.y());
-  const int r = std::max(2, static_cast<int>(std::lround(std::sqrt(p.size_m2 / M_PI) * w.ppm)));
-  cv::circle(img, c, r, Bgr(palette::kCrop), 2, cv::LINE_AA);
+  cv::circle(img, w.At(p.position_m.x(), p.position_m.y()), MarkerRadiusPx(p, w), Bgr(palette::kCrop), 2,
+             cv::LINE_AA);
 }
 
 // The ellipse of covariance `c` (field x, y) at `centre`, `k` Mahalanobis
