@@ -85,6 +85,7 @@ nlohmann::json DetectionJson(const fs::path& file, const rows::RowDetection& det
   j["coherence"] = det.coherence;
   j["alignment"] = det.alignment;
   j["contrast"] = det.contrast;
+  j["streak_support"] = det.streak_support;
   return j;
 }
 

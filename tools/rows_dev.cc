@@ -29,6 +29,19 @@ void SetOption(rows::RowDetectorOptions& options, const std::string& kv) {
   const double value = std::stod(kv.substr(eq + 1));
   if (key == "min_row_occupancy") options.min_row_occupancy = value;
   else if (key == "min_gap_row_occupancy") options.min_gap_row_occupancy = value;
+  else if (key == "min_alignment") options.min_alignment = value;
+  else if (key == "min_streak_alignment") options.min_streak_alignment = value;
+  else if (key == "min_streak_support") options.min_streak_support = value;
+  else if (key == "min_coherence") options.min_coherence = value;
+  else if (key == "min_contrast") options.min_contrast = value;
+  else if (key == "max_convergence") options.max_convergence = value;
+  else if (key == "convergence_steps") options.convergence_steps = static_cast<int>(value);
+  else if (key == "max_lean") options.max_lean = value;
+  else if (key == "lean_steps") options.lean_steps = static_cast<int>(value);
+  else if (key == "strips") options.strips = static_cast<int>(value);
+  else if (key == "work_width_px") options.work_width_px = static_cast<int>(value);
+  else if (key == "candidates") options.candidates = static_cast<int>(value);
+  else if (key == "max_spacing_fraction") options.max_spacing_fraction = value;
   else if (key == "min_curve_coherence") options.min_curve_coherence = value;
   else if (key == "phase_smoothness") options.curve.phase_smoothness = value;
   else if (key == "scale_smoothness") options.curve.scale_smoothness = value;
@@ -78,6 +91,8 @@ void WriteRows(const rows::RowDetection& det, const std::string& out) {
   std::ofstream json(out + "_rows.json");
   json << "{\"width\": " << det.width_px << ", \"height\": " << det.height_px
        << ", \"confidence\": " << det.confidence << ", \"curve_coherence\": " << det.curve_coherence
+       << ", \"coherence\": " << det.coherence << ", \"alignment\": " << det.alignment
+       << ", \"contrast\": " << det.contrast << ", \"streak_support\": " << det.streak_support
        << ", \"reason\": \"" << det.reason << "\"}\n";
 }
 

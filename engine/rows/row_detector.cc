@@ -33,6 +33,8 @@ OptionErrors RowDetectorOptions::Validate() const {
   RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
   RequireInRange(e, "min_coherence", min_coherence, 0.0, 1.0);
   RequireInRange(e, "min_alignment", min_alignment, 0.0, 1.0);
+  RequireInRange(e, "min_streak_alignment", min_streak_alignment, 0.0, 1.0);
+  RequireInRange(e, "min_streak_support", min_streak_support, 0.0, 1.0);
   RequireInRange(e, "min_contrast", min_contrast, 0.0, 1.0);
   RequireInRange(e, "gap_search_fraction", gap_search_fraction, 0.0, 0.5, false);
   if (fit_iterations < 0) e.push_back({"fit_iterations", "must be >= 0"});

@@ -87,6 +87,13 @@ struct RowDetectorOptions {
   double min_plant_fraction = 0.002; // less plant matter in the image: no rows
   double min_coherence = 0.15;       // comb phase coherence below this: no rows
   double min_alignment = 0.85;       // agreement of the bands' comb phases below this: no rows
+  // ... unless the streaks confirm the geometry: rows that converge sharply
+  // (a camera looking far along the bed) leave few rows per band in the
+  // near field and their band phases agree less, while their streaks all
+  // point at the vanishing point; scattered plants have no such streaks
+  // (support ≤ 0.045 in RowDetectorTest.ScatteredBlobsAreNotRows).
+  double min_streak_alignment = 0.6;  // band agreement required when the streaks confirm
+  double min_streak_support = 0.06;   // streak support (orientation.h) that confirms
   double min_contrast = 0.2;         // 1 − (matter half-way between rows) / (on them)
   double gap_search_fraction = 0.25;  // the refit looks for the gap between two rows within
                                       // ± this × spacing of their midpoint
@@ -139,6 +146,7 @@ struct RowDetection {
   double coherence = 0.0;      // |Σ w e^{2πi s/d}| / Σ w of the plant matter
   double alignment = 0.0;      // |Σ z_k| / Σ |z_k| of the bands' comb phasors z_k
   double contrast = 0.0;       // 1 − (matter half-way between the rows) / (on the rows)
+  double streak_support = 0.0; // the streaks' agreement with the rows' lines beyond chance (orientation.h)
   double top_v_px = 0.0;       // rows are told apart from the bottom up to this v
   std::vector<DetectedRow> rows;  // left to right
   // The rows as curves (bottom to top): c(v) and d(v) at each band's centre,

@@ -23,6 +23,8 @@ struct Scene {
   int weeds = 0;
   double weed_radius_px = 4.0;
   double top_v = 0.0;  // no plants above this
+  double step = 0.25;     // between plants along a row, of the local row spacing
+  double jitter = 0.0;    // sd of a plant's place across its row, of the local row spacing
 
   double Shrink(double v) const { return 1.0 - g * (height - 0.5 - v); }
   double U(int n, double v) const {
@@ -32,16 +34,18 @@ struct Scene {
     cv::Mat mask(height, width, CV_8UC1, cv::Scalar(0));
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::normal_distribution<double> across(0.0, jitter);
     for (int n = n_min; n <= n_max; ++n) {
       for (double v = height - 0.5 + 0.3 * d * unit(rng); v > top_v;) {
         const double s = Shrink(v);
         if (s * d < 4.0) break;
         if (unit(rng) >= missing) {
           const int r = std::max(1, static_cast<int>(std::lround(plant_radius * d * s)));
-          cv::circle(mask, cv::Point(static_cast<int>(U(n, v)), static_cast<int>(v)), r,
-                     cv::Scalar(255), cv::FILLED);
+          const double u = U(n, v) + (jitter > 0.0 ? across(rng) * d * s * s : 0.0);
+          cv::circle(mask, cv::Point(static_cast<int>(u), static_cast<int>(v)), r, cv::Scalar(255),
+                     cv::FILLED);
         }
-        v -= 0.25 * d * s;
+        v -= step * d * s;
       }
     }
     for (int k = 0; k < weeds; ++k) {
@@ -288,6 +292,50 @@ TEST(RowDetectorTest, ScatteredBlobsAreNotRows) {
     EXPECT_EQ(det.rows.empty(), det.confidence == 0.0);
   }
   EXPECT_EQ(with_rows, 0);
+}
+
+// A camera looking far along the bed (CRDLD test photographs 108-124): the
+// vanishing point just above the image, rows two-fifths of the image apart
+// at the bottom and fanning out to the sides, weeds everywhere. Few rows
+// cross each band of the near field, so the bands' comb phases agree less
+// than the 0.85 asked of plant matter in general; the streaks all pointing
+// at the vanishing point confirm the rows (scattered blobs above have none).
+TEST(RowDetectorTest, SharplyConvergingRowsAreConfirmedByTheirStreaks) {
+  Scene scene;
+  scene.width = 512;
+  scene.height = 512;
+  scene.g = 1.0 / 530.0;
+  scene.c = scene.g * 270.0;
+  scene.sc = 270.0;
+  scene.d = 210.0;
+  scene.n_min = -7;
+  scene.n_max = 7;
+  scene.plant_radius = 0.1;
+  scene.step = 0.1;    // plants merge into streaks in the distance ...
+  scene.jitter = 0.3;  // ... and stand anywhere about their row near the camera
+  scene.missing = 0.5;
+  scene.weeds = 100;
+  scene.weed_radius_px = 6.0;
+  RowDetector detector{RowDetectorOptions{}};
+  RowDetectorOptions without_streaks;  // the straight model alone, ...
+  without_streaks.curves = false;
+  without_streaks.min_streak_support = 1.0;  // ... whose streaks never confirm
+  RowDetector plain{without_streaks};
+  int below_general_alignment = 0;
+  for (uint32_t seed = 30; seed < 36; ++seed) {
+    SCOPED_TRACE(seed);
+    const cv::Mat mask = scene.Draw(seed);
+    const RowDetection det = detector.Detect(mask);
+    ASSERT_GT(det.confidence, 0.0) << det.reason;
+    EXPECT_GE(det.streak_support, RowDetectorOptions{}.min_streak_support);
+    EXPECT_NEAR(det.spacing_px, 210.0, 210.0 * 0.1);
+    EXPECT_LT(WorstError(det, scene, 200.0), 0.15);
+    if (det.alignment < 0.85) {
+      ++below_general_alignment;
+      EXPECT_EQ(plain.Detect(mask).confidence, 0.0);
+    }
+  }
+  EXPECT_GE(below_general_alignment, 3);
 }
 
 TEST(RowDetectorTest, RejectsEmptyAndWrongTypeImages) {

@@ -811,11 +811,16 @@ void StraightSearch::Finish(Fit fit, RowDetection& out) {
   out.alignment = alignment;
   out.top_v_px = TopOfRows(geo, d, sc, fit.found);
   out.contrast = fit.found.contrast;
-  if (final_fit.coherence < o_.min_coherence || alignment < o_.min_alignment ||
+  out.streak_support = use_orientation_ ? orientation_.Support(geo.g, geo.c) : 0.0;
+  const bool streaks_confirm = out.streak_support >= o_.min_streak_support;
+  const double min_alignment =
+      streaks_confirm ? std::min(o_.min_alignment, o_.min_streak_alignment) : o_.min_alignment;
+  if (final_fit.coherence < o_.min_coherence || alignment < min_alignment ||
       fit.found.contrast < o_.min_contrast) {
     out.reason = "no rows: plant matter does not follow evenly spaced rows (coherence " +
                  std::to_string(final_fit.coherence) + ", band agreement " +
-                 std::to_string(alignment) + ", contrast " + std::to_string(fit.found.contrast) + ")";
+                 std::to_string(alignment) + ", contrast " + std::to_string(fit.found.contrast) +
+                 ", streak support " + std::to_string(out.streak_support) + ")";
     return;
   }
   out.rows = std::move(fit.found.rows);
