@@ -12,6 +12,7 @@
 
 #include "app/rows_eval.h"
 #include "engine/geometry/test_cameras.h"
+#include "engine/rows/comb.h"
 #include "engine/rows/row_detector.h"
 #include "engine/sim/simulator.h"
 
@@ -117,6 +118,21 @@ void BM_RowDetectorOnMask(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RowDetectorOnMask)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond);
+
+// The comb's inner loop (comb.h): one band's profile of N work columns, as
+// the straight search's band-by-band comb sums it (thousands of times per
+// photograph).
+void BM_PhasorSum(benchmark::State& state) {
+  std::vector<float> w(static_cast<size_t>(state.range(0)));
+  for (size_t i = 0; i < w.size(); ++i) w[i] = static_cast<float>((i * 37) % 11) / 11.0F;
+  double a0 = 0.1;
+  for (auto _ : state) {
+    const Phasor p = PhasorSum(std::span<const float>(w), a0, -0.21);
+    benchmark::DoNotOptimize(p);
+    a0 += 1e-9;
+  }
+}
+BENCHMARK(BM_PhasorSum)->Arg(128)->Arg(384);
 
 }  // namespace
 }  // namespace plantscale::rows

@@ -23,11 +23,12 @@ struct Phasor {
   double re = 0.0, im = 0.0, mass = 0.0;
 };
 // The phasor advances by a fixed rotation per weight (std::complex's
-// product checks for NaN at every step), in four interleaved chains
-// (weights b … b + 3, each rotated by four weights' angle) held as two
-// pairs of two-lane vectors, so the steps do not wait on each other and
-// each pair is one vector instruction. Every lane does what a scalar loop
-// would: the sums are the same to the last bit on any vector width.
+// product checks for NaN at every step), in eight interleaved chains
+// (weights b … b + 7, each rotated by eight weights' angle) held as two
+// four-lane vectors, so the steps do not wait on each other (one AVX2
+// instruction each where the CPU has it, engine/common/vectorise.h). Every
+// lane does what a scalar loop would: the sums are the same to the last
+// bit on any vector width.
 Phasor PhasorSum(std::span<const double> w, double a0, double da);
 Phasor PhasorSum(std::span<const float> w, double a0, double da);
 
