@@ -41,8 +41,10 @@ if t is None:
 checks = [
     ("crop plants", a["crop_plants"], t["crop_plants"], -0.05, 0.05),
     # a crop-sized weed record in a gap's place is the crop recorded as a
-    # weed (session 30: seed 1 8 -> 7 against 6 true)
-    ("missing plants", a["missing_plants"], t["missing_plants"], -0.10, 0.20),
+    # weed (session 30: seed 1 8 -> 7 against 6 true), and so is a smaller
+    # one beside the place (session 31: 6 against 6; seeds 1, 3, 7, 1000,
+    # 1001, 1002 all exact); one plant of six either way
+    ("missing plants", a["missing_plants"], t["missing_plants"], -0.17, 0.17),
     ("median crop leaf-tip radius (m)", a["crop_radius"]["median_m"], t["median_radius_m"], -0.03, 0.03),
     ("weeds per m2", a["weeds_per_m2"], t["weeds_per_m2"], -0.42, 0.05),
     # a weed's record is its whole grown blob at the weeds' plane (session

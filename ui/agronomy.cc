@@ -67,6 +67,8 @@ OptionErrors AgronomyOptions::Validate() const {
   RequirePositive(e, "histogram_bin_m", histogram_bin_m);
   RequireInRange(e, "histogram_bins", histogram_bins, 1, 1000);
   RequireInRange(e, "far_view_fraction", far_view_fraction, 0.0, 1.0);
+  RequireInRange(e, "gap_crop_fraction", gap_crop_fraction, 0.0, 1.0);
+  RequireInRange(e, "gap_crop_reach", gap_crop_reach, 0.0, 0.5);
   RequireInRange(e, "unseen_canopy_fraction", unseen_canopy_fraction, 0.0, 1.0);
   return e;
 }
@@ -174,14 +176,17 @@ double CropSizedRadius(const AgronomySummary& a, const AgronomyOptions& o) {
 }
 
 // Every row's gaps (CountGaps), a place filled by a crop-sized weed record
-// within half the row's plant spacing of it (each record fills one place);
-// the records that filled one.
+// within half the row's plant spacing of it, or by one of gap_crop_fraction
+// of the crops' size within gap_crop_reach spacings (each record fills one
+// place); the records that filled one.
 std::set<const PlantRecord*> CountAllGaps(const RowsOfCrops& by_row, const std::vector<const PlantRecord*>& weeds,
                                           const AgronomyOptions& o, AgronomySummary& a) {
   const double crop_sized = CropSizedRadius(a, o);
-  std::vector<const PlantRecord*> large;  // crop-sized weed records by y
+  const double near_sized = o.gap_crop_fraction > 0.0 ? o.gap_crop_fraction * a.crop_size.median_m
+                                                      : std::numeric_limits<double>::infinity();
+  std::vector<const PlantRecord*> large;  // weed records that may fill a place, by y
   for (const PlantRecord* w : weeds) {
-    if (DiscRadius(*w) >= crop_sized) large.push_back(w);
+    if (DiscRadius(*w) >= std::min(crop_sized, near_sized)) large.push_back(w);
   }
   std::sort(large.begin(), large.end(), [](const PlantRecord* p, const PlantRecord* q) {
     return p->plant.position_m.y() < q->plant.position_m.y();
@@ -191,11 +196,14 @@ std::set<const PlantRecord*> CountAllGaps(const RowsOfCrops& by_row, const std::
   for (const auto& [n, v] : by_row) {
     RowAgronomy& r = a.rows[i++];
     const double reach = 0.5 * r.plant_spacing_m;
+    const double near_reach = o.gap_crop_reach * r.plant_spacing_m;
     CountGaps(r, v, [&](const Eigen::Vector2d& place) {
       auto it = std::lower_bound(large.begin(), large.end(), place.y() - reach,
                                  [](const PlantRecord* p, double y) { return p->plant.position_m.y() < y; });
       for (; it != large.end() && (*it)->plant.position_m.y() <= place.y() + reach; ++it) {
-        if ((place - (*it)->plant.position_m).norm() < reach && used.insert(*it).second) return true;
+        const double distance = (place - (*it)->plant.position_m).norm();
+        const bool fills = distance < (DiscRadius(**it) >= crop_sized ? reach : near_reach);
+        if (fills && used.insert(*it).second) return true;
       }
       return false;
     });

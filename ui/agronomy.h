@@ -30,7 +30,11 @@
 //    missing plant's place in its row, is that crop recorded as a weed
 //    (a large weed merged with it moved the blob's centroid out of every
 //    association region): the place is not missing, and the record is
-//    neither a weed nor a gap (`crops_recorded_as_weeds`);
+//    neither a weed nor a gap (`crops_recorded_as_weeds`); so is a smaller
+//    weed record, down to `gap_crop_fraction` of the crops' median radius,
+//    within `gap_crop_reach` plant spacings of the place: a small crop
+//    recorded beside its place, which a weed of that size would have to
+//    hit by chance;
 //  - weeds per m² of the ground seen: the weeds outside the crops' unseen
 //    ground over the band less that ground. A crop's canopy hides the
 //    ground under it from every view; it is taken as the disc of
@@ -59,6 +63,12 @@ struct AgronomyOptions {
   // leaf-tip radius, 0.15 the crop profiles' plant-to-plant spread (the
   // registry's undersized line). 0: every weed record counts.
   double far_view_fraction = 0.55;
+  // A weed record of this fraction of the crops' median leaf-tip radius
+  // within `gap_crop_reach` plant spacings of a missing plant's place is
+  // that crop (above). 0: only crop-sized records fill a gap.
+  // docs/results/2026-11-27-report.md, session 31.
+  double gap_crop_fraction = 0.35;
+  double gap_crop_reach = 0.15;
   // The ground no view sees under a crop (above): within this fraction of
   // its leaf-tip radius (docs/results/2026-11-27-report.md, session 27).
   double unseen_canopy_fraction = 0.75;

@@ -181,12 +181,15 @@ void AddRecord(std::map<int64_t, PlantRecord>& plants, telemetry::PlantKind kind
 }
 
 // The plant figures of `plants` on rows 0.5 m apart, crop-sized weed
-// records at `far_view_fraction` of the crops' radius (0: none).
-AgronomySummary FiguresOnRowsHalfAMetreApart(const std::map<int64_t, PlantRecord>& plants, double far_view_fraction) {
+// records at `far_view_fraction` of the crops' radius (0: none), smaller
+// ones near a gap's place at `gap_crop_fraction` (0: none).
+AgronomySummary FiguresOnRowsHalfAMetreApart(const std::map<int64_t, PlantRecord>& plants, double far_view_fraction,
+                                             double gap_crop_fraction = AgronomyOptions{}.gap_crop_fraction) {
   AgronomySummary a;
   a.row_spacing_m = 0.5;
   AgronomyOptions o;
   o.far_view_fraction = far_view_fraction;
+  o.gap_crop_fraction = gap_crop_fraction;
   AddPlantFigures(a, plants, o);
   return a;
 }
@@ -248,13 +251,43 @@ TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
   EXPECT_EQ(a.longest_gap, 1);
   EXPECT_EQ(a.weeds, 1);    // the small one; the two crop-sized records are crops
   // Off (every weed record a weed): the gaps as the crop records leave them.
-  const AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0);
+  const AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0, 0.0);
   EXPECT_EQ(all.crops_recorded_as_weeds, 0);
   EXPECT_EQ(all.gaps, 4);
   EXPECT_EQ(all.missing, 5);
   EXPECT_EQ(all.longest_gap, 2);
   EXPECT_NEAR(all.rows[0].longest_gap_at_m, 3.0, 1e-9);  // the plant before the gap
   EXPECT_EQ(all.weeds, 3);
+}
+
+TEST(Agronomy, ASmallCropBesideItsPlaceFillsItsGap) {
+  // One row, a crop of leaf-tip radius 0.1 m every 0.5 m over 10 m, gaps of
+  // one plant at y = 2, 5 and 8. Weed records of 0.04 m (0.4 of the crops'
+  // radius, below the crop-sized 0.55): at 2, 5 cm off the place (within
+  // 0.15 spacings: the small crop recorded as a weed); at 5, 12 cm off
+  // (0.24 spacings: a weed in the gap); at 8, one of 0.03 m on the place
+  // (0.3 of the crops' radius: a weed).
+  std::map<int64_t, PlantRecord> plants;
+  const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1;
+  for (int i = 0; i <= 20; ++i) {
+    const double y = 0.5 * i;
+    if (y == 2.0 || y == 5.0 || y == 8.0) continue;
+    AddRecord(plants, telemetry::PlantKind::kCrop, 0.0, y, crop_m2);
+  }
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.03, 2.04, M_PI * 0.04 * 0.04);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 5.12, M_PI * 0.04 * 0.04);
+  AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 8.0, M_PI * 0.03 * 0.03);
+  const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
+  ASSERT_EQ(a.rows.size(), 1u);
+  EXPECT_EQ(a.crops_recorded_as_weeds, 1);
+  EXPECT_EQ(a.gaps, 2);  // 5, 8
+  EXPECT_EQ(a.missing, 2);
+  EXPECT_EQ(a.weeds, 2);
+  // Only crop-sized records fill a gap: all three are weeds.
+  const AgronomySummary crop_sized_only = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction, 0.0);
+  EXPECT_EQ(crop_sized_only.crops_recorded_as_weeds, 0);
+  EXPECT_EQ(crop_sized_only.missing, 3);
+  EXPECT_EQ(crop_sized_only.weeds, 3);
 }
 
 TEST(Report, NoDisplayStillReports) {
