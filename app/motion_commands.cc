@@ -42,7 +42,9 @@ nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
           {"row_spacing_m", m.row_spacing_m},
           {"row_rms_m", m.row_rms_m},
           {"row_spacings_m", m.row_spacings_m},
-          {"ms_per_frame", m.ms_per_frame}};
+          {"ms_per_frame", m.ms_per_frame},
+          {"prior_valid_pairs", m.prior_valid_pairs},
+          {"prior_translation_rmse_m", m.prior_translation_rmse_m}};
 }
 
 // Ours at the top level (the keys the issue names), the paper's method
@@ -54,7 +56,7 @@ nlohmann::json EvaluationJson(const MotionEvaluation& e) {
   j["frames"] = e.frames;
   j["distance_m"] = e.distance_m;
   j["true_row_spacing_m"] = e.true_row_spacing_m;
-  j["prior"] = e.wheel_prior ? "wheels" : "none";
+  j["prior"] = e.wheel_prior ? "wheels" : e.image_prior ? "image" : "none";
   j["baseline_paper"] = MethodJson(e.paper);
   j["published"] = {{"correct_correspondence_rate_min", 0.95},
                     {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
@@ -107,6 +109,7 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   o.paper = PaperMethod();
   o.ours = OursMethod(o.sim);
   o.wheel_prior = a.prior == "wheels";
+  o.image_prior = a.prior == "image";
   const MotionEvaluation e = EvaluateMotion(o);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';
@@ -144,8 +147,9 @@ void AddMotionCommands(CommandRegistry& registry) {
                   "what ours searches each frame around: none (the smoothed previous motion, no "
                   "odometry at all) or wheels (the simulated wheel odometry since the previous "
                   "frame, as the vehicle's pipeline does; the pose still composes the camera's "
-                  "motion only)")
-      ->check(CLI::IsMember({"none", "wheels"}))
+                  "motion only), or image (the ground's shift between the two frames' plant "
+                  "masks, phase-correlated on the plane: no odometry at all)")
+      ->check(CLI::IsMember({"none", "wheels", "image"}))
       ->capture_default_str();
 }
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <unordered_map>
 
 #include "engine/motion/visual_odometry.h"
@@ -71,6 +72,8 @@ struct Totals {
   double rotation_sq = 0.0, translation_sq = 0.0, drift_sum = 0.0, seconds = 0.0;
   double along_sum = 0.0, across_sum = 0.0;
   int sequences = 0;
+  int prior_valid = 0;
+  double prior_sq = 0.0;
   std::vector<double> rms, spacings, angles;
 };
 
@@ -88,12 +91,19 @@ class MethodRun {
     track_width_m_ = track_width_m;
     wheel_psi_sd_rad_ = psi_sd_rad;
   }
+  // Search around the ground's shift between the plant masks (no odometry).
+  void UseImagePrior(const motion::GroundShiftOptions& o, const geometry::CameraModel& camera,
+                     double psi_sd_rad) {
+    ground_shift_.emplace(o, camera);
+    wheel_psi_sd_rad_ = psi_sd_rad;
+  }
 
   void Step(const sim::SimFrame& frame, const vision::Segmentation& seg,
             const geometry::CameraModel& camera,
             const std::unordered_map<int, const sim::PlantTruth*>& by_instance, Totals& totals) {
     const auto& features = extractor_.Extract(seg.blobs, camera);
     if (track_width_m_ > 0.0 && !first_) SetWheelPrior(frame);
+    if (ground_shift_) SetImagePrior(frame, seg, totals);
     const auto start = std::chrono::steady_clock::now();
     const motion::FrameMotion& m = tracker_.Update(features);
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -149,6 +159,14 @@ class MethodRun {
     tracker_.SetMotionPrior({-w * dt, {0.0, -v * dt}}, wheel_psi_sd_rad_);
   }
 
+  void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
+    const motion::GroundShift shift = ground_shift_->Update(seg.mask);
+    if (!shift.valid || first_) return;
+    tracker_.SetMotionPrior({0.0, shift.t_m}, wheel_psi_sd_rad_);
+    ++totals.prior_valid;
+    totals.prior_sq += (shift.t_m - TrueMotion(previous_pose_, frame.truth.pose).t_m).squaredNorm();
+  }
+
   void ScoreMatches(std::span<const Feature> features, const motion::FrameMotion& m,
                     const sim::SimFrame& frame, const geometry::CameraModel& camera,
                     const std::unordered_map<int, const sim::PlantTruth*>& by_instance,
@@ -188,6 +206,7 @@ class MethodRun {
   sim::Pose2 previous_pose_, first_pose_;
   int64_t previous_utime_ = 0;
   double track_width_m_ = 0.0, wheel_psi_sd_rad_ = 0.0;
+  std::optional<motion::GroundShiftEstimator> ground_shift_;
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
 };
@@ -218,6 +237,8 @@ MotionMethodEvaluation Summarise(const std::string& name, const Totals& t) {
   e.row_rms_m = t.rms;
   e.row_spacings_m = t.spacings;
   e.ms_per_frame = t.frames > 0 ? 1000.0 * t.seconds / t.frames : 0.0;
+  e.prior_valid_pairs = t.prior_valid;
+  e.prior_translation_rmse_m = t.prior_valid > 0 ? std::sqrt(t.prior_sq / t.prior_valid) : 0.0;
   return e;
 }
 
@@ -279,6 +300,7 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   out.frames = options.frames;
   out.true_row_spacing_m = options.sim.field.row_spacing_m;
   out.wheel_prior = options.wheel_prior;
+  out.image_prior = options.image_prior;
   const double step_m = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Totals paper, ours;
   vision::SegmenterOptions seg_options = options.segmenter;
@@ -311,10 +333,14 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
     MotionMethodOptions paper_o = options.paper, ours_o = options.ours;
     for (MotionMethodOptions* m : {&paper_o, &ours_o}) m->tracker.initial_motion.t_m = {0.0, -step_m};
     MethodRun paper_run(paper_o, camera, mosaic, options.match_tolerance_m);
-    if (options.wheel_prior) motion::UsePriorSearch(ours_o.tracker, ours_o.features);
+    if (options.wheel_prior || options.image_prior) motion::UsePriorSearch(ours_o.tracker, ours_o.features);
     MethodRun ours_run(ours_o, camera, mosaic, options.match_tolerance_m);
     if (options.wheel_prior) {
       ours_run.UseWheelPrior(so.vehicle.track_width_m, options.wheel_prior_psi_sd_rad);
+    } else if (options.image_prior) {
+      motion::GroundShiftOptions g = options.ground_shift;
+      g.plane_height_m = ours_o.features.plane_height_m;
+      ours_run.UseImagePrior(g, camera, options.wheel_prior_psi_sd_rad);
     }
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/motion/feature_tracker.h"
+#include "engine/motion/ground_shift.h"
 #include "engine/motion/features.h"
 #include "engine/motion/mosaic.h"
 #include "engine/motion/row_fit.h"
@@ -40,6 +41,11 @@ struct MotionEvalOptions {
   // only. σ of that prior's rotation per frame:
   bool wheel_prior = false;
   double wheel_prior_psi_sd_rad = 0.15 * M_PI / 180.0;
+  // ... or around the ground's shift between the two frames' plant masks
+  // (motion/ground_shift.h: images only, no odometry at all); a frame that
+  // does not lock coasts on it. Its rotation prior is the rows' heading.
+  bool image_prior = false;
+  motion::GroundShiftOptions ground_shift;
 
   OptionErrors Validate() const;
 };
@@ -70,6 +76,10 @@ struct MotionMethodEvaluation {
   std::vector<double> row_rms_m;       // every fitted row
   std::vector<double> row_spacings_m;  // every neighbouring pair
   double ms_per_frame = 0.0;           // correspondence + motion only
+  // With the image prior: the frame pairs whose ground shift was valid,
+  // and its error against the true translation over them.
+  int prior_valid_pairs = 0;
+  double prior_translation_rmse_m = 0.0;
 };
 
 struct MotionEvaluation {
@@ -78,6 +88,7 @@ struct MotionEvaluation {
   double distance_m = 0.0;  // per sequence, mean
   double true_row_spacing_m = 0.0;
   bool wheel_prior = false;
+  bool image_prior = false;
   MotionMethodEvaluation paper, ours;
 };
 

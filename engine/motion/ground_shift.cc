@@ -1,0 +1,161 @@
+#include "engine/motion/ground_shift.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+#include <opencv2/imgproc.hpp>
+
+
+namespace plantscale::motion {
+
+OptionErrors GroundShiftOptions::Validate() const {
+  OptionErrors e;
+  RequireNonNegative(e, "plane_height_m", plane_height_m);
+  RequireInRange(e, "cell_m", cell_m, 0.001, 0.05);
+  RequirePositive(e, "max_half_width_m", max_half_width_m);
+  RequirePositive(e, "max_range_m", max_range_m);
+  RequireInRange(e, "whiten", whiten, 0.0, 1.0);
+  RequireInRange(e, "min_response", min_response, 0.0, 1.0);
+  RequireInRange(e, "max_shift_fraction", max_shift_fraction, 0.01, 0.5);
+  RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
+  return e;
+}
+
+GroundShiftEstimator::GroundShiftEstimator(const GroundShiftOptions& options,
+                                           const geometry::CameraModel& camera)
+    : options_(options), image_width_(camera.width()), image_height_(camera.height()) {
+  ThrowIfInvalid("ground shift", options_.Validate());
+  // The view: a rectangle inside the ground the image sees, so that the
+  // image's edges, fixed to the camera, are not in it (they would pull
+  // every shift towards none): across between the bottom corners (where
+  // the ground seen is narrowest), along from the bottom edge's farthest
+  // point for max_range_m, short of the top edge.
+  const double w = camera.width(), h = camera.height();
+  const auto on_plane = [&](double u, double v) { return camera.ImageToPlane({u, v}, options_.plane_height_m); };
+  const auto left = on_plane(0.0, h), right = on_plane(w, h), middle = on_plane(0.5 * w, h);
+  const auto far_left = on_plane(0.0, 0.0), far_right = on_plane(w, 0.0);
+  if (!left || !right || !middle) throw DataError("ground shift: the camera's bottom edge sees no ground");
+  double x_lo = std::max(left->x(), -options_.max_half_width_m);
+  double x_hi = std::min(right->x(), options_.max_half_width_m);
+  const double y_lo = std::max({left->y(), right->y(), middle->y()});
+  double y_hi = y_lo + options_.max_range_m;
+  if (far_left && far_right) y_hi = std::min({y_hi, far_left->y(), far_right->y()});
+  if (!(y_hi > y_lo) || !(x_hi > x_lo)) throw DataError("ground shift: the camera sees no ground");
+  // Sizes FFT-friendly (cv::getOptimalDFTSize), the view centred on what was asked
+  // (rounded down, so the view stays inside).
+  int nx = static_cast<int>(std::floor((x_hi - x_lo) / options_.cell_m));
+  int ny = static_cast<int>(std::floor((y_hi - y_lo) / options_.cell_m));
+  if (nx < 16 || ny < 16) throw DataError("ground shift: the ground seen is smaller than 16 cells");
+  while (cv::getOptimalDFTSize(nx) != nx) --nx;
+  while (cv::getOptimalDFTSize(ny) != ny) --ny;
+  size_ = cv::Size(nx, ny);
+  x0_ = 0.5 * (x_lo + x_hi) - 0.5 * nx * options_.cell_m;
+  y0_ = 0.5 * (y_lo + y_hi) - 0.5 * ny * options_.cell_m;
+  // Bird's-eye pixel (c, r) → plane (x0 + (c + ½)·cell, y0 + (r + ½)·cell)
+  // → image (u, v) → OpenCV's pixel coordinates (u − ½, v − ½).
+  const Eigen::Matrix3d h_plane = camera.PlaneToImageHomography(options_.plane_height_m);
+  Eigen::Matrix3d to_plane;
+  to_plane << options_.cell_m, 0.0, x0_ + 0.5 * options_.cell_m, 0.0, options_.cell_m,
+      y0_ + 0.5 * options_.cell_m, 0.0, 0.0, 1.0;
+  Eigen::Matrix3d to_cv;
+  to_cv << 1.0, 0.0, -0.5, 0.0, 1.0, -0.5, 0.0, 0.0, 1.0;
+  const Eigen::Matrix3d m = to_cv * h_plane * to_plane;
+  to_image_ = cv::Mat(3, 3, CV_64F);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) to_image_.at<double>(r, c) = m(r, c);
+  }
+  cv::createHanningWindow(window_, size_, CV_32F);
+}
+
+cv::Mat GroundShiftEstimator::BirdsEye(const cv::Mat& mask) const {
+  if (mask.empty() || mask.type() != CV_8UC1 || mask.cols != image_width_ || mask.rows != image_height_) {
+    throw DataError("ground shift: the mask must be CV_8UC1 of " + std::to_string(image_width_) + "x" +
+                    std::to_string(image_height_) + " pixels");
+  }
+  cv::Mat plant, view;
+  mask.convertTo(plant, CV_32F, 1.0 / 255.0);
+  cv::min(plant, 1.0, plant);
+  cv::warpPerspective(plant, view, to_image_, size_, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, cv::Scalar(0));
+  return view;
+}
+
+namespace {
+
+// The shift of `b` against `a` (b(x) ≈ a(x − shift)) at the peak of their
+// cross-correlation, its spectrum divided by its magnitude to the power
+// `whiten` (1: phase correlation, 0: plain correlation); the peak placed
+// to a fraction of a cell by a parabola through it and its neighbours
+// along each axis. `response`: the peak (whiten 1: 1 for two views one
+// shift apart, near 0 for views that share nothing).
+cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, double& response) {
+  cv::Mat fa, fb, cross;
+  cv::dft(a, fa, cv::DFT_COMPLEX_OUTPUT);
+  cv::dft(b, fb, cv::DFT_COMPLEX_OUTPUT);
+  cv::mulSpectrums(fb, fa, cross, 0, true);
+  if (whiten > 0.0) {
+    std::vector<cv::Mat> parts;
+    cv::split(cross, parts);
+    cv::Mat magnitude;
+    cv::magnitude(parts[0], parts[1], magnitude);
+    cv::pow(magnitude + 1e-9, whiten, magnitude);
+    cv::divide(parts[0], magnitude, parts[0]);
+    cv::divide(parts[1], magnitude, parts[1]);
+    cv::merge(parts, cross);
+  }
+  cv::Mat c;
+  cv::idft(cross, c, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
+  const int w = c.cols, h = c.rows;
+  cv::Point peak;
+  double max_value = 0.0;
+  cv::minMaxLoc(c, nullptr, &max_value, nullptr, &peak);
+  const auto at = [&](int x, int y) { return static_cast<double>(c.at<float>((y + h) % h, (x + w) % w)); };
+  const auto vertex = [](double l, double m, double r) {
+    const double d = l - 2.0 * m + r;
+    return d < 0.0 ? 0.5 * (l - r) / d : 0.0;
+  };
+  double x = peak.x + vertex(at(peak.x - 1, peak.y), max_value, at(peak.x + 1, peak.y));
+  double y = peak.y + vertex(at(peak.x, peak.y - 1), max_value, at(peak.x, peak.y + 1));
+  if (x > 0.5 * w) x -= w;
+  if (y > 0.5 * h) y -= h;
+  response = max_value;
+  return {x, y};
+}
+
+}  // namespace
+
+GroundShift GroundShiftEstimator::Update(const cv::Mat& mask) {
+  cv::Mat view = BirdsEye(mask);
+  GroundShift out;
+  const double fraction = cv::sum(view)[0] / static_cast<double>(view.total());
+  if (fraction < options_.min_plant_fraction) {
+    out.reason = "too little plant matter in view";
+    previous_.release();
+    return out;
+  }
+  if (previous_.empty()) {
+    out.reason = "first frame";
+    previous_ = std::move(view);
+    return out;
+  }
+  // The window on copies: the kept view is the next frame's previous one.
+  cv::Mat a, b;
+  cv::multiply(previous_, window_, a);
+  cv::multiply(view, window_, b);
+  const cv::Point2d p = Correlate(a, b, options_.whiten, out.response);
+  previous_ = std::move(view);
+  out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
+  if (!(out.response >= options_.min_response)) {
+    out.reason = "no clear correlation peak (" + std::to_string(out.response) + ")";
+    return out;
+  }
+  if (std::abs(p.x) > options_.max_shift_fraction * size_.width ||
+      std::abs(p.y) > options_.max_shift_fraction * size_.height) {
+    out.reason = "shift beyond a quarter of the view";
+    return out;
+  }
+  out.valid = true;
+  return out;
+}
+
+}  // namespace plantscale::motion

@@ -1,0 +1,121 @@
+#include "engine/motion/ground_shift.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "engine/geometry/test_cameras.h"
+
+namespace plantscale::motion {
+namespace {
+
+struct Disc {
+  Eigen::Vector2d centre;
+  double radius;
+};
+
+// Plants as discs on the plane at height h, three rows 0.5 m apart with a
+// plant every 0.3 m (radius 6–10 cm) and small weeds, seen by `camera`
+// after the ground moved by `t` (vehicle frame).
+std::vector<Disc> Bed(uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Disc> plants;
+  for (int row = -2; row <= 2; ++row) {
+    for (double y = 0.0; y < 8.0; y += 0.3) {
+      plants.push_back({{0.5 * row + 0.02 * (unit(rng) - 0.5), y + 0.04 * (unit(rng) - 0.5)},
+                        0.06 + 0.04 * unit(rng)});
+    }
+  }
+  for (int k = 0; k < 150; ++k) plants.push_back({{-1.2 + 2.4 * unit(rng), 8.0 * unit(rng)}, 0.01 + 0.01 * unit(rng)});
+  return plants;
+}
+
+// Plants scattered anywhere (no rows), radius 2–5 cm.
+std::vector<Disc> Scatter(uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Disc> plants;
+  for (int k = 0; k < 300; ++k) plants.push_back({{-1.5 + 3.0 * unit(rng), 6.0 * unit(rng)}, 0.02 + 0.03 * unit(rng)});
+  return plants;
+}
+
+cv::Mat Mask(const geometry::CameraModel& camera, const std::vector<Disc>& plants, double h,
+             const Eigen::Vector2d& t) {
+  cv::Mat mask(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
+  for (int v = 0; v < mask.rows; ++v) {
+    for (int u = 0; u < mask.cols; ++u) {
+      const auto p = camera.ImageToPlane({u + 0.5, v + 0.5}, h);
+      if (!p) continue;
+      for (const Disc& d : plants) {
+        if ((*p - (d.centre + t)).squaredNorm() < d.radius * d.radius) {
+          mask.at<uint8_t>(v, u) = 255;
+          break;
+        }
+      }
+    }
+  }
+  return mask;
+}
+
+TEST(GroundShift, FollowsThePlantMatterFromFrameToFrame) {
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  GroundShiftOptions o;
+  o.plane_height_m = 0.1;
+  GroundShiftEstimator estimator(o, camera);
+  const std::vector<Disc> plants = Bed(3);
+  // The ground comes towards the camera 5 cm a frame and drifts across.
+  Eigen::Vector2d at(0.0, -1.0);
+  const GroundShift first = estimator.Update(Mask(camera, plants, o.plane_height_m, at));
+  EXPECT_FALSE(first.valid);
+  EXPECT_EQ(first.reason, "first frame");
+  for (const Eigen::Vector2d& step : {Eigen::Vector2d(0.0, -0.05), Eigen::Vector2d(0.004, -0.047),
+                                     Eigen::Vector2d(-0.006, -0.062)}) {
+    at += step;
+    const GroundShift s = estimator.Update(Mask(camera, plants, o.plane_height_m, at));
+    ASSERT_TRUE(s.valid) << s.reason;
+    // A 1.5 mm tolerance: an eighth of the 8 mm cell, from the parabola's
+    // placing of the peak on a view with the plants' edges resampled.
+    EXPECT_NEAR(s.t_m.x(), step.x(), 0.0015);
+    EXPECT_NEAR(s.t_m.y(), step.y(), 0.0015);
+    EXPECT_GT(s.response, 0.3);
+  }
+}
+
+TEST(GroundShift, BareSoilAViewThatChangedAndAGapAreNotShifts) {
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  GroundShiftOptions o;
+  GroundShiftEstimator estimator(o, camera);
+  const cv::Mat soil(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
+  EXPECT_FALSE(estimator.Update(soil).valid);
+  const GroundShift bare = estimator.Update(soil);
+  EXPECT_FALSE(bare.valid);
+  EXPECT_EQ(bare.reason, "too little plant matter in view");
+  // Two unrelated views (scattered plants): no clear peak.
+  estimator.Update(Mask(camera, Scatter(1), 0.0, {0.0, 0.0}));
+  const GroundShift other = estimator.Update(Mask(camera, Scatter(2), 0.0, {0.0, 0.0}));
+  EXPECT_FALSE(other.valid);
+  EXPECT_LT(other.response, o.min_response);
+  // After Reset the next frame starts again.
+  estimator.Reset();
+  EXPECT_EQ(estimator.Update(Mask(camera, Bed(1), 0.0, {0.0, 0.0})).reason, "first frame");
+}
+
+TEST(GroundShift, BadMasksAndOptionsAreNamed) {
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  GroundShiftEstimator estimator(GroundShiftOptions{}, camera);
+  EXPECT_THROW(estimator.Update(cv::Mat(10, 10, CV_8UC1, cv::Scalar(0))), DataError);
+  EXPECT_THROW(estimator.Update(cv::Mat(camera.height(), camera.width(), CV_32FC1, cv::Scalar(0))), DataError);
+  GroundShiftOptions bad;
+  bad.cell_m = 0.0;
+  bad.whiten = 2.0;
+  const OptionErrors e = bad.Validate();
+  ASSERT_EQ(e.size(), 2U);
+  EXPECT_EQ(e[0].key, "cell_m");
+  EXPECT_EQ(e[1].key, "whiten");
+  EXPECT_THROW(GroundShiftEstimator(bad, camera), InvalidOptionsError);
+}
+
+}  // namespace
+}  // namespace plantscale::motion
