@@ -395,14 +395,18 @@ std::vector<double> StraightSearch::HoughSharpness() {
   for (int i = 0; i < ng_; ++i) {
     for (int j = 0; j < nl_; ++j) {
       BuildHistogram(GeometryAt(i * g_step_, -o_.max_lean + j * l_step_), H_);
+      // The histogram smoothed by (¼, ½, ¼), zero beyond its ends; the
+      // first and last bins apart so that the loop has no branches.
+      const double* hist = histogram_.data();
+      const int n = n_bins_;
       double sum = 0.0, sum2 = 0.0;
-      for (int b = 0; b < n_bins_; ++b) {
-        const double l = b > 0 ? histogram_[static_cast<size_t>(b - 1)] : 0.0;
-        const double r = b + 1 < n_bins_ ? histogram_[static_cast<size_t>(b + 1)] : 0.0;
-        const double v = 0.25 * l + 0.5 * histogram_[static_cast<size_t>(b)] + 0.25 * r;
+      const auto add = [&](double v) {
         sum += v;
         sum2 += v * v;
-      }
+      };
+      add(0.25 * 0.0 + 0.5 * hist[0] + 0.25 * (n > 1 ? hist[1] : 0.0));
+      for (int b = 1; b + 1 < n; ++b) add(0.25 * hist[b - 1] + 0.5 * hist[b] + 0.25 * hist[b + 1]);
+      if (n > 1) add(0.25 * hist[n - 2] + 0.5 * hist[n - 1] + 0.25 * 0.0);
       sharpness[static_cast<size_t>(i) * nl_ + j] = sum > 0.0 ? sum2 / (sum * sum) : 0.0;
     }
   }
