@@ -4,6 +4,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <utility>
 
 #include "engine/common/vectorise.h"
 
@@ -91,12 +92,20 @@ PLANTSCALE_VECTOR_CLONES Phasor PhasorSum(std::span<const float> w, double a0, d
   return PhasorSumOf(w, a0, da);
 }
 
-CombFit CombAt(std::span<const double> histogram, double x0, double bin_width, double period) {
-  // Only the span that holds weight.
+namespace {
+
+// The span of `histogram` that holds weight, [first, last).
+std::pair<size_t, size_t> Weighted(std::span<const double> histogram) {
   size_t first = 0;
   size_t last = histogram.size();
   while (first < last && histogram[first] == 0.0) ++first;
   while (last > first && histogram[last - 1] == 0.0) --last;
+  return {first, last};
+}
+
+// CombAt on the weighted span [first, last) of `histogram`.
+CombFit CombOn(std::span<const double> histogram, size_t first, size_t last, double x0,
+               double bin_width, double period) {
   const double da = -2.0 * std::numbers::pi * bin_width / period;
   const double a0 =
       -2.0 * std::numbers::pi * (x0 + static_cast<double>(first) * bin_width) / period;
@@ -114,11 +123,19 @@ CombFit CombAt(std::span<const double> histogram, double x0, double bin_width, d
   return fit;
 }
 
+}  // namespace
+
+CombFit CombAt(std::span<const double> histogram, double x0, double bin_width, double period) {
+  const auto [first, last] = Weighted(histogram);
+  return CombOn(histogram, first, last, x0, bin_width, period);
+}
+
 std::vector<CombFit> BestCombs(std::span<const double> histogram, double x0, double bin_width,
                                double min_period, double max_period, double step, int max_fits) {
   std::vector<CombFit> all;
+  const auto [first, last] = Weighted(histogram);  // once for every period
   for (double p = min_period; p <= max_period * (1.0 + 1e-9); p *= 1.0 + step) {
-    all.push_back(CombAt(histogram, x0, bin_width, p));
+    all.push_back(CombOn(histogram, first, last, x0, bin_width, p));
   }
   std::vector<CombFit> peaks;
   for (size_t i = 0; i < all.size(); ++i) {
