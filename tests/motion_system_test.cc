@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "app/config_loader.h"
 #include "app/motion_eval.h"
@@ -12,9 +13,9 @@
 namespace plantscale::app {
 namespace {
 
-MotionEvalOptions Sequences(int seeds, int frames) {
+MotionEvalOptions Sequences(int seeds, int frames, const std::string& preset = "sanchiz_pla") {
   MotionEvalOptions o;
-  o.sim = LoadSimulatorPreset("sanchiz_pla", DefaultConfigDir());
+  o.sim = LoadSimulatorPreset(preset, DefaultConfigDir());
   o.seeds = seeds;
   o.frames = frames;
   o.paper = PaperMethod();
@@ -76,25 +77,14 @@ TEST(MotionSystem, SecondSetUpMosaicRowFit) {
   EXPECT_LT(e.ours.drift_cm_per_m, 0.3 * e.paper.drift_cm_per_m);
 }
 
-}  // namespace
-}  // namespace plantscale::app
-
-namespace plantscale::app {
-namespace {
-
 // The vehicle's own camera with no odometry at all (issue 38): ours
 // searches around the ground's shift between the plant masks
 // (motion/ground_shift.h). Tuning seeds 1–2 (measured: 56 of 58 pairs
 // locked, 66.5 % correct, drift 2.07 cm/m); the smoothed previous motion
 // alone locks 1 of 58 pairs, 22.9 % correct.
 TEST(MotionSystem, FieldWithoutOdometryLocksOnTheGroundShift) {
-  MotionEvalOptions o;
-  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
+  MotionEvalOptions o = Sequences(2, 30, "field");
   o.sim.seed = 1;
-  o.seeds = 2;
-  o.frames = 30;
-  o.paper = PaperMethod();
-  o.ours = OursMethod(o.sim);
   o.image_prior = true;
   const MotionEvaluation e = EvaluateMotion(o);
   ASSERT_EQ(e.ours.pairs, 58);
