@@ -80,10 +80,12 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
                        Pct(a.missing, a.missing + a.crop) + "), longest " + std::to_string(a.longest_gap) +
                        (a.longest_gap == 1 ? " plant" : " plants");
     if (a.crops_recorded_as_weeds == 1) {
-      gaps += "; 1 place in a gap holds a crop-sized weed record, taken as the crop recorded as a weed";
+      gaps += "; 1 place in a gap holds a weed record (crop-sized, or beside the place), taken as the crop "
+              "recorded as a weed";
     } else if (a.crops_recorded_as_weeds > 1) {
       gaps += "; " + std::to_string(a.crops_recorded_as_weeds) +
-              " places in gaps hold a crop-sized weed record each, taken as the crop recorded as a weed";
+              " places in gaps hold a weed record each (crop-sized, or beside the place), taken as the crop "
+              "recorded as a weed";
     }
     Row(out, "gaps (missing plants)", gaps);
     Row(out, "crop leaf-tip radius", "median " + Fixed(100 * a.crop_size.median_m, 1) + " cm (quartiles " +

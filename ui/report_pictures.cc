@@ -319,7 +319,7 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
   if (!a.crop_sized_weed_ids.empty()) {  // their key, on a line of its own
     const cv::Point at{left, by - 22};
     cv::circle(img, {at.x + 7, at.y - 4}, 6, Bgr(palette::kCrop), 2, cv::LINE_AA);
-    Text(img, "crop-sized weed record: a crop seen as a weed (far view, or in a gap's place), not counted as a weed",
+    Text(img, "weed record taken for a crop (a far view, or in a gap's place), not counted as a weed",
          {at.x + 19, at.y});
   }
   return img;

@@ -404,9 +404,9 @@ std::vector<double> StraightSearch::HoughSharpness() {
         sum += v;
         sum2 += v * v;
       };
-      add(0.25 * 0.0 + 0.5 * hist[0] + 0.25 * (n > 1 ? hist[1] : 0.0));
+      add(0.5 * hist[0] + 0.25 * (n > 1 ? hist[1] : 0.0));
       for (int b = 1; b + 1 < n; ++b) add(0.25 * hist[b - 1] + 0.5 * hist[b] + 0.25 * hist[b + 1]);
-      if (n > 1) add(0.25 * hist[n - 2] + 0.5 * hist[n - 1] + 0.25 * 0.0);
+      if (n > 1) add(0.25 * hist[n - 2] + 0.5 * hist[n - 1]);
       sharpness[static_cast<size_t>(i) * nl_ + j] = sum > 0.0 ? sum2 / (sum * sum) : 0.0;
     }
   }
