@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
 #include <opencv2/imgproc.hpp>
-
+#include <string>
+#include <vector>
 
 namespace plantscale::motion {
 
@@ -35,8 +35,8 @@ GroundShiftEstimator::GroundShiftEstimator(const GroundShiftOptions& options,
   const auto left = on_plane(0.0, h), right = on_plane(w, h), middle = on_plane(0.5 * w, h);
   const auto far_left = on_plane(0.0, 0.0), far_right = on_plane(w, 0.0);
   if (!left || !right || !middle) throw DataError("ground shift: the camera's bottom edge sees no ground");
-  double x_lo = std::max(left->x(), -options_.max_half_width_m);
-  double x_hi = std::min(right->x(), options_.max_half_width_m);
+  const double x_lo = std::max(left->x(), -options_.max_half_width_m);
+  const double x_hi = std::min(right->x(), options_.max_half_width_m);
   const double y_lo = std::max({left->y(), right->y(), middle->y()});
   double y_hi = y_lo + options_.max_range_m;
   if (far_left && far_right) y_hi = std::min({y_hi, far_left->y(), far_right->y()});
@@ -73,8 +73,7 @@ cv::Mat GroundShiftEstimator::BirdsEye(const cv::Mat& mask) const {
                     std::to_string(image_height_) + " pixels");
   }
   cv::Mat plant, view;
-  mask.convertTo(plant, CV_32F, 1.0 / 255.0);
-  cv::min(plant, 1.0, plant);
+  cv::Mat(mask > 0).convertTo(plant, CV_32F, 1.0 / 255.0);  // plant 1, soil 0
   cv::warpPerspective(plant, view, to_image_, size_, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar(0));
   return view;
