@@ -168,11 +168,10 @@ void CountGaps(RowAgronomy& r, const std::vector<const PlantRecord*>& v, Filled 
 // A weed record's radius: the disc of its area.
 double DiscRadius(const PlantRecord& w) { return std::sqrt(std::max(0.0, w.plant.size_m2) / std::numbers::pi); }
 
-// The radius from which a weed record is as large as a crop (agronomy.h,
-// far_view_fraction; ∞: none is).
-double CropSizedRadius(const AgronomySummary& a, const AgronomyOptions& o) {
-  return o.far_view_fraction > 0.0 ? o.far_view_fraction * a.crop_size.median_m
-                                   : std::numeric_limits<double>::infinity();
+// `fraction` of the crops' median leaf-tip radius (∞ for 0: no record is
+// that large), the lines of far_view_fraction and gap_crop_fraction.
+double CropRadiusFraction(const AgronomySummary& a, double fraction) {
+  return fraction > 0.0 ? fraction * a.crop_size.median_m : std::numeric_limits<double>::infinity();
 }
 
 // Every row's gaps (CountGaps), a place filled by a crop-sized weed record
@@ -181,9 +180,8 @@ double CropSizedRadius(const AgronomySummary& a, const AgronomyOptions& o) {
 // place); the records that filled one.
 std::set<const PlantRecord*> CountAllGaps(const RowsOfCrops& by_row, const std::vector<const PlantRecord*>& weeds,
                                           const AgronomyOptions& o, AgronomySummary& a) {
-  const double crop_sized = CropSizedRadius(a, o);
-  const double near_sized = o.gap_crop_fraction > 0.0 ? o.gap_crop_fraction * a.crop_size.median_m
-                                                      : std::numeric_limits<double>::infinity();
+  const double crop_sized = CropRadiusFraction(a, o.far_view_fraction);
+  const double near_sized = CropRadiusFraction(a, o.gap_crop_fraction);
   std::vector<const PlantRecord*> large;  // weed records that may fill a place, by y
   for (const PlantRecord* w : weeds) {
     if (DiscRadius(*w) >= std::min(crop_sized, near_sized)) large.push_back(w);
@@ -278,7 +276,7 @@ WeedContext WeedContextOf(const RowsOfCrops& by_row, const AgronomySummary& a, c
   WeedContext c;
   c.discs = CropDiscs(by_row, o);
   for (const CropDisc& d : c.discs) c.max_disc_m = std::max(c.max_disc_m, d.radius_m);
-  c.crop_sized_m = CropSizedRadius(a, o);
+  c.crop_sized_m = CropRadiusFraction(a, o.far_view_fraction);
   std::vector<double> spacing;
   for (const RowAgronomy& r : a.rows) spacing.push_back(r.plant_spacing_m);
   c.far_view_reach_m = 0.5 * Median(spacing);
@@ -324,11 +322,11 @@ void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops&
     if (p.x() < x_lo || p.x() > x_hi || p.y() < a.y0_m || p.y() > a.y1_m) continue;
     if (FarViewOfCrop(*w, context)) {
       ++a.far_views_of_crops;
-      a.crop_sized_weed_ids.insert(w->plant.id);
+      a.weed_records_taken_as_crops.insert(w->plant.id);
       continue;
     }
     if (crops_as_weeds.count(w)) {  // a crop in a gap's place (CountGaps)
-      a.crop_sized_weed_ids.insert(w->plant.id);
+      a.weed_records_taken_as_crops.insert(w->plant.id);
       continue;
     }
     ++a.weeds;

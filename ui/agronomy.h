@@ -122,7 +122,7 @@ struct AgronomySummary {
   double weeds_per_m2 = 0.0;
   int far_views_of_crops = 0;        // crop-sized weed records beside their crop (above), not in `weeds`
   int crops_recorded_as_weeds = 0;   // weed records filling a gap's place (above), in neither
-  std::set<int64_t> crop_sized_weed_ids;  // the records of both (the bed picture draws them as crops' rings)
+  std::set<int64_t> weed_records_taken_as_crops;  // ids of both (the bed picture draws them as crops' rings)
   double unseen_canopy_m2 = 0.0;     // ground under the crops that no view sees (above)
   double weeds_per_m2_seen = 0.0;    // weeds per m² of the ground seen (above)
   SizeStats weed_size;

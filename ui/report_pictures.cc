@@ -113,7 +113,6 @@ int MarkerRadiusPx(const tm::PlantObservation& p, const Window& w) {
 }
 
 // Plant marker: a disc of the plant's area (at least 2 px), ringed blue when sprayed.
-
 void DrawPlant(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
   const cv::Point2d c = w.At(p.position_m.x(), p.position_m.y());
   const int r = MarkerRadiusPx(p, w);
@@ -122,8 +121,8 @@ void DrawPlant(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
              cv::LINE_AA);
 }
 
-// A crop-sized weed record that the summary takes for a crop (agronomy.h):
-// a ring of the crop colour, the record's size.
+// A weed record that the summary takes for a crop (agronomy.h: a far view,
+// or a crop in a gap's place): a ring of the crop colour, the record's size.
 void DrawCropSeenAsWeed(cv::Mat& img, const tm::PlantObservation& p, const Window& w) {
   cv::circle(img, w.At(p.position_m.x(), p.position_m.y()), MarkerRadiusPx(p, w), Bgr(palette::kCrop), 2,
              cv::LINE_AA);
@@ -276,7 +275,7 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
   const double ppm = (o.strip_width_px - 2 * left) / o.strip_length_m;
   const int strip_h = static_cast<int>(std::lround((x_hi - x_lo) * ppm));
   const int n = static_cast<int>(starts.size());
-  const int key_h = a.crop_sized_weed_ids.empty() ? 0 : 22;  // the crop-sized weed records' key
+  const int key_h = a.weed_records_taken_as_crops.empty() ? 0 : 22;  // their key's line
   cv::Mat img(top + n * (strip_h + label_h + gap) + 40 + key_h, o.strip_width_px, CV_8UC3, kWhite);
   Text(img, "Bed, " + Fixed(o.strip_length_m, 0) + " m per strip, the run left to right; y along the bed", {left, 20},
        0.5);
@@ -299,7 +298,7 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
     for (const auto& [id, r] : model.plants()) {
       const double y = r.plant.position_m.y();
       if (y < w.y0_m - 0.2 || y > y1 + 0.2) continue;
-      if (a.crop_sized_weed_ids.count(r.plant.id)) {
+      if (a.weed_records_taken_as_crops.count(r.plant.id)) {
         DrawCropSeenAsWeed(roi, r.plant, local);
       } else {
         DrawPlant(roi, r.plant, local);
@@ -316,7 +315,7 @@ cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::v
           {Bgr(palette::kTreated), "treated (cells; ring: plant sprayed)"},
           {Bgr(palette::kSoil), "soil"},
           {Bgr(palette::kUnknownCell), "not mapped"}});
-  if (!a.crop_sized_weed_ids.empty()) {  // their key, on a line of its own
+  if (!a.weed_records_taken_as_crops.empty()) {  // their key, on a line of its own
     const cv::Point at{left, by - 22};
     cv::circle(img, {at.x + 7, at.y - 4}, 6, Bgr(palette::kCrop), 2, cv::LINE_AA);
     Text(img, "weed record taken for a crop (a far view, or in a gap's place), not counted as a weed",

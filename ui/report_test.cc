@@ -245,7 +245,7 @@ TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
   const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
   ASSERT_EQ(a.rows.size(), 1u);
   EXPECT_EQ(a.crops_recorded_as_weeds, 2);
-  EXPECT_EQ(a.crop_sized_weed_ids.size(), 2u);  // the bed picture draws the two as crops' rings
+  EXPECT_EQ(a.weed_records_taken_as_crops.size(), 2u);  // the bed picture draws the two as crops' rings
   EXPECT_EQ(a.gaps, 3);     // 3.5, 5, 8
   EXPECT_EQ(a.missing, 3);
   EXPECT_EQ(a.longest_gap, 1);
