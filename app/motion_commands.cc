@@ -56,7 +56,7 @@ nlohmann::json EvaluationJson(const MotionEvaluation& e) {
   j["frames"] = e.frames;
   j["distance_m"] = e.distance_m;
   j["true_row_spacing_m"] = e.true_row_spacing_m;
-  j["prior"] = e.wheel_prior ? "wheels" : e.image_prior ? "image" : "none";
+  j["prior"] = MotionPriorName(e.prior);
   j["baseline_paper"] = MethodJson(e.paper);
   j["published"] = {{"correct_correspondence_rate_min", 0.95},
                     {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
@@ -108,8 +108,9 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   o.frames = a.frames;
   o.paper = PaperMethod();
   o.ours = OursMethod(o.sim);
-  o.wheel_prior = a.prior == "wheels";
-  o.image_prior = a.prior == "image";
+  for (const MotionPrior p : {MotionPrior::kNone, MotionPrior::kWheels, MotionPrior::kImage}) {
+    if (a.prior == MotionPriorName(p)) o.prior = p;
+  }
   const MotionEvaluation e = EvaluateMotion(o);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';

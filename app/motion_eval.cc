@@ -89,13 +89,13 @@ class MethodRun {
   // `track_width_m`, the rotation's σ per frame `psi_sd_rad`).
   void UseWheelPrior(double track_width_m, double psi_sd_rad) {
     track_width_m_ = track_width_m;
-    wheel_psi_sd_rad_ = psi_sd_rad;
+    prior_psi_sd_rad_ = psi_sd_rad;
   }
   // Search around the ground's shift between the plant masks (no odometry).
   void UseImagePrior(const motion::GroundShiftOptions& o, const geometry::CameraModel& camera,
                      double psi_sd_rad) {
     ground_shift_.emplace(o, camera);
-    wheel_psi_sd_rad_ = psi_sd_rad;
+    prior_psi_sd_rad_ = psi_sd_rad;
   }
 
   void Step(const sim::SimFrame& frame, const vision::Segmentation& seg,
@@ -156,13 +156,13 @@ class MethodRun {
     const double n = static_cast<double>(frame.odometry.size());
     const double dt = 1e-6 * static_cast<double>(frame.truth.utime - previous_utime_);
     const double v = 0.5 * (left + right) / n, w = (right - left) / n / track_width_m_;
-    tracker_.SetMotionPrior({-w * dt, {0.0, -v * dt}}, wheel_psi_sd_rad_);
+    tracker_.SetMotionPrior({-w * dt, {0.0, -v * dt}}, prior_psi_sd_rad_);
   }
 
   void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
     const motion::GroundShift shift = ground_shift_->Update(seg.mask);
     if (!shift.valid || first_) return;
-    tracker_.SetMotionPrior({0.0, shift.t_m}, wheel_psi_sd_rad_);
+    tracker_.SetMotionPrior({0.0, shift.t_m}, prior_psi_sd_rad_);
     ++totals.prior_valid;
     totals.prior_sq += (shift.t_m - TrueMotion(previous_pose_, frame.truth.pose).t_m).squaredNorm();
   }
@@ -205,7 +205,7 @@ class MethodRun {
   std::unordered_map<int64_t, FeatureTruth> track_truth_;
   sim::Pose2 previous_pose_, first_pose_;
   int64_t previous_utime_ = 0;
-  double track_width_m_ = 0.0, wheel_psi_sd_rad_ = 0.0;
+  double track_width_m_ = 0.0, prior_psi_sd_rad_ = 0.0;
   std::optional<motion::GroundShiftEstimator> ground_shift_;
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
@@ -244,13 +244,23 @@ MotionMethodEvaluation Summarise(const std::string& name, const Totals& t) {
 
 }  // namespace
 
+const char* MotionPriorName(MotionPrior p) {
+  switch (p) {
+    case MotionPrior::kWheels: return "wheels";
+    case MotionPrior::kImage: return "image";
+    case MotionPrior::kNone: break;
+  }
+  return "none";
+}
+
 OptionErrors MotionEvalOptions::Validate() const {
   OptionErrors e = Prefixed("sim", sim.Validate());
   RequirePositive(e, "seeds", seeds);
   if (frames < 2) e.push_back({"frames", "must be >= 2"});
   RequirePositive(e, "match_tolerance_m", match_tolerance_m);
   RequirePositive(e, "mosaic_resolution_m", mosaic_resolution_m);
-  RequirePositive(e, "wheel_prior_psi_sd_rad", wheel_prior_psi_sd_rad);
+  RequirePositive(e, "prior_psi_sd_rad", prior_psi_sd_rad);
+  for (OptionError& g : Prefixed("ground_shift", ground_shift.Validate())) e.push_back(std::move(g));
   for (const auto& [name, m] : {std::pair{"paper", &paper}, std::pair{"ours", &ours}}) {
     const std::string prefix = name;
     auto f = Prefixed(prefix + ".features", m->features.Validate());
@@ -299,8 +309,7 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   out.preset = options.sim.preset;
   out.frames = options.frames;
   out.true_row_spacing_m = options.sim.field.row_spacing_m;
-  out.wheel_prior = options.wheel_prior;
-  out.image_prior = options.image_prior;
+  out.prior = options.prior;
   const double step_m = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Totals paper, ours;
   vision::SegmenterOptions seg_options = options.segmenter;
@@ -333,14 +342,14 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
     MotionMethodOptions paper_o = options.paper, ours_o = options.ours;
     for (MotionMethodOptions* m : {&paper_o, &ours_o}) m->tracker.initial_motion.t_m = {0.0, -step_m};
     MethodRun paper_run(paper_o, camera, mosaic, options.match_tolerance_m);
-    if (options.wheel_prior || options.image_prior) motion::UsePriorSearch(ours_o.tracker, ours_o.features);
+    if (options.prior != MotionPrior::kNone) motion::UsePriorSearch(ours_o.tracker, ours_o.features);
     MethodRun ours_run(ours_o, camera, mosaic, options.match_tolerance_m);
-    if (options.wheel_prior) {
-      ours_run.UseWheelPrior(so.vehicle.track_width_m, options.wheel_prior_psi_sd_rad);
-    } else if (options.image_prior) {
+    if (options.prior == MotionPrior::kWheels) {
+      ours_run.UseWheelPrior(so.vehicle.track_width_m, options.prior_psi_sd_rad);
+    } else if (options.prior == MotionPrior::kImage) {
       motion::GroundShiftOptions g = options.ground_shift;
       g.plane_height_m = ours_o.features.plane_height_m;
-      ours_run.UseImagePrior(g, camera, options.wheel_prior_psi_sd_rad);
+      ours_run.UseImagePrior(g, camera, options.prior_psi_sd_rad);
     }
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;

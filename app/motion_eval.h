@@ -25,6 +25,16 @@ struct MotionMethodOptions {
   double mosaic_plane_height_m = 0.0;  // plane the labels are placed on in the mosaic
 };
 
+// kNone: the smoothed previous motion (no odometry at all); kWheels: the
+// motion the wheel odometry reports since the previous frame (as the
+// vehicle's pipeline does, with the simulator's faulty wheels: scale error,
+// slip); kImage: the ground's shift between the two frames' plant masks
+// (motion/ground_shift.h: images only, no odometry at all). With a prior
+// the search is the prior-gated one, and a frame that does not lock
+// coasts on the prior.
+enum class MotionPrior { kNone, kWheels, kImage };
+const char* MotionPriorName(MotionPrior p);  // "none", "wheels", "image"
+
 struct MotionEvalOptions {
   sim::SimulatorOptions sim;
   int seeds = 3;                    // seeds sim.seed, sim.seed + 1, ...
@@ -34,18 +44,12 @@ struct MotionEvalOptions {
   vision::SegmenterOptions segmenter;
   MotionMethodOptions paper, ours;  // defaults: PaperMethod(), OursMethod()
   motion::RowFitOptions rows;
-  // Ours searches each frame around the motion the wheel odometry reports
-  // since the previous frame (as the vehicle's pipeline does, with the
-  // simulator's faulty wheels: scale error, slip) instead of around the
-  // smoothed previous motion; the pose still composes the camera's motion
-  // only. σ of that prior's rotation per frame:
-  bool wheel_prior = false;
-  double wheel_prior_psi_sd_rad = 0.15 * M_PI / 180.0;
-  // ... or around the ground's shift between the two frames' plant masks
-  // (motion/ground_shift.h: images only, no odometry at all); a frame that
-  // does not lock coasts on it. Its rotation prior is the rows' heading.
-  bool image_prior = false;
-  motion::GroundShiftOptions ground_shift;
+  // What ours searches each frame around (MotionPrior); the pose still
+  // composes the camera's motion only. σ of the prior's rotation per frame
+  // (the wheels' turn; the ground shift's rotation is taken as none):
+  MotionPrior prior = MotionPrior::kNone;
+  double prior_psi_sd_rad = 0.15 * M_PI / 180.0;
+  motion::GroundShiftOptions ground_shift;  // kImage (its plane: ours' feature plane)
 
   OptionErrors Validate() const;
 };
@@ -87,8 +91,7 @@ struct MotionEvaluation {
   int seeds = 0, frames = 0;
   double distance_m = 0.0;  // per sequence, mean
   double true_row_spacing_m = 0.0;
-  bool wheel_prior = false;
-  bool image_prior = false;
+  MotionPrior prior = MotionPrior::kNone;
   MotionMethodEvaluation paper, ours;
 };
 

@@ -85,7 +85,7 @@ TEST(MotionSystem, SecondSetUpMosaicRowFit) {
 TEST(MotionSystem, FieldWithoutOdometryLocksOnTheGroundShift) {
   MotionEvalOptions o = Sequences(2, 30, "field");
   o.sim.seed = 1;
-  o.image_prior = true;
+  o.prior = MotionPrior::kImage;
   const MotionEvaluation e = EvaluateMotion(o);
   ASSERT_EQ(e.ours.pairs, 58);
   EXPECT_EQ(e.ours.prior_valid_pairs, 58);
