@@ -22,6 +22,7 @@ struct MotionArgs {
   bool json = false;
   std::string baseline;
   std::string prior = "none";
+  std::string ground_shift = "soil";
 };
 
 nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
@@ -57,6 +58,8 @@ nlohmann::json EvaluationJson(const MotionEvaluation& e) {
   j["distance_m"] = e.distance_m;
   j["true_row_spacing_m"] = e.true_row_spacing_m;
   j["prior"] = MotionPriorName(e.prior);
+  if (e.prior == MotionPrior::kImage)
+    j["ground_shift"] = e.ground_shift_source == motion::GroundShiftSource::kSoil ? "soil" : "plants";
   j["baseline_paper"] = MethodJson(e.paper);
   j["published"] = {{"correct_correspondence_rate_min", 0.95},
                     {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
@@ -111,6 +114,7 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   for (const MotionPrior p : {MotionPrior::kNone, MotionPrior::kWheels, MotionPrior::kImage}) {
     if (a.prior == MotionPriorName(p)) o.prior = p;
   }
+  if (a.ground_shift == "plants") o.ground_shift = motion::GroundShiftOptions{};
   const MotionEvaluation e = EvaluateMotion(o);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';
@@ -151,6 +155,12 @@ void AddMotionCommands(CommandRegistry& registry) {
                   "motion only), or image (the ground's shift between the two frames' plant "
                   "masks, phase-correlated on the plane: no odometry at all)")
       ->check(CLI::IsMember({"none", "wheels", "image"}))
+      ->capture_default_str();
+  cmd->add_option("--ground-shift", a.ground_shift,
+                  "with --prior image, what is correlated: soil (the soil's texture on the "
+                  "ground, the plants cut out: the ground's true scale) or plants (the plant "
+                  "masks on the plane at plant height)")
+      ->check(CLI::IsMember({"plants", "soil"}))
       ->capture_default_str();
 }
 

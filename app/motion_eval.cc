@@ -92,9 +92,16 @@ class MethodRun {
     prior_psi_sd_rad_ = psi_sd_rad;
   }
   // Search around the ground's shift between the plant masks (no odometry).
-  void UseImagePrior(const motion::GroundShiftOptions& o, const geometry::CameraModel& camera,
-                     double psi_sd_rad) {
+  void UseImagePrior(const motion::GroundShiftOptions& o, double plants_plane_height_m,
+                     const geometry::CameraModel& camera, double psi_sd_rad) {
     ground_shift_.emplace(o, camera);
+    // Where the soil gives no shift (a closed canopy, soil without texture),
+    // the plant masks on the plane at plant height stand in.
+    if (o.source == motion::GroundShiftSource::kSoil) {
+      motion::GroundShiftOptions p;
+      p.plane_height_m = plants_plane_height_m;
+      plant_shift_.emplace(p, camera);
+    }
     prior_psi_sd_rad_ = psi_sd_rad;
   }
 
@@ -160,7 +167,11 @@ class MethodRun {
   }
 
   void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
-    const motion::GroundShift shift = ground_shift_->Update(seg.mask);
+    motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
+    if (plant_shift_) {
+      const motion::GroundShift on_plants = plant_shift_->Update(seg.mask);
+      if (!shift.valid) shift = on_plants;
+    }
     if (!shift.valid || first_) return;
     tracker_.SetMotionPrior({0.0, shift.t_m}, prior_psi_sd_rad_);
     ++totals.prior_valid;
@@ -206,7 +217,7 @@ class MethodRun {
   sim::Pose2 previous_pose_, first_pose_;
   int64_t previous_utime_ = 0;
   double track_width_m_ = 0.0, prior_psi_sd_rad_ = 0.0;
-  std::optional<motion::GroundShiftEstimator> ground_shift_;
+  std::optional<motion::GroundShiftEstimator> ground_shift_, plant_shift_;
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
 };
@@ -310,6 +321,7 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   out.frames = options.frames;
   out.true_row_spacing_m = options.sim.field.row_spacing_m;
   out.prior = options.prior;
+  out.ground_shift_source = options.ground_shift.source;
   const double step_m = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Totals paper, ours;
   vision::SegmenterOptions seg_options = options.segmenter;
@@ -348,8 +360,8 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
       ours_run.UseWheelPrior(so.vehicle.track_width_m, options.prior_psi_sd_rad);
     } else if (options.prior == MotionPrior::kImage) {
       motion::GroundShiftOptions g = options.ground_shift;
-      g.plane_height_m = ours_o.features.plane_height_m;
-      ours_run.UseImagePrior(g, camera, options.prior_psi_sd_rad);
+      if (g.source == motion::GroundShiftSource::kPlants) g.plane_height_m = ours_o.features.plane_height_m;
+      ours_run.UseImagePrior(g, ours_o.features.plane_height_m, camera, options.prior_psi_sd_rad);
     }
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;

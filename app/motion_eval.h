@@ -28,8 +28,9 @@ struct MotionMethodOptions {
 // kNone: the smoothed previous motion (no odometry at all); kWheels: the
 // motion the wheel odometry reports since the previous frame (as the
 // vehicle's pipeline does, with the simulator's faulty wheels: scale error,
-// slip); kImage: the ground's shift between the two frames' plant masks
-// (motion/ground_shift.h: images only, no odometry at all). With a prior
+// slip); kImage: the ground's shift between the two frames, the soil's
+// texture or the plant masks phase-correlated (motion/ground_shift.h: images
+// only, no odometry at all). With a prior
 // the search is the prior-gated one, and a frame that does not lock
 // coasts on the prior.
 enum class MotionPrior { kNone, kWheels, kImage };
@@ -49,7 +50,9 @@ struct MotionEvalOptions {
   // (the wheels' turn; the ground shift's rotation is taken as none):
   MotionPrior prior = MotionPrior::kNone;
   double prior_psi_sd_rad = 0.15 * M_PI / 180.0;
-  motion::GroundShiftOptions ground_shift;  // kImage (its plane: ours' feature plane)
+  // kImage: the soil's texture by default; the plant masks (GroundShiftOptions{})
+  // are warped onto ours' feature plane.
+  motion::GroundShiftOptions ground_shift = motion::GroundShiftOptions::Soil();
 
   OptionErrors Validate() const;
 };
@@ -92,6 +95,7 @@ struct MotionEvaluation {
   double distance_m = 0.0;  // per sequence, mean
   double true_row_spacing_m = 0.0;
   MotionPrior prior = MotionPrior::kNone;
+  motion::GroundShiftSource ground_shift_source = motion::GroundShiftSource::kSoil;  // kImage
   MotionMethodEvaluation paper, ours;
 };
 

@@ -1,23 +1,33 @@
 #pragma once
-// The ground's shift between two frames from the plant masks alone, with no
-// features and no odometry (issue 38): each mask is warped onto the plane at
-// plant height, a bird's-eye view in the vehicle frame, `cell_m` per
-// pixel, and the two views are phase-correlated (Hann window, the cross
-// spectrum divided by its magnitude, the peak placed by parabolas). Plants that merge, split or slide between frames change
-// their contours, and with them the dominant points the feature search
-// pairs, but little of their mass: the correlation peak is the motion of
-// the plant matter as a whole. It is the feature search's prior where the
-// wheels are absent or lie, and the motion a frame coasts on when the
-// search does not lock.
+// The ground's shift between two frames with no features and no odometry
+// (issue 38), from either of two bird's-eye views in the vehicle frame,
+// `cell_m` per pixel, phase-correlated (Hann window, the cross spectrum
+// divided by its magnitude to the power `whiten`, the peak placed by
+// parabolas):
+// - kSoil (GroundShiftOptions::Soil()): the soil's own texture (clods,
+//   stones, glints) on the ground, the plants cut out. The soil lies on the
+//   plane the camera's height is calibrated to, so the shift has the
+//   ground's scale whatever the plants' heights; it fails where a canopy
+//   closes over the soil or the soil has no texture (invalid: the caller
+//   falls back on the plants).
+// - kPlants: the plant masks on the plane at plant height. Plants that
+//   merge, split or slide between frames change their contours, and with
+//   them the dominant points the feature search pairs, but little of their
+//   mass. Plant matter above or below the plane moves faster or slower on
+//   it than the ground (its scale is (H − h)/(H − z), 0.7 % per centimetre
+//   on the field camera), so the shift reads short or long.
+// It is the feature search's prior where the wheels are absent or lie, and
+// the motion a frame coasts on when the search does not lock.
 //
 // Only the translation is measured (the rotation between frames of a
 // vehicle following rows is a few milliradians). The view is limited to
-// `max_range_m` ahead of the nearest ground seen, where the plants are
-// resolved. What limits it (docs/results/2026-11-27-visual-motion.md,
-// session 31): the camera's bounce moves the whole view by about a
-// centimetre from frame to frame (0.004 rad of pitch at 1.5 m), and plant
-// matter above or below the plane moves faster or slower on it than the
-// ground (its scale is (H − h)/(H − z), 0.7 % per centimetre here).
+// `max_range_m` ahead of the nearest ground seen. What limits it
+// (docs/results/2026-11-27-visual-motion.md, sessions 31–32): the camera's
+// bounce moves the whole view by about a centimetre from frame to frame
+// (0.004 rad of pitch at 1.5 m). Fitting each frame's pitch, roll and
+// height change to the shifts of blocks of the view takes it out of the
+// ground's translation, but the feature search sees the same bounce, so a
+// prior without it locked fewer frames (session 32).
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -28,8 +38,16 @@
 
 namespace plantscale::motion {
 
+// What is correlated: the plant masks on the plane at plant height, or
+// the soil's own texture (clods, stones, glints) on the ground, the plants
+// cut out. The soil lies on the plane the camera's height is calibrated
+// to, so its shift has the ground's true scale whatever the plants'
+// heights.
+enum class GroundShiftSource { kPlants, kSoil };
+
 struct GroundShiftOptions {
-  double plane_height_m = 0.0;  // the plane the masks are warped onto
+  GroundShiftSource source = GroundShiftSource::kPlants;
+  double plane_height_m = 0.0;  // the plane the masks are warped onto (kSoil: 0)
   double cell_m = 0.008;        // bird's-eye pixel
   double max_half_width_m = 1.0;  // across, each side of the camera
   double max_range_m = 1.6;     // along, from the nearest ground seen
@@ -43,14 +61,28 @@ struct GroundShiftOptions {
   // A shift beyond this fraction of the view: no shift (the peak wrapped).
   double max_shift_fraction = 0.25;
   double min_plant_fraction = 0.002;  // of the view; less: no shift
+  // kSoil: the plant mask closed by `soil_close_px`, each plant filled to
+  // its convex hull and grown by `soil_plant_margin_px` is cut out, and the
+  // soil's brightness less its mean over `soil_detrend_m` is correlated
+  // (the illumination's gradient and the vehicle's shadow are fixed to the
+  // camera).
+  int soil_close_px = 10;
+  int soil_plant_margin_px = 3;
+  double soil_detrend_m = 0.12;
+  double min_soil_fraction = 0.3;  // of the view; less: no shift
 
   OptionErrors Validate() const;
+  // The soil's texture on the ground, its spectrum less whitened (0.7): the
+  // texture's finest detail is near the sensor's noise, and full phase
+  // correlation let that noise place two of 116 peaks 10–17 cm off on
+  // held-out field sequences.
+  static GroundShiftOptions Soil();
 };
 
 struct GroundShift {
   bool valid = false;
   Eigen::Vector2d t_m{0.0, 0.0};  // the ground's displacement, previous → current frame, vehicle frame
-  double response = 0.0;
+  double response = 0.0;  // the correlation's peak (above 1 possible when whiten < 1)
   std::string reason;  // why not valid
 };
 
@@ -64,11 +96,20 @@ class GroundShiftEstimator {
   // previous mask given (invalid for the first). Throws DataError for
   // another size or type.
   GroundShift Update(const cv::Mat& mask);
+  // `image` the frame (CV_8UC1 grey or CV_8UC3 BGR), `mask` its plants as
+  // above: kSoil correlates the soil's texture, kPlants the mask alone.
+  // Invalid (and the previous view forgotten) when less than
+  // `min_soil_fraction` of the view is soil: a closed canopy.
+  GroundShift Update(const cv::Mat& image, const cv::Mat& mask);
   // Forget the previous mask (a gap in the frames).
   void Reset() { previous_.release(); }
 
   // The bird's-eye view of `mask` (CV_32FC1, 0..1; row r at y = y0 + (r + ½)·cell).
   cv::Mat BirdsEye(const cv::Mat& mask) const;
+  // The soil's bird's-eye view on the ground: brightness less its local
+  // mean, 0 where plants are (CV_32FC1); `soil_fraction` the share of the
+  // view that is soil.
+  cv::Mat SoilView(const cv::Mat& image, const cv::Mat& mask, double& soil_fraction) const;
   double x0_m() const { return x0_; }
   double y0_m() const { return y0_; }
 
@@ -79,6 +120,8 @@ class GroundShiftEstimator {
   cv::Size size_;
   cv::Mat to_image_;  // 3×3: bird's-eye pixel → OpenCV image coordinates
   cv::Mat window_, previous_;
+  cv::Mat BirdsEyeInput(const cv::Mat& mask) const;  // checked, plant 255
+  GroundShift Correlated(cv::Mat view);
 };
 
 }  // namespace plantscale::motion

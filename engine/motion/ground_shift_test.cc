@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -81,6 +82,89 @@ TEST(GroundShift, FollowsThePlantMatterFromFrameToFrame) {
     EXPECT_NEAR(s.t_m.y(), step.y(), 0.0015);
     EXPECT_GT(s.response, 0.3);
   }
+}
+
+// Value noise on the ground (lattices of 2.4 cm and 0.9 cm, bilinear),
+// fixed to the field: clods and stones.
+double SoilTexture(double x, double y) {
+  const auto lattice = [](int i, int j, uint32_t salt) {
+    uint32_t h = static_cast<uint32_t>(i) * 73856093U ^ static_cast<uint32_t>(j) * 19349663U ^ salt;
+    h ^= h >> 13;
+    h *= 0x5bd1e995U;
+    h ^= h >> 15;
+    return static_cast<double>(h & 0xffffU) / 65535.0 - 0.5;
+  };
+  const auto octave = [&](double cell, uint32_t salt) {
+    const double fx = x / cell + 1000.0, fy = y / cell + 1000.0;
+    const int i = static_cast<int>(std::floor(fx)), j = static_cast<int>(std::floor(fy));
+    const double a = fx - i, b = fy - j;
+    return (1 - a) * (1 - b) * lattice(i, j, salt) + a * (1 - b) * lattice(i + 1, j, salt) +
+           (1 - a) * b * lattice(i, j + 1, salt) + a * b * lattice(i + 1, j + 1, salt);
+  };
+  return octave(0.024, 11U) + 0.6 * octave(0.009, 29U);
+}
+
+// The frame: textured soil, and the plants (discs at height h) bright over it.
+cv::Mat Frame(const geometry::CameraModel& camera, const cv::Mat& mask, const Eigen::Vector2d& t) {
+  cv::Mat image(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
+  for (int v = 0; v < image.rows; ++v) {
+    for (int u = 0; u < image.cols; ++u) {
+      if (mask.at<uint8_t>(v, u)) {
+        image.at<uint8_t>(v, u) = 210;
+        continue;
+      }
+      const auto g = camera.ImageToPlane({u + 0.5, v + 0.5}, 0.0);
+      if (g) image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(90.0 + 70.0 * SoilTexture(g->x() - t.x(), g->y() - t.y()));
+    }
+  }
+  return image;
+}
+
+TEST(GroundShift, TheSoilsTextureGivesTheGroundsScaleWhateverThePlantsHeight) {
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  const GroundShiftOptions soil = GroundShiftOptions::Soil();
+  GroundShiftOptions plants;  // the masks on the ground: the plants' height unknown
+  GroundShiftEstimator on_soil(soil, camera), on_plants(plants, camera);
+  const std::vector<Disc> bed = Bed(5);
+  const double plant_height = 0.15;
+  Eigen::Vector2d at(0.0, -1.0);
+  for (const Eigen::Vector2d& step : {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.0, -0.05),
+                                     Eigen::Vector2d(0.005, -0.055), Eigen::Vector2d(-0.004, -0.06)}) {
+    at += step;
+    const cv::Mat mask = Mask(camera, bed, plant_height, at);
+    const GroundShift s = on_soil.Update(Frame(camera, mask, at), mask);
+    const GroundShift p = on_plants.Update(mask);
+    if (step.isZero()) {
+      EXPECT_EQ(s.reason, "first frame");
+      continue;
+    }
+    ASSERT_TRUE(s.valid) << s.reason;
+    ASSERT_TRUE(p.valid) << p.reason;
+    // The soil: within 1.5 mm (as the masks on their own plane above;
+    // measured 0.8 mm at most).
+    EXPECT_NEAR(s.t_m.x(), step.x(), 0.0015);
+    EXPECT_NEAR(s.t_m.y(), step.y(), 0.0015);
+    // The masks on the wrong plane read the plants' faster motion
+    // (H / (H − h) of it, 11 % here): the error the soil takes out.
+    EXPECT_GT(std::abs(p.t_m.y()), std::abs(step.y()) + 0.003);
+  }
+}
+
+TEST(GroundShift, ACanopyWithoutSoilAndBadImagesAreNamed) {
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  GroundShiftEstimator estimator(GroundShiftOptions::Soil(), camera);
+  const cv::Mat canopy(camera.height(), camera.width(), CV_8UC1, cv::Scalar(255));
+  const GroundShift closed = estimator.Update(canopy, canopy);
+  EXPECT_FALSE(closed.valid);
+  EXPECT_EQ(closed.reason, "too little soil in view");
+  EXPECT_THROW(estimator.Update(canopy), DataError);  // the soil needs the image
+  EXPECT_THROW(estimator.Update(cv::Mat(10, 10, CV_8UC1, cv::Scalar(0)), canopy), DataError);
+  EXPECT_THROW(estimator.Update(cv::Mat(camera.height(), camera.width(), CV_16UC1, cv::Scalar(0)), canopy), DataError);
+  GroundShiftOptions raised = GroundShiftOptions::Soil();
+  raised.plane_height_m = 0.1;
+  const OptionErrors e = raised.Validate();
+  ASSERT_EQ(e.size(), 1U);
+  EXPECT_EQ(e[0].key, "plane_height_m");
 }
 
 TEST(GroundShift, BareSoilAViewThatChangedAndAGapAreNotShifts) {
