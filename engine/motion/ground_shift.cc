@@ -208,13 +208,13 @@ cv::Mat GroundShiftEstimator::SoilView(const cv::Mat& image, const cv::Mat& mask
   cv::multiply(view, weight, view);
   // What is left of plants, shadows' edges and glints clipped to 3σ of the
   // soil's texture, so that no one bright patch outweighs it.
-  const double soil_cells = std::max(1.0, cv::sum(weight)[0]);
-  const double sd = std::sqrt(cv::sum(view.mul(view))[0] / soil_cells);
+  const double soil_cells = cv::sum(weight)[0];
+  const double sd = std::sqrt(cv::sum(view.mul(view))[0] / std::max(1.0, soil_cells));
   if (sd > 0.0) {
     cv::min(view, 3.0 * sd, view);
     cv::max(view, -3.0 * sd, view);
   }
-  soil_fraction = cv::sum(weight)[0] / static_cast<double>(weight.total());
+  soil_fraction = soil_cells / static_cast<double>(weight.total());
   return view;
 }
 

@@ -38,11 +38,7 @@
 
 namespace plantscale::motion {
 
-// What is correlated: the plant masks on the plane at plant height, or
-// the soil's own texture (clods, stones, glints) on the ground, the plants
-// cut out. The soil lies on the plane the camera's height is calibrated
-// to, so its shift has the ground's true scale whatever the plants'
-// heights.
+// What is correlated (see above).
 enum class GroundShiftSource { kPlants, kSoil };
 
 struct GroundShiftOptions {
