@@ -45,7 +45,9 @@ nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
           {"row_spacings_m", m.row_spacings_m},
           {"ms_per_frame", m.ms_per_frame},
           {"prior_valid_pairs", m.prior_valid_pairs},
-          {"prior_translation_rmse_m", m.prior_translation_rmse_m}};
+          {"prior_translation_rmse_m", m.prior_translation_rmse_m},
+          {"prior_turn_pairs", m.prior_turn_pairs},
+          {"prior_rotation_rmse_deg", m.prior_rotation_rmse_deg}};
 }
 
 // Ours at the top level (the keys the issue names), the paper's method

@@ -72,8 +72,8 @@ struct Totals {
   double rotation_sq = 0.0, translation_sq = 0.0, drift_sum = 0.0, seconds = 0.0;
   double along_sum = 0.0, across_sum = 0.0;
   int sequences = 0;
-  int prior_valid = 0;
-  double prior_sq = 0.0;
+  int prior_valid = 0, prior_turns = 0;
+  double prior_sq = 0.0, prior_psi_sq = 0.0;
   std::vector<double> rms, spacings, angles;
 };
 
@@ -91,17 +91,10 @@ class MethodRun {
     track_width_m_ = track_width_m;
     prior_psi_sd_rad_ = psi_sd_rad;
   }
-  // Search around the ground's shift between the plant masks (no odometry).
-  void UseImagePrior(const motion::GroundShiftOptions& o, double plants_plane_height_m,
-                     const geometry::CameraModel& camera, double psi_sd_rad) {
+  // Search around the ground's motion between the frames (no odometry).
+  void UseImagePrior(const motion::GroundShiftOptions& o, const geometry::CameraModel& camera,
+                     double psi_sd_rad) {
     ground_shift_.emplace(o, camera);
-    // Where the soil gives no shift (a closed canopy, soil without texture),
-    // the plant masks on the plane at plant height stand in.
-    if (o.source == motion::GroundShiftSource::kSoil) {
-      motion::GroundShiftOptions p;
-      p.plane_height_m = plants_plane_height_m;
-      plant_shift_.emplace(p, camera);
-    }
     prior_psi_sd_rad_ = psi_sd_rad;
   }
 
@@ -167,15 +160,16 @@ class MethodRun {
   }
 
   void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
-    motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
-    if (plant_shift_) {
-      const motion::GroundShift on_plants = plant_shift_->Update(seg.mask);
-      if (!shift.valid) shift = on_plants;
-    }
+    const motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
     if (!shift.valid || first_) return;
-    tracker_.SetMotionPrior({0.0, shift.t_m}, prior_psi_sd_rad_);
+    tracker_.SetMotionPrior({shift.psi_rad, shift.t_m}, prior_psi_sd_rad_);
+    const PlanarMotion truth = TrueMotion(previous_pose_, frame.truth.pose);
     ++totals.prior_valid;
-    totals.prior_sq += (shift.t_m - TrueMotion(previous_pose_, frame.truth.pose).t_m).squaredNorm();
+    totals.prior_sq += (shift.t_m - truth.t_m).squaredNorm();
+    if (shift.turn_valid) {
+      ++totals.prior_turns;
+      totals.prior_psi_sq += std::pow(motion::WrapAngle(shift.psi_rad - truth.psi_rad), 2);
+    }
   }
 
   void ScoreMatches(std::span<const Feature> features, const motion::FrameMotion& m,
@@ -217,7 +211,7 @@ class MethodRun {
   sim::Pose2 previous_pose_, first_pose_;
   int64_t previous_utime_ = 0;
   double track_width_m_ = 0.0, prior_psi_sd_rad_ = 0.0;
-  std::optional<motion::GroundShiftEstimator> ground_shift_, plant_shift_;
+  std::optional<motion::GroundShiftEstimator> ground_shift_;
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
 };
@@ -250,6 +244,8 @@ MotionMethodEvaluation Summarise(const std::string& name, const Totals& t) {
   e.ms_per_frame = t.frames > 0 ? 1000.0 * t.seconds / t.frames : 0.0;
   e.prior_valid_pairs = t.prior_valid;
   e.prior_translation_rmse_m = t.prior_valid > 0 ? std::sqrt(t.prior_sq / t.prior_valid) : 0.0;
+  e.prior_turn_pairs = t.prior_turns;
+  e.prior_rotation_rmse_deg = t.prior_turns > 0 ? std::sqrt(t.prior_psi_sq / t.prior_turns) * 180.0 / M_PI : 0.0;
   return e;
 }
 
@@ -360,8 +356,12 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
       ours_run.UseWheelPrior(so.vehicle.track_width_m, options.prior_psi_sd_rad);
     } else if (options.prior == MotionPrior::kImage) {
       motion::GroundShiftOptions g = options.ground_shift;
-      if (g.source == motion::GroundShiftSource::kPlants) g.plane_height_m = ours_o.features.plane_height_m;
-      ours_run.UseImagePrior(g, ours_o.features.plane_height_m, camera, options.prior_psi_sd_rad);
+      if (g.source == motion::GroundShiftSource::kPlants) {
+        g.plane_height_m = ours_o.features.plane_height_m;
+      } else if (g.plants_fallback_height_m < 0.0) {
+        g.plants_fallback_height_m = ours_o.features.plane_height_m;
+      }
+      ours_run.UseImagePrior(g, camera, options.prior_psi_sd_rad);
     }
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;

@@ -47,11 +47,13 @@ struct MotionEvalOptions {
   motion::RowFitOptions rows;
   // What ours searches each frame around (MotionPrior); the pose still
   // composes the camera's motion only. σ of the prior's rotation per frame
-  // (the wheels' turn; the ground shift's rotation is taken as none):
+  // (the wheels' turn, or the ground shift's; where the ground shift
+  // measured no turn, none):
   MotionPrior prior = MotionPrior::kNone;
   double prior_psi_sd_rad = 0.15 * M_PI / 180.0;
-  // kImage: the soil's texture by default; the plant masks (GroundShiftOptions{})
-  // are warped onto ours' feature plane.
+  // kImage: the soil's texture by default, the plant masks on ours' feature
+  // plane standing in where the soil gives no shift; the plant masks alone
+  // (GroundShiftOptions{}) are warped onto ours' feature plane.
   motion::GroundShiftOptions ground_shift = motion::GroundShiftOptions::Soil();
 
   OptionErrors Validate() const;
@@ -84,9 +86,12 @@ struct MotionMethodEvaluation {
   std::vector<double> row_spacings_m;  // every neighbouring pair
   double ms_per_frame = 0.0;           // correspondence + motion only
   // With the image prior: the frame pairs whose ground shift was valid,
-  // and its error against the true translation over them.
+  // and its error against the true translation over them; the pairs with
+  // a turn measured too, and its error over them.
   int prior_valid_pairs = 0;
   double prior_translation_rmse_m = 0.0;
+  int prior_turn_pairs = 0;
+  double prior_rotation_rmse_deg = 0.0;
 };
 
 struct MotionEvaluation {

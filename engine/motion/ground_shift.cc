@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
@@ -24,6 +25,9 @@ OptionErrors GroundShiftOptions::Validate() const {
   if (soil_close_px < 0 || soil_close_px > 64) e.push_back({"soil_close_px", "must be in [0, 64]"});
   RequireInRange(e, "soil_detrend_m", soil_detrend_m, 0.01, 1.0);
   RequireInRange(e, "min_soil_fraction", min_soil_fraction, 0.0, 1.0);
+  if (plants_fallback_height_m >= 0.0 && source != GroundShiftSource::kSoil)
+    e.push_back({"plants_fallback_height_m", "must be negative (none) unless the soil is correlated"});
+  RequireInRange(e, "max_half_disagreement_m", max_half_disagreement_m, 0.0, 1.0);
   return e;
 }
 
@@ -32,6 +36,8 @@ GroundShiftOptions GroundShiftOptions::Soil() {
   o.source = GroundShiftSource::kSoil;
   o.plane_height_m = 0.0;
   o.whiten = 0.7;
+  o.measure_turn = true;
+  o.gaussian_peak = true;
   return o;
 }
 
@@ -79,6 +85,22 @@ GroundShiftEstimator::GroundShiftEstimator(const GroundShiftOptions& options,
     for (int c = 0; c < 3; ++c) to_image_.at<double>(r, c) = m(r, c);
   }
   cv::createHanningWindow(window_, size_, CV_32F);
+  cv::createHanningWindow(half_window_, cv::Size(size_.width, size_.height / 2), CV_32F);
+  if (options_.plants_fallback_height_m >= 0.0) {
+    GroundShiftOptions plants = options_;
+    plants.source = GroundShiftSource::kPlants;
+    plants.plane_height_m = options_.plants_fallback_height_m;
+    plants.plants_fallback_height_m = -1.0;
+    plants.whiten = GroundShiftOptions().whiten;
+    plants.measure_turn = false;
+    plants.gaussian_peak = false;
+    plants_fallback_ = std::make_unique<GroundShiftEstimator>(plants, camera);
+  }
+}
+
+void GroundShiftEstimator::Reset() {
+  previous_.release();
+  if (plants_fallback_) plants_fallback_->Reset();
 }
 
 cv::Mat GroundShiftEstimator::BirdsEyeInput(const cv::Mat& mask) const {
@@ -103,9 +125,10 @@ namespace {
 // cross-correlation, its spectrum divided by its magnitude to the power
 // `whiten` (1: phase correlation, 0: plain correlation); the peak placed
 // to a fraction of a cell by a parabola through it and its neighbours
-// along each axis. `response`: the peak (whiten 1: 1 for two views one
+// along each axis (through their logarithms with `gaussian_peak`).
+// `response`: the peak (whiten 1: 1 for two views one
 // shift apart, near 0 for views that share nothing).
-cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, double& response) {
+cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, bool gaussian_peak, double& response) {
   cv::Mat fa, fb, cross;
   cv::dft(a, fa, cv::DFT_COMPLEX_OUTPUT);
   cv::dft(b, fb, cv::DFT_COMPLEX_OUTPUT);
@@ -127,7 +150,12 @@ cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, double&
   double max_value = 0.0;
   cv::minMaxLoc(c, nullptr, &max_value, nullptr, &peak);
   const auto at = [&](int x, int y) { return static_cast<double>(c.at<float>((y + h) % h, (x + w) % w)); };
-  const auto vertex = [](double l, double m, double r) {
+  const auto vertex = [gaussian_peak](double l, double m, double r) {
+    if (gaussian_peak && l > 0.0 && r > 0.0 && m > 0.0) {
+      const double ll = std::log(l), lm = std::log(m), lr = std::log(r);
+      const double dl = ll - 2.0 * lm + lr;
+      if (dl < 0.0) return 0.5 * (ll - lr) / dl;
+    }
     const double d = l - 2.0 * m + r;
     return d < 0.0 ? 0.5 * (l - r) / d : 0.0;
   };
@@ -222,13 +250,19 @@ GroundShift GroundShiftEstimator::Update(const cv::Mat& image, const cv::Mat& ma
   if (options_.source != GroundShiftSource::kSoil) return Update(mask);
   double soil = 0.0;
   cv::Mat view = SoilView(image, mask, soil);
+  GroundShift out;
   if (soil < options_.min_soil_fraction) {
-    GroundShift out;
     out.reason = "too little soil in view";
     previous_.release();
-    return out;
+  } else {
+    out = Correlated(std::move(view));
   }
-  return Correlated(std::move(view));
+  out.source = GroundShiftSource::kSoil;
+  if (!plants_fallback_) return out;
+  GroundShift plants = plants_fallback_->Update(mask);
+  if (out.valid) return out;
+  if (!plants.valid) plants.reason = "soil: " + out.reason + "; plants: " + plants.reason;
+  return plants;
 }
 
 GroundShift GroundShiftEstimator::Correlated(cv::Mat view) {
@@ -242,8 +276,9 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view) {
   cv::Mat a, b;
   cv::multiply(previous_, window_, a);
   cv::multiply(view, window_, b);
-  const cv::Point2d p = Correlate(a, b, options_.whiten, out.response);
+  const cv::Point2d p = Correlate(a, b, options_.whiten, options_.gaussian_peak, out.response);
   out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
+  const cv::Mat previous_view = std::move(previous_);
   previous_ = std::move(view);
   if (!(out.response >= options_.min_response)) {
     out.reason = "no clear correlation peak (" + std::to_string(out.response) + ")";
@@ -255,7 +290,33 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view) {
     return out;
   }
   out.valid = true;
+  if (options_.measure_turn) MeasureTurn(previous_view, out);
   return out;
+}
+
+void GroundShiftEstimator::MeasureTurn(const cv::Mat& previous, GroundShift& shift) const {
+  // The halves' across shifts at their centres y_n and y_f: Δx(y) = t_x − ψ·y.
+  const int half = size_.height / 2;
+  const cv::Rect near(0, 0, size_.width, half), far(0, size_.height - half, size_.width, half);
+  double across[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    const cv::Rect& part = k == 0 ? near : far;
+    cv::Mat a, b;
+    cv::multiply(previous(part), half_window_, a);
+    cv::multiply(previous_(part), half_window_, b);
+    double response = 0.0;
+    across[k] = Correlate(a, b, options_.whiten, options_.gaussian_peak, response).x * options_.cell_m;
+    if (!(response >= options_.min_response) ||
+        std::abs(across[k] - shift.t_m.x()) > options_.max_half_disagreement_m)
+      return;
+  }
+  const double y_near = y0_ + 0.5 * half * options_.cell_m;
+  const double y_far = y0_ + (size_.height - 0.5 * half) * options_.cell_m;
+  shift.psi_rad = -(across[1] - across[0]) / (y_far - y_near);
+  shift.turn_valid = true;
+  // The view's shift is the motion of its centre c: R(ψ)·c + t − c ≈ t + ψ·(−c_y, c_x).
+  const double cx = x0_ + 0.5 * size_.width * options_.cell_m, cy = y0_ + 0.5 * size_.height * options_.cell_m;
+  shift.t_m += Eigen::Vector2d(shift.psi_rad * cy, -shift.psi_rad * cx);
 }
 
 }  // namespace plantscale::motion

@@ -19,18 +19,28 @@
 // It is the feature search's prior where the wheels are absent or lie, and
 // the motion a frame coasts on when the search does not lock.
 //
-// Only the translation is measured (the rotation between frames of a
-// vehicle following rows is a few milliradians). The view is limited to
-// `max_range_m` ahead of the nearest ground seen. What limits it
-// (docs/results/2026-11-27-visual-motion.md, sessions 31–32): the camera's
-// bounce moves the whole view by about a centimetre from frame to frame
-// (0.004 rad of pitch at 1.5 m). Fitting each frame's pitch, roll and
-// height change to the shifts of blocks of the view takes it out of the
-// ground's translation, but the feature search sees the same bounce, so a
-// prior without it locked fewer frames (session 32).
+// The turn between frames comes from the view's near and far halves,
+// correlated apart: a turn ψ moves the ground across by −ψ·y at a distance
+// y ahead, so the halves' across shifts differ by ψ times the distance
+// between their centres. The camera's bounce does not enter that
+// difference (a change of pitch moves the ground across by ∝ x·y, which
+// sums to zero over a view centred across; a roll or a height change moves
+// both halves alike). On `field` the turn reads to 0.09° a frame
+// (session 33), half the features' own error (0.19°), and it finds the 1°
+// turns that kept the feature search from locking.
+//
+// The view is limited to `max_range_m` ahead of the nearest ground seen.
+// What limits the translation (docs/results/2026-11-27-visual-motion.md,
+// sessions 31–33): the camera's bounce moves the whole view along by about
+// a centimetre from frame to frame (0.004 rad of pitch at 1.5 m). Fitting
+// each frame's pitch, roll and height change to the shifts of blocks of
+// the view takes it out of the ground's translation, but the feature
+// search sees the same bounce, so a prior without it locked fewer frames
+// (session 32).
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <memory>
 #include <string>
 
 #include "engine/common/options.h"
@@ -50,6 +60,12 @@ struct GroundShiftOptions {
   // The cross spectrum divided by its magnitude to this power: 1 phase
   // correlation (every spatial frequency weighs alike), 0 plain correlation.
   double whiten = 1.0;
+  // The peak placed to a fraction of a cell by a parabola through the
+  // logarithms of it and its neighbours (a Gaussian) instead of through
+  // the values. Soil() only: a parabola draws the soil's smooth peak
+  // towards whole cells, which read a 1° turn 10 % short on the halves of
+  // a synthetic bed (GroundShift tests).
+  bool gaussian_peak = false;
   // The correlation's peak below this: no shift (a view that changed
   // altogether; consecutive field frames give 0.1–0.3, two unrelated
   // views of scattered plants 0.06, GroundShift tests).
@@ -66,6 +82,19 @@ struct GroundShiftOptions {
   int soil_plant_margin_px = 3;
   double soil_detrend_m = 0.12;
   double min_soil_fraction = 0.3;  // of the view; less: no shift
+  // kSoil: where the soil gives no shift (a closed canopy, soil without
+  // texture), the plant masks on the plane at this height stand in (a
+  // second estimator, fed every frame so that its previous view is ready).
+  // Negative: none.
+  double plants_fallback_height_m = -1.0;
+  // The turn from the near and far halves of the view: both halves' peaks
+  // above `min_response` and their across shifts within this of the whole
+  // view's, else no turn (ψ = 0, the whole view's shift as the
+  // translation). Soil() only: the plant masks' halves gave turns that
+  // cost the `treatment` preset locked frames (tuning seeds 1–3: 67 → 61
+  // of 87).
+  bool measure_turn = false;
+  double max_half_disagreement_m = 0.024;
 
   OptionErrors Validate() const;
   // The soil's texture on the ground, its spectrum less whitened (0.7): the
@@ -77,7 +106,13 @@ struct GroundShiftOptions {
 
 struct GroundShift {
   bool valid = false;
-  Eigen::Vector2d t_m{0.0, 0.0};  // the ground's displacement, previous → current frame, vehicle frame
+  // The ground's motion from the previous frame to this one, in the vehicle
+  // frame: a ground point p moves to R(psi_rad)·p + t_m. Without a turn
+  // measured (turn_valid false) ψ = 0 and t_m is the view's shift.
+  Eigen::Vector2d t_m{0.0, 0.0};
+  double psi_rad = 0.0;
+  bool turn_valid = false;
+  GroundShiftSource source = GroundShiftSource::kPlants;  // what gave the shift
   double response = 0.0;  // the correlation's peak (above 1 possible when whiten < 1)
   std::string reason;  // why not valid
 };
@@ -96,9 +131,11 @@ class GroundShiftEstimator {
   // above: kSoil correlates the soil's texture, kPlants the mask alone.
   // Invalid (and the previous view forgotten) when less than
   // `min_soil_fraction` of the view is soil: a closed canopy.
+  // With `plants_fallback_height_m` ≥ 0 the plant masks stand in where
+  // the soil gives no shift (`source` says which did).
   GroundShift Update(const cv::Mat& image, const cv::Mat& mask);
   // Forget the previous mask (a gap in the frames).
-  void Reset() { previous_.release(); }
+  void Reset();
 
   // The bird's-eye view of `mask` (CV_32FC1, 0..1; row r at y = y0 + (r + ½)·cell).
   cv::Mat BirdsEye(const cv::Mat& mask) const;
@@ -115,9 +152,11 @@ class GroundShiftEstimator {
   double x0_ = 0.0, y0_ = 0.0;
   cv::Size size_;
   cv::Mat to_image_;  // 3×3: bird's-eye pixel → OpenCV image coordinates
-  cv::Mat window_, previous_;
+  cv::Mat window_, half_window_, previous_;
+  std::unique_ptr<GroundShiftEstimator> plants_fallback_;
   cv::Mat BirdsEyeInput(const cv::Mat& mask) const;  // checked, plant 255
   GroundShift Correlated(cv::Mat view);
+  void MeasureTurn(const cv::Mat& view, GroundShift& shift) const;
 };
 
 }  // namespace plantscale::motion
