@@ -2,6 +2,7 @@
 // update — search regions, two-way matches, Hough clustering, Umeyama,
 // filtering, final matching, Kalman updates — with 50 features per frame in
 // at most 1 ms. Feature extraction (segmentation, contours) is not counted.
+// Also the ground's shift (the image prior without odometry) per frame.
 // Run: build/bench/motion_benchmark
 #include <benchmark/benchmark.h>
 
@@ -9,7 +10,11 @@
 #include <memory>
 #include <random>
 
+#include <opencv2/imgproc.hpp>
+
+#include "engine/geometry/test_cameras.h"
 #include "engine/motion/feature_tracker.h"
+#include "engine/motion/ground_shift.h"
 #include "engine/motion/test_scenes.h"
 #include "engine/motion/visual_odometry.h"
 
@@ -91,6 +96,37 @@ void BM_VisualOdometry(benchmark::State& state) {
   state.counters["valid"] = static_cast<double>(valid) / static_cast<double>(updates);
 }
 BENCHMARK(BM_VisualOdometry)->Arg(50)->Unit(benchmark::kMicrosecond);
+
+// The ground's shift with no odometry (GroundShiftOptions::Soil()): a
+// 640×480 frame of textured soil with plants cut out, warped onto the
+// ground and phase-correlated with the previous one. Arg: the turn from
+// the view's halves off (0) or on (1). Frames alternate between two views
+// 6 px apart, so every update correlates a real shift.
+void BM_GroundShift(benchmark::State& state) {
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  GroundShiftOptions o = GroundShiftOptions::Soil();
+  o.measure_turn = state.range(0) != 0;
+  GroundShiftEstimator estimator(o, camera);
+  cv::Mat texture(camera.height() + 12, camera.width(), CV_8UC1);
+  cv::randu(texture, 60, 140);
+  cv::GaussianBlur(texture, texture, cv::Size(5, 5), 1.0);
+  cv::Mat mask(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
+  for (int k = 0; k < 12; ++k)
+    cv::circle(mask, {60 + 50 * k, 120 + 25 * (k % 3)}, 18, cv::Scalar(255), cv::FILLED);
+  const cv::Mat frames[2] = {texture(cv::Rect(0, 0, camera.width(), camera.height())).clone(),
+                             texture(cv::Rect(0, 6, camera.width(), camera.height())).clone()};
+  size_t k = 0, valid = 0, turns = 0, updates = 0;
+  for (auto _ : state) {
+    const GroundShift g = estimator.Update(frames[k++ % 2], mask);
+    benchmark::DoNotOptimize(g.t_m);
+    valid += g.valid ? 1 : 0;
+    turns += g.turn_valid ? 1 : 0;
+    ++updates;
+  }
+  state.counters["valid"] = static_cast<double>(valid) / static_cast<double>(updates);
+  state.counters["turn"] = static_cast<double>(turns) / static_cast<double>(updates);
+}
+BENCHMARK(BM_GroundShift)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace plantscale::motion
