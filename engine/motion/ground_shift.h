@@ -3,13 +3,13 @@
 // (issue 38), from either of two bird's-eye views in the vehicle frame,
 // `cell_m` per pixel, phase-correlated (Hann window, the cross spectrum
 // divided by its magnitude to the power `whiten`, the peak placed by
-// parabolas):
+// parabolas or Gaussians):
 // - kSoil (GroundShiftOptions::Soil()): the soil's own texture (clods,
 //   stones, glints) on the ground, the plants cut out. The soil lies on the
 //   plane the camera's height is calibrated to, so the shift has the
 //   ground's scale whatever the plants' heights; it fails where a canopy
-//   closes over the soil or the soil has no texture (invalid: the caller
-//   falls back on the plants).
+//   closes over the soil or the soil has no texture (invalid, or the
+//   plant masks stand in: `plants_fallback_height_m`).
 // - kPlants: the plant masks on the plane at plant height. Plants that
 //   merge, split or slide between frames change their contours, and with
 //   them the dominant points the feature search pairs, but little of their
@@ -156,7 +156,7 @@ class GroundShiftEstimator {
   std::unique_ptr<GroundShiftEstimator> plants_fallback_;
   cv::Mat BirdsEyeInput(const cv::Mat& mask) const;  // checked, plant 255
   GroundShift Correlated(cv::Mat view);
-  void MeasureTurn(const cv::Mat& view, GroundShift& shift) const;
+  void MeasureTurn(const cv::Mat& previous, GroundShift& shift) const;  // previous_ is this frame's view
 };
 
 }  // namespace plantscale::motion
