@@ -69,6 +69,9 @@ struct MotionMethodEvaluation {
   std::string method;
   int pairs = 0, locked_pairs = 0;
   int matches = 0, correct_matches = 0;
+  // Matches with a feature on no plant (within 2 px): scored wrong, as a
+  // match on a speck or a shadow's edge would be.
+  int matches_without_truth = 0;
   double correct_correspondence_rate = 0.0;
   double rotation_rmse_deg = 0.0;
   double translation_rmse_m = 0.0;
