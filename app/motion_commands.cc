@@ -30,7 +30,7 @@ nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
           {"correct_correspondence_rate", m.correct_correspondence_rate},
           {"matches", m.matches},
           {"correct_matches", m.correct_matches},
-          {"matches_without_truth", m.matches_without_truth},
+          {"matches_on_ground", m.matches_on_ground},
           {"pairs", m.pairs},
           {"locked_pairs", m.locked_pairs},
           {"rotation_rmse_deg", m.rotation_rmse_deg},

@@ -16,9 +16,13 @@ using motion::PlanarMotion;
 using motion::VehiclePose2;
 
 // What a feature is in truth: the plant under its pixel and its field
-// position on the plane at that plant's rim height.
+// position on the plane at that plant's height; a feature on no plant
+// (kOnGround: a stone, a clod or a shadow's edge the segmenter took for
+// plant matter) at its ground point, which a right match keeps as a plant's
+// would.
+constexpr int kOnGround = -2;
 struct FeatureTruth {
-  int plant_id = -1;
+  int plant_id = -1;  // -1: unknown (the pixel sees no ground)
   Eigen::Vector2d field_m{0.0, 0.0};
 };
 
@@ -60,10 +64,10 @@ FeatureTruth TruthOf(const Feature& f, const sim::SimFrame& frame,
                      const std::unordered_map<int, const sim::PlantTruth*>& by_instance) {
   FeatureTruth t;
   const auto it = by_instance.find(InstanceAt(frame.rendered.instances, f.pixel));
-  if (it == by_instance.end()) return t;
-  const auto g = camera.ImageToPlane(f.pixel, it->second->height_m);
+  const bool on_plant = it != by_instance.end();
+  const auto g = camera.ImageToPlane(f.pixel, on_plant ? it->second->height_m : 0.0);
   if (!g) return t;
-  t.plant_id = it->second->plant_id;
+  t.plant_id = on_plant ? it->second->plant_id : kOnGround;
   t.field_m = ToVehiclePose(frame.truth.pose).ToWorld(*g);
   return t;
 }
@@ -81,7 +85,7 @@ PlanarMotion TrueMotion(const sim::Pose2& previous, const sim::Pose2& current) {
 }
 
 struct Totals {
-  int pairs = 0, locked = 0, matches = 0, correct = 0, frames = 0, without_truth = 0;
+  int pairs = 0, locked = 0, matches = 0, correct = 0, frames = 0, on_ground = 0;
   double rotation_sq = 0.0, translation_sq = 0.0, drift_sum = 0.0, seconds = 0.0;
   double along_sum = 0.0, across_sum = 0.0;
   int sequences = 0;
@@ -195,8 +199,8 @@ class MethodRun {
       if (m.track_of_feature[i] >= 0) {
         const FeatureTruth& before = track_truth_[m.track_of_feature[i]];
         ++totals.matches;
-        if (now.plant_id < 0 || before.plant_id < 0) ++totals.without_truth;
-        if (now.plant_id >= 0 && now.plant_id == before.plant_id &&
+        if (now.plant_id == kOnGround || before.plant_id == kOnGround) ++totals.on_ground;
+        if (now.plant_id != -1 && now.plant_id == before.plant_id &&
             (now.field_m - before.field_m).norm() <= tolerance_m_)
           ++totals.correct;
       }
@@ -244,7 +248,7 @@ MotionMethodEvaluation Summarise(const std::string& name, const Totals& t) {
   e.matches = t.matches;
   e.correct_matches = t.correct;
   e.correct_correspondence_rate = t.matches > 0 ? static_cast<double>(t.correct) / t.matches : 0.0;
-  e.matches_without_truth = t.without_truth;
+  e.matches_on_ground = t.on_ground;
   e.rotation_rmse_deg = t.pairs > 0 ? std::sqrt(t.rotation_sq / t.pairs) * 180.0 / M_PI : 0.0;
   e.translation_rmse_m = t.pairs > 0 ? std::sqrt(t.translation_sq / t.pairs) : 0.0;
   e.drift_cm_per_m = t.sequences > 0 ? t.drift_sum / t.sequences : 0.0;

@@ -69,9 +69,12 @@ struct MotionMethodEvaluation {
   std::string method;
   int pairs = 0, locked_pairs = 0;
   int matches = 0, correct_matches = 0;
-  // Matches with a feature on no plant (within 2 px): scored wrong, as a
-  // match on a speck or a shadow's edge would be.
-  int matches_without_truth = 0;
+  // Matches with a feature on no plant (none within 2 px): a stone, a clod
+  // or a shadow's edge segmented as plant matter. Such a feature is scored
+  // by its ground point: right when both lie on the ground within the
+  // tolerance (a stone keeps its place; a feature on the vehicle's own
+  // shadow does not).
+  int matches_on_ground = 0;
   double correct_correspondence_rate = 0.0;
   double rotation_rmse_deg = 0.0;
   double translation_rmse_m = 0.0;
