@@ -23,6 +23,7 @@ struct MotionArgs {
   std::string baseline;
   std::string prior = "none";
   std::string ground_shift = "soil";
+  std::string soil_scale = "on";
 };
 
 nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
@@ -48,7 +49,8 @@ nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
           {"prior_valid_pairs", m.prior_valid_pairs},
           {"prior_translation_rmse_m", m.prior_translation_rmse_m},
           {"prior_turn_pairs", m.prior_turn_pairs},
-          {"prior_rotation_rmse_deg", m.prior_rotation_rmse_deg}};
+          {"prior_rotation_rmse_deg", m.prior_rotation_rmse_deg},
+          {"soil_scale", m.soil_scale}};
 }
 
 // Ours at the top level (the keys the issue names), the paper's method
@@ -61,8 +63,10 @@ nlohmann::json EvaluationJson(const MotionEvaluation& e) {
   j["distance_m"] = e.distance_m;
   j["true_row_spacing_m"] = e.true_row_spacing_m;
   j["prior"] = MotionPriorName(e.prior);
-  if (e.prior == MotionPrior::kImage)
+  if (e.prior == MotionPrior::kImage) {
     j["ground_shift"] = e.ground_shift_source == motion::GroundShiftSource::kSoil ? "soil" : "plants";
+    j["soil_scale_applied"] = e.soil_scale;
+  }
   j["baseline_paper"] = MethodJson(e.paper);
   j["published"] = {{"correct_correspondence_rate_min", 0.95},
                     {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
@@ -118,6 +122,7 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
     if (a.prior == MotionPriorName(p)) o.prior = p;
   }
   if (a.ground_shift == "plants") o.ground_shift = motion::GroundShiftOptions{};
+  o.soil_scale = a.soil_scale == "on";
   const MotionEvaluation e = EvaluateMotion(o);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';
@@ -164,6 +169,12 @@ void AddMotionCommands(CommandRegistry& registry) {
                   "ground, the plants cut out: the ground's true scale) or plants (the plant "
                   "masks on the plane at plant height)")
       ->check(CLI::IsMember({"plants", "soil"}))
+      ->capture_default_str();
+  cmd->add_option("--soil-scale", a.soil_scale,
+                  "with --prior image and the soil: on scales the features' locked translation "
+                  "by the soil's distance over theirs (the features lie on the crop profile's "
+                  "plane, the soil on the ground)")
+      ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
 }
 

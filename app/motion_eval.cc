@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "engine/motion/visual_odometry.h"
+#include "engine/pipeline/motion_fusion.h"
 
 namespace plantscale::app {
 namespace {
@@ -89,6 +90,7 @@ struct Totals {
   double rotation_sq = 0.0, translation_sq = 0.0, drift_sum = 0.0, seconds = 0.0;
   double along_sum = 0.0, across_sum = 0.0;
   int sequences = 0;
+  double soil_scale_sum = 0.0;
   int prior_valid = 0, prior_turns = 0;
   double prior_sq = 0.0, prior_psi_sq = 0.0;
   std::vector<double> rms, spacings, angles;
@@ -114,6 +116,13 @@ class MethodRun {
     ground_shift_.emplace(o, camera);
     prior_psi_sd_rad_ = psi_sd_rad;
   }
+  // The locked translation scaled by the soil's distance over the features'
+  // (the soil's shift lies on the ground; the features on the profile's plane).
+  void UseSoilScale(double min_distance_m) {
+    pipeline::MotionFusionOptions o;
+    o.scale_min_distance_m = min_distance_m;
+    soil_scale_.emplace(o);
+  }
 
   void Step(const sim::SimFrame& frame, const vision::Segmentation& seg,
             const geometry::CameraModel& camera,
@@ -126,6 +135,7 @@ class MethodRun {
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++totals.frames;
     ScoreMatches(features, m, frame, camera, by_instance, totals);
+    if (!first_) pose_ = motion::Compose(pose_, Scaled(m));
     if (first_) {
       first_pose_ = frame.truth.pose;
       first_distance_ = frame.truth.distance_m;
@@ -139,7 +149,7 @@ class MethodRun {
     cv::Mat labels;
     motion::LabelFrame(seg.mask, seg.blobs,
                        [&](const vision::Blob& b) { return extractor_.IsPlant(b); }, labels);
-    mosaic_.AddFrame(labels, m.pose);
+    mosaic_.AddFrame(labels, pose_);
   }
 
   // Drift of the composed pose and the row fit of the mosaic.
@@ -149,16 +159,17 @@ class MethodRun {
     const double distance = last_distance_ - first_distance_;
     if (distance > 0.0) {
       // Vehicle frame: x across (right), y along the forward axis.
-      const Eigen::Vector2d error = tracker_.pose().position_m - truth;
+      const Eigen::Vector2d error = pose_.position_m - truth;
       totals.drift_sum += 100.0 * error.norm() / distance;
       totals.along_sum += 100.0 * error.y() / distance;
       totals.across_sum += 100.0 * error.x() / distance;
     }
     ++totals.sequences;
+    totals.soil_scale_sum += soil_scale_ ? soil_scale_->ratio() : 1.0;
     const motion::MosaicMap map = mosaic_.Build();
     std::vector<Eigen::Vector2d> plants;
     for (const auto& p : map.plants) plants.push_back(p.position_m);
-    const motion::RowFit fit = motion::FitRows(plants, 0.5 * tracker_.pose().position_m.y(), rows);
+    const motion::RowFit fit = motion::FitRows(plants, 0.5 * pose_.position_m.y(), rows);
     for (const auto& r : fit.rows) totals.rms.push_back(r.rms_m);
     totals.spacings.insert(totals.spacings.end(), fit.spacings_m.begin(), fit.spacings_m.end());
     totals.angles.insert(totals.angles.end(), fit.angles_rad.begin(), fit.angles_rad.end());
@@ -178,6 +189,7 @@ class MethodRun {
 
   void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
     const motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
+    soil_shift_m_ = shift.valid && shift.source == motion::GroundShiftSource::kSoil ? shift.t_m.norm() : -1.0;
     if (!shift.valid || first_) return;
     tracker_.SetMotionPrior({shift.psi_rad, shift.t_m}, prior_psi_sd_rad_);
     const PlanarMotion truth = TrueMotion(previous_pose_, frame.truth.pose);
@@ -187,6 +199,17 @@ class MethodRun {
       ++totals.prior_turns;
       totals.prior_psi_sq += std::pow(motion::WrapAngle(shift.psi_rad - truth.psi_rad), 2);
     }
+  }
+
+  // The frame's motion for the pose: a locked one's translation scaled by
+  // the soil's distance over the features' (learnt on the locked frames
+  // with a soil shift); a coasting one is the prior's, unscaled.
+  PlanarMotion Scaled(const motion::FrameMotion& m) {
+    PlanarMotion out = m.motion;
+    if (!soil_scale_ || !m.locked) return out;
+    if (soil_shift_m_ >= 0.0) soil_scale_->Add(soil_shift_m_, m.motion.t_m.norm(), 1.0);
+    out.t_m *= soil_scale_->ratio();
+    return out;
   }
 
   void ScoreMatches(std::span<const Feature> features, const motion::FrameMotion& m,
@@ -230,6 +253,9 @@ class MethodRun {
   int64_t previous_utime_ = 0;
   double track_width_m_ = 0.0, prior_psi_sd_rad_ = 0.0;
   std::optional<motion::GroundShiftEstimator> ground_shift_;
+  std::optional<pipeline::VisualScale> soil_scale_;
+  double soil_shift_m_ = -1.0;  // this frame's soil shift, -1 for none
+  VehiclePose2 pose_;           // the motions composed, Scaled
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
 };
@@ -264,6 +290,7 @@ MotionMethodEvaluation Summarise(const std::string& name, const Totals& t) {
   e.prior_valid_pairs = t.prior_valid;
   e.prior_translation_rmse_m = t.prior_valid > 0 ? std::sqrt(t.prior_sq / t.prior_valid) : 0.0;
   e.prior_turn_pairs = t.prior_turns;
+  e.soil_scale = t.sequences > 0 ? t.soil_scale_sum / t.sequences : 1.0;
   e.prior_rotation_rmse_deg = t.prior_turns > 0 ? std::sqrt(t.prior_psi_sq / t.prior_turns) * 180.0 / M_PI : 0.0;
   return e;
 }
@@ -286,6 +313,7 @@ OptionErrors MotionEvalOptions::Validate() const {
   RequirePositive(e, "match_tolerance_m", match_tolerance_m);
   RequirePositive(e, "mosaic_resolution_m", mosaic_resolution_m);
   RequirePositive(e, "prior_psi_sd_rad", prior_psi_sd_rad);
+  RequirePositive(e, "soil_scale_min_distance_m", soil_scale_min_distance_m);
   for (OptionError& g : Prefixed("ground_shift", ground_shift.Validate())) e.push_back(std::move(g));
   for (const auto& [name, m] : {std::pair{"paper", &paper}, std::pair{"ours", &ours}}) {
     const std::string prefix = name;
@@ -337,6 +365,8 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   out.true_row_spacing_m = options.sim.field.row_spacing_m;
   out.prior = options.prior;
   out.ground_shift_source = options.ground_shift.source;
+  out.soil_scale = options.prior == MotionPrior::kImage && options.soil_scale &&
+                   options.ground_shift.source == motion::GroundShiftSource::kSoil;
   const double step_m = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Totals paper, ours;
   vision::SegmenterOptions seg_options = options.segmenter;
@@ -381,6 +411,7 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
         g.plants_fallback_height_m = ours_o.features.plane_height_m;
       }
       ours_run.UseImagePrior(g, camera, options.prior_psi_sd_rad);
+      if (out.soil_scale) ours_run.UseSoilScale(options.soil_scale_min_distance_m);
     }
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;

@@ -55,6 +55,14 @@ struct MotionEvalOptions {
   // plane standing in where the soil gives no shift; the plant masks alone
   // (GroundShiftOptions{}) are warped onto ours' feature plane.
   motion::GroundShiftOptions ground_shift = motion::GroundShiftOptions::Soil();
+  // kImage with the soil: the features' locked translation scaled by the
+  // soil's distance over theirs (pipeline::VisualScale, learnt over the
+  // sequence from `soil_scale_min_distance_m` on, ±20 %). The contour
+  // features are placed on the crop profile's plane, the soil lies on the
+  // ground the camera's height is calibrated to (session 33: the features
+  // read 1–1.5 % short on `field`).
+  bool soil_scale = true;
+  double soil_scale_min_distance_m = 0.1;
 
   OptionErrors Validate() const;
 };
@@ -98,6 +106,9 @@ struct MotionMethodEvaluation {
   double prior_translation_rmse_m = 0.0;
   int prior_turn_pairs = 0;
   double prior_rotation_rmse_deg = 0.0;
+  // With the soil's scale: its ratio at each sequence's end, mean over
+  // sequences (1 when it was never learnt).
+  double soil_scale = 1.0;
 };
 
 struct MotionEvaluation {
@@ -107,6 +118,7 @@ struct MotionEvaluation {
   double true_row_spacing_m = 0.0;
   MotionPrior prior = MotionPrior::kNone;
   motion::GroundShiftSource ground_shift_source = motion::GroundShiftSource::kSoil;  // kImage
+  bool soil_scale = false;  // the soil's scale applied
   MotionMethodEvaluation paper, ours;
 };
 

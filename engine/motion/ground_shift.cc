@@ -38,6 +38,7 @@ GroundShiftOptions GroundShiftOptions::Soil() {
   o.whiten = 0.7;
   o.measure_turn = true;
   o.gaussian_peak = true;
+  o.mask_both_views = true;
   return o;
 }
 
@@ -100,6 +101,7 @@ GroundShiftEstimator::GroundShiftEstimator(const GroundShiftOptions& options,
 
 void GroundShiftEstimator::Reset() {
   previous_.release();
+  previous_weight_.release();
   if (plants_fallback_) plants_fallback_->Reset();
 }
 
@@ -180,10 +182,11 @@ GroundShift GroundShiftEstimator::Update(const cv::Mat& mask) {
     previous_.release();
     return out;
   }
-  return Correlated(std::move(view));
+  return Correlated(std::move(view), cv::Mat());
 }
 
-cv::Mat GroundShiftEstimator::SoilView(const cv::Mat& image, const cv::Mat& mask, double& soil_fraction) const {
+cv::Mat GroundShiftEstimator::SoilView(const cv::Mat& image, const cv::Mat& mask, double& soil_fraction,
+                                       cv::Mat* soil_weight) const {
   if (image.empty() || (image.type() != CV_8UC1 && image.type() != CV_8UC3) || image.cols != image_width_ ||
       image.rows != image_height_) {
     throw DataError("ground shift: the image must be CV_8UC1 or CV_8UC3 of " + std::to_string(image_width_) + "x" +
@@ -243,19 +246,21 @@ cv::Mat GroundShiftEstimator::SoilView(const cv::Mat& image, const cv::Mat& mask
     cv::max(view, -3.0 * sd, view);
   }
   soil_fraction = soil_cells / static_cast<double>(weight.total());
+  if (soil_weight) *soil_weight = weight;
   return view;
 }
 
 GroundShift GroundShiftEstimator::Update(const cv::Mat& image, const cv::Mat& mask) {
   if (options_.source != GroundShiftSource::kSoil) return Update(mask);
   double soil = 0.0;
-  cv::Mat view = SoilView(image, mask, soil);
+  cv::Mat weight;
+  cv::Mat view = SoilView(image, mask, soil, &weight);
   GroundShift out;
   if (soil < options_.min_soil_fraction) {
     out.reason = "too little soil in view";
     previous_.release();
   } else {
-    out = Correlated(std::move(view));
+    out = Correlated(std::move(view), std::move(weight));
   }
   out.source = GroundShiftSource::kSoil;
   if (!plants_fallback_) return out;
@@ -265,36 +270,59 @@ GroundShift GroundShiftEstimator::Update(const cv::Mat& image, const cv::Mat& ma
   return plants;
 }
 
-GroundShift GroundShiftEstimator::Correlated(cv::Mat view) {
+GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
   GroundShift out;
   if (previous_.empty()) {
     out.reason = "first frame";
     previous_ = std::move(view);
+    previous_weight_ = std::move(weight);
     return out;
   }
   // The window on copies: the kept view is the next frame's previous one.
   cv::Mat a, b;
   cv::multiply(previous_, window_, a);
   cv::multiply(view, window_, b);
-  const cv::Point2d p = Correlate(a, b, options_.whiten, options_.gaussian_peak, out.response);
-  out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
-  const cv::Mat previous_view = std::move(previous_);
+  cv::Point2d p = Correlate(a, b, options_.whiten, options_.gaussian_peak, out.response);
+  // The turn from the views as they are: each view's holes carried over by
+  // the shift alone would sit a turn's few millimetres off in the halves.
+  const cv::Mat previous_view = std::move(previous_), current_view = view;
+  const cv::Mat previous_weight = std::move(previous_weight_);
   previous_ = std::move(view);
+  previous_weight_ = weight;
   if (!(out.response >= options_.min_response)) {
+    out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
     out.reason = "no clear correlation peak (" + std::to_string(out.response) + ")";
     return out;
   }
+  if (options_.mask_both_views && !weight.empty() && !previous_weight.empty()) {
+    // The holes where the plants were cut out move with the plants, faster
+    // than the ground beneath them, and pull the peak with them. Each view
+    // loses also the other's holes, carried over by the shift found: the
+    // holes of both then move with the ground, and the correlation again.
+    cv::Mat into_previous, into_current;
+    const cv::Matx23d back(1.0, 0.0, p.x, 0.0, 1.0, p.y), ahead(1.0, 0.0, -p.x, 0.0, 1.0, -p.y);
+    cv::warpAffine(weight, into_previous, back, size_, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                   cv::BORDER_CONSTANT, cv::Scalar(1));
+    cv::warpAffine(previous_weight, into_current, ahead, size_, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                   cv::BORDER_CONSTANT, cv::Scalar(1));
+    cv::multiply(previous_view.mul(into_previous), window_, a);
+    cv::multiply(current_view.mul(into_current), window_, b);
+    double response = 0.0;
+    p = Correlate(a, b, options_.whiten, options_.gaussian_peak, response);
+  }
+  out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
   if (std::abs(p.x) > options_.max_shift_fraction * size_.width ||
       std::abs(p.y) > options_.max_shift_fraction * size_.height) {
     out.reason = "shift beyond a quarter of the view";
     return out;
   }
   out.valid = true;
-  if (options_.measure_turn) MeasureTurn(previous_view, out);
+  if (options_.measure_turn) MeasureTurn(previous_view, current_view, out);
   return out;
 }
 
-void GroundShiftEstimator::MeasureTurn(const cv::Mat& previous, GroundShift& shift) const {
+void GroundShiftEstimator::MeasureTurn(const cv::Mat& previous, const cv::Mat& current,
+                                       GroundShift& shift) const {
   // The halves' across shifts at their centres y_n and y_f: Δx(y) = t_x − ψ·y.
   const int half = size_.height / 2;
   const cv::Rect near(0, 0, size_.width, half), far(0, size_.height - half, size_.width, half);
@@ -303,7 +331,7 @@ void GroundShiftEstimator::MeasureTurn(const cv::Mat& previous, GroundShift& shi
     const cv::Rect& part = k == 0 ? near : far;
     cv::Mat a, b;
     cv::multiply(previous(part), half_window_, a);
-    cv::multiply(previous_(part), half_window_, b);
+    cv::multiply(current(part), half_window_, b);
     double response = 0.0;
     across[k] = Correlate(a, b, options_.whiten, options_.gaussian_peak, response).x * options_.cell_m;
     if (!(response >= options_.min_response) ||
