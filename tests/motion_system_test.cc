@@ -23,6 +23,14 @@ MotionEvalOptions Sequences(int seeds, int frames, const std::string& preset = "
   return o;
 }
 
+// Tuning seeds 1–2 of `field`, 30 frames each, ours searching around `prior`.
+MotionEvalOptions FieldSequences(MotionPrior prior) {
+  MotionEvalOptions o = Sequences(2, 30, "field");
+  o.sim.seed = 1;
+  o.prior = prior;
+  return o;
+}
+
 // First set-up (v = 1.2 m, φ = 66°, f = 40 mm, 1.25 m/s, 200 ms): 30-image
 // sequences whose consecutive frames share only about 0.1 m of ground.
 TEST(MotionSystem, FirstSetUpCorrespondencesAndDrift) {
@@ -83,10 +91,7 @@ TEST(MotionSystem, SecondSetUpMosaicRowFit) {
 // feature on no plant (a stone or clod segmented as plant matter), scored
 // by its ground point.
 TEST(MotionSystem, FieldWithTheWheelsPriorMatchesThePlantsAndTheStones) {
-  MotionEvalOptions o = Sequences(2, 30, "field");
-  o.sim.seed = 1;
-  o.prior = MotionPrior::kWheels;
-  const MotionEvaluation e = EvaluateMotion(o);
+  const MotionEvaluation e = EvaluateMotion(FieldSequences(MotionPrior::kWheels));
   ASSERT_EQ(e.ours.pairs, 58);
   EXPECT_GE(e.ours.locked_pairs, 30);
   EXPECT_GE(e.ours.matches, 500);
@@ -105,9 +110,7 @@ TEST(MotionSystem, FieldWithTheWheelsPriorMatchesThePlantsAndTheStones) {
 // matter's height not the plane's; the smoothed previous motion alone
 // locks 1 of 58 pairs, 22.9 % correct.
 TEST(MotionSystem, FieldWithoutOdometryLocksOnTheGroundShift) {
-  MotionEvalOptions o = Sequences(2, 30, "field");
-  o.sim.seed = 1;
-  o.prior = MotionPrior::kImage;
+  MotionEvalOptions o = FieldSequences(MotionPrior::kImage);
   const MotionEvaluation e = EvaluateMotion(o);
   ASSERT_EQ(e.ours.pairs, 58);
   EXPECT_EQ(e.ours.prior_valid_pairs, 58);
