@@ -94,6 +94,7 @@ struct GroundShiftOptions {
   // cost the `treatment` preset locked frames (tuning seeds 1–3: 67 → 61
   // of 87).
   bool measure_turn = false;
+  double max_half_disagreement_m = 0.024;
   // kSoil: each view also loses the other's plants, carried over by the
   // shift found, and is correlated again. The holes cut for the plants move
   // with the plants, faster than the ground, and pulled the peak with them:
@@ -101,7 +102,6 @@ struct GroundShiftOptions {
   // (session 33); on a synthetic bed of 15 cm plants 0.21 → 0.07 mm a frame.
   // Soil() only.
   bool mask_both_views = false;
-  double max_half_disagreement_m = 0.024;
 
   OptionErrors Validate() const;
   // The soil's texture on the ground, its spectrum less whitened (0.7): the
