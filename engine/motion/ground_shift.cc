@@ -171,18 +171,29 @@ cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, bool ga
 
 }  // namespace
 
-GroundShift GroundShiftEstimator::Update(const cv::Mat& mask) {
+cv::Mat GroundShiftEstimator::PlantView(const cv::Mat& mask) {
   if (options_.source != GroundShiftSource::kPlants)
     throw DataError("ground shift: the soil's texture needs the image with the mask");
   cv::Mat view = BirdsEye(mask);
   const double fraction = cv::sum(view)[0] / static_cast<double>(view.total());
-  if (fraction < options_.min_plant_fraction) {
+  if (fraction >= options_.min_plant_fraction) return view;
+  previous_.release();
+  return cv::Mat();
+}
+
+GroundShift GroundShiftEstimator::Update(const cv::Mat& mask) {
+  cv::Mat view = PlantView(mask);
+  if (view.empty()) {
     GroundShift out;
     out.reason = "too little plant matter in view";
-    previous_.release();
     return out;
   }
   return Correlated(std::move(view), cv::Mat());
+}
+
+void GroundShiftEstimator::Remember(const cv::Mat& mask) {
+  cv::Mat view = PlantView(mask);
+  if (!view.empty()) previous_ = std::move(view);
 }
 
 cv::Mat GroundShiftEstimator::SoilView(const cv::Mat& image, const cv::Mat& mask, double& soil_fraction,
@@ -264,8 +275,11 @@ GroundShift GroundShiftEstimator::Update(const cv::Mat& image, const cv::Mat& ma
   }
   out.source = GroundShiftSource::kSoil;
   if (!plants_fallback_) return out;
+  if (out.valid) {
+    plants_fallback_->Remember(mask);  // ready for the next frame the soil fails
+    return out;
+  }
   GroundShift plants = plants_fallback_->Update(mask);
-  if (out.valid) return out;
   if (!plants.valid) plants.reason = "soil: " + out.reason + "; plants: " + plants.reason;
   return plants;
 }
@@ -278,11 +292,7 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
     previous_weight_ = std::move(weight);
     return out;
   }
-  // The window on copies: the kept view is the next frame's previous one.
-  cv::Mat a, b;
-  cv::multiply(previous_, window_, a);
-  cv::multiply(view, window_, b);
-  cv::Point2d p = Correlate(a, b, options_.whiten, options_.gaussian_peak, out.response);
+  cv::Point2d p = Windowed(previous_, view, window_, out.response);
   // The turn from the views as they are: each view's holes carried over by
   // the shift alone would sit a turn's few millimetres off in the halves.
   const cv::Mat previous_view = std::move(previous_), current_view = view;
@@ -305,10 +315,8 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
                    cv::BORDER_CONSTANT, cv::Scalar(1));
     cv::warpAffine(previous_weight, into_current, ahead, size_, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
                    cv::BORDER_CONSTANT, cv::Scalar(1));
-    cv::multiply(previous_view.mul(into_previous), window_, a);
-    cv::multiply(current_view.mul(into_current), window_, b);
     double response = 0.0;
-    p = Correlate(a, b, options_.whiten, options_.gaussian_peak, response);
+    p = Windowed(previous_view.mul(into_previous), current_view.mul(into_current), window_, response);
   }
   out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
   if (std::abs(p.x) > options_.max_shift_fraction * size_.width ||
@@ -321,6 +329,15 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
   return out;
 }
 
+cv::Point2d GroundShiftEstimator::Windowed(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& window,
+                                           double& response) const {
+  // The window on copies: a kept view is the next frame's previous one.
+  cv::Mat a, b;
+  cv::multiply(previous, window, a);
+  cv::multiply(current, window, b);
+  return Correlate(a, b, options_.whiten, options_.gaussian_peak, response);
+}
+
 void GroundShiftEstimator::MeasureTurn(const cv::Mat& previous, const cv::Mat& current,
                                        GroundShift& shift) const {
   // The halves' across shifts at their centres y_n and y_f: Δx(y) = t_x − ψ·y.
@@ -329,11 +346,8 @@ void GroundShiftEstimator::MeasureTurn(const cv::Mat& previous, const cv::Mat& c
   double across[2] = {0.0, 0.0};
   for (int k = 0; k < 2; ++k) {
     const cv::Rect& part = k == 0 ? near : far;
-    cv::Mat a, b;
-    cv::multiply(previous(part), half_window_, a);
-    cv::multiply(current(part), half_window_, b);
     double response = 0.0;
-    across[k] = Correlate(a, b, options_.whiten, options_.gaussian_peak, response).x * options_.cell_m;
+    across[k] = Windowed(previous(part), current(part), half_window_, response).x * options_.cell_m;
     if (!(response >= options_.min_response) ||
         std::abs(across[k] - shift.t_m.x()) > options_.max_half_disagreement_m)
       return;

@@ -84,7 +84,7 @@ struct GroundShiftOptions {
   double min_soil_fraction = 0.3;  // of the view; less: no shift
   // kSoil: where the soil gives no shift (a closed canopy, soil without
   // texture), the plant masks on the plane at this height stand in (a
-  // second estimator, fed every frame so that its previous view is ready).
+  // second estimator, shown every frame so that its previous view is ready).
   // Negative: none.
   double plants_fallback_height_m = -1.0;
   // The turn from the near and far halves of the view: both halves' peaks
@@ -163,7 +163,16 @@ class GroundShiftEstimator {
   cv::Mat window_, half_window_, previous_, previous_weight_;
   std::unique_ptr<GroundShiftEstimator> plants_fallback_;
   cv::Mat BirdsEyeInput(const cv::Mat& mask) const;  // checked, plant 255
+  // kPlants: the mask's bird's-eye view, or empty (the previous view
+  // forgotten) when it holds too little plant matter.
+  cv::Mat PlantView(const cv::Mat& mask);
+  // kPlants: the mask's view kept as the previous one, nothing correlated
+  // (the fallback while the soil gives the shift).
+  void Remember(const cv::Mat& mask);
   GroundShift Correlated(cv::Mat view, cv::Mat weight);  // weight: the soil's (kSoil) or empty
+  // The shift of `current` against `previous`, both multiplied by `window`.
+  cv::Point2d Windowed(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& window,
+                       double& response) const;
   void MeasureTurn(const cv::Mat& previous, const cv::Mat& current, GroundShift& shift) const;
 };
 
