@@ -77,9 +77,11 @@ class Simulator {
   const geometry::CameraModel& camera() const { return camera_; }
   int expected_frames() const;
   int dropped_frames() const { return dropped_; }
+  // The camera as it was with `bounce` (a frame's truth.bounce): what
+  // placed that frame's pixels, for scoring against the truth.
+  geometry::CameraModel CameraFor(const CameraBounce& bounce) const;
 
  private:
-  geometry::CameraModel CameraFor(const CameraBounce& bounce) const;
   void FillGridTruth(FrameTruth& truth) const;
   void FillPlantTruth(const geometry::CameraModel& camera, const RenderedFrame& rendered,
                       FrameTruth& truth) const;
