@@ -135,9 +135,11 @@ class MethodRun {
   void Step(const sim::SimFrame& frame, const vision::Segmentation& seg,
             const geometry::CameraModel& camera, const geometry::CameraModel& true_camera,
             const std::unordered_map<int, const sim::PlantTruth*>& by_instance, Totals& totals) {
-    const auto& features = extractor_.Extract(seg.blobs, camera);
-    if (track_width_m_ > 0.0 && !first_) SetWheelPrior(frame);
     if (ground_shift_) SetImagePrior(frame, seg, totals);
+    // Placed with the camera's pitch the soil measured (0 without), as the
+    // soil's translation, the search's prior, has it taken out.
+    const auto& features = extractor_.Extract(seg.blobs, motion::WithPitch(camera, pitch_rad_));
+    if (track_width_m_ > 0.0 && !first_) SetWheelPrior(frame);
     const auto start = std::chrono::steady_clock::now();
     const motion::FrameMotion& m = tracker_.Update(features);
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -198,6 +200,7 @@ class MethodRun {
   void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
     const motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
     soil_shift_m_ = shift.valid && shift.source == motion::GroundShiftSource::kSoil ? shift.t_m.norm() : -1.0;
+    pitch_rad_ = shift.pitch_rad;
     if (!shift.valid || first_) return;
     tracker_.SetMotionPrior({shift.psi_rad, shift.t_m}, prior_psi_sd_rad_);
     const PlanarMotion truth = TrueMotion(previous_pose_, frame.truth.pose);
@@ -263,6 +266,7 @@ class MethodRun {
   std::optional<motion::GroundShiftEstimator> ground_shift_;
   std::optional<pipeline::VisualScale> soil_scale_;
   double soil_shift_m_ = -1.0;  // this frame's soil shift, -1 for none
+  double pitch_rad_ = 0.0;      // the camera's pitch the soil measured
   VehiclePose2 pose_;           // the motions composed, Scaled
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;

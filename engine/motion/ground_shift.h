@@ -29,14 +29,17 @@
 // (session 33), half the features' own error (0.19°), and it finds the 1°
 // turns that kept the feature search from locking.
 //
+// The camera's bounce moves the whole view along by about a centimetre
+// from frame to frame (0.004 rad of pitch at 1.5 m ahead). The same halves'
+// along shifts give the change of pitch (measure_pitch), which comes out of
+// the ground's translation; the feature search sees the same bounce, so its
+// features must be placed with the pitch too (GroundShift::pitch_rad,
+// WithPitch): session 32 took the bounce out of the prior alone and locked
+// fewer frames. A roll moves the ground across alike everywhere and stays
+// in the translation (docs/results/2026-11-27-visual-motion.md, sessions
+// 31–34).
+//
 // The view is limited to `max_range_m` ahead of the nearest ground seen.
-// What limits the translation (docs/results/2026-11-27-visual-motion.md,
-// sessions 31–33): the camera's bounce moves the whole view along by about
-// a centimetre from frame to frame (0.004 rad of pitch at 1.5 m). Fitting
-// each frame's pitch, roll and height change to the shifts of blocks of
-// the view takes it out of the ground's translation, but the feature
-// search sees the same bounce, so a prior without it locked fewer frames
-// (session 32).
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -95,6 +98,30 @@ struct GroundShiftOptions {
   // of 87).
   bool measure_turn = false;
   double max_half_disagreement_m = 0.024;
+  // The camera's change of pitch from the halves' along shifts (with the
+  // turn: measure_turn on; kSoil only). A pitch change Δθ moves a ground
+  // point y ahead of the camera's foot along by Δθ·(H² + y²)/H on the
+  // nominal camera's view, so the far half moves further than the near
+  // one, and the ground's translation is the view's shift less that. Both
+  // halves' along shifts must lie within max_half_disagreement_m of the
+  // whole view's. On `field` the bounce puts 12 mm on a frame's shift
+  // (pitch 0.3° sd); the change reads to 1.6–1.9 mrad rms against a true
+  // 4.1 mrad sd (tuning seeds 1–8, session 34), and the shift's error falls
+  // to 7.5 mm. The along shifts are read on the views that lost each
+  // other's holes (mask_both_views), the across ones on the views as they
+  // are.
+  // Soil() only: the features the shift is the prior of must then be
+  // placed with the pitch too (GroundShift::pitch_rad).
+  bool measure_pitch = false;
+  // The halves' difference reads a small bias (a mean of 0.36 mrad a frame
+  // against the truth's 0.14 on tuning seeds 1–8; cause not traced). A
+  // camera's bounce about its mount has no mean change, so the measured
+  // changes' running mean (this weight a frame) is taken out.
+  double pitch_bias_weight = 0.05;
+  // GroundShift::pitch_rad, the changes summed, keeps this share a frame
+  // and returns the rest to level, so that the sum of the changes' errors
+  // stays bounded on a long run (1: a random walk, 12 mrad in 100 frames).
+  double pitch_hold = 0.97;
   // kSoil: each view also loses the other's plants, carried over by the
   // shift found, and is correlated again. The holes cut for the plants move
   // with the plants, faster than the ground, and pulled the peak with them:
@@ -119,6 +146,15 @@ struct GroundShift {
   Eigen::Vector2d t_m{0.0, 0.0};
   double psi_rad = 0.0;
   bool turn_valid = false;
+  // The camera's pitch (down) from the previous frame to this one
+  // (measure_pitch); t_m is then the ground's, the pitch's apparent shift
+  // taken out. Invalid: 0, and t_m holds it.
+  double pitch_change_rad = 0.0;
+  bool pitch_valid = false;
+  // The camera's pitch against its mount's, the changes summed
+  // (pitch_hold): place this frame's features with the tilt plus this, so
+  // that they move as the ground's translation says (measure_pitch; else 0).
+  double pitch_rad = 0.0;
   GroundShiftSource source = GroundShiftSource::kPlants;  // what gave the shift
   double response = 0.0;  // the correlation's peak (above 1 possible when whiten < 1)
   std::string reason;  // why not valid
@@ -158,6 +194,9 @@ class GroundShiftEstimator {
   GroundShiftOptions options_;
   int image_width_ = 0, image_height_ = 0;
   double x0_ = 0.0, y0_ = 0.0;
+  double camera_height_m_ = 0.0;  // above the view's plane
+  double pitch_bias_rad_ = 0.0;   // the measured changes' running mean
+  double pitch_rad_ = 0.0;        // GroundShift::pitch_rad
   cv::Size size_;
   cv::Mat to_image_;  // 3×3: bird's-eye pixel → OpenCV image coordinates
   cv::Mat window_, half_window_, previous_, previous_weight_;
@@ -173,7 +212,15 @@ class GroundShiftEstimator {
   // The shift of `current` against `previous`, both multiplied by `window`.
   cv::Point2d Windowed(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& window,
                        double& response) const;
-  void MeasureTurn(const cv::Mat& previous, const cv::Mat& current, GroundShift& shift) const;
+  // The turn and the pitch change from the view's near and far halves.
+  struct ViewPair {
+    const cv::Mat& previous;
+    const cv::Mat& current;
+  };
+  void MeasureHalves(const ViewPair& for_turn, const ViewPair& for_pitch, GroundShift& shift);
 };
+
+// `camera` with its tilt raised by `pitch_rad` (GroundShift::pitch_rad).
+geometry::CameraModel WithPitch(const geometry::CameraModel& camera, double pitch_rad);
 
 }  // namespace plantscale::motion
