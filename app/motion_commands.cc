@@ -24,6 +24,7 @@ struct MotionArgs {
   std::string prior = "none";
   std::string ground_shift = "soil";
   std::string soil_scale = "on";
+  std::string camera_pitch = "soil";
 };
 
 nlohmann::json MethodJson(const MotionMethodEvaluation& m) {
@@ -67,6 +68,7 @@ nlohmann::json EvaluationJson(const MotionEvaluation& e) {
     j["ground_shift"] = e.ground_shift_source == motion::GroundShiftSource::kSoil ? "soil" : "plants";
     j["soil_scale_applied"] = e.soil_scale;
   }
+  j["camera_pitch_applied"] = e.camera_pitch;
   j["baseline_paper"] = MethodJson(e.paper);
   j["published"] = {{"correct_correspondence_rate_min", 0.95},
                     {"row_fit_rms_m", {0.0327, 0.0272, 0.0086}},
@@ -123,6 +125,7 @@ int EvaluateMotionCommand(const MotionArgs& a, const GlobalOptions& global) {
   }
   if (a.ground_shift == "plants") o.ground_shift = motion::GroundShiftOptions{};
   o.soil_scale = a.soil_scale == "on";
+  o.camera_pitch = a.camera_pitch == "soil";
   const MotionEvaluation e = EvaluateMotion(o);
   if (a.json) {
     std::cout << EvaluationJson(e).dump(2) << '\n';
@@ -175,6 +178,12 @@ void AddMotionCommands(CommandRegistry& registry) {
                   "by the soil's distance over theirs (the features lie on the crop profile's "
                   "plane, the soil on the ground)")
       ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--camera-pitch", a.camera_pitch,
+                  "with --prior wheels or image: soil places ours' features with the camera's "
+                  "pitch from frame to frame, read off the soil view's near and far halves "
+                  "(the bounce); off places them with the nominal camera")
+      ->check(CLI::IsMember({"soil", "off"}))
       ->capture_default_str();
 }
 

@@ -122,6 +122,11 @@ class MethodRun {
     ground_shift_.emplace(o, camera);
     prior_psi_sd_rad_ = psi_sd_rad;
   }
+  // Place the features with the camera's pitch the soil reads (`o` with
+  // measure_pitch), the prior whatever else it is.
+  void UsePitchOnly(const motion::GroundShiftOptions& o, const geometry::CameraModel& camera) {
+    pitch_only_.emplace(o, camera);
+  }
   // The locked translation scaled by the soil's distance over the features'
   // (the soil's shift lies on the ground; the features on the profile's plane).
   void UseSoilScale(double min_distance_m) {
@@ -136,6 +141,7 @@ class MethodRun {
             const geometry::CameraModel& camera, const geometry::CameraModel& true_camera,
             const std::unordered_map<int, const sim::PlantTruth*>& by_instance, Totals& totals) {
     if (ground_shift_) SetImagePrior(frame, seg, totals);
+    if (pitch_only_) pitch_rad_ = pitch_only_->Update(frame.rendered.image, seg.mask).pitch_rad;
     // Placed with the camera's pitch the soil measured (0 without), as the
     // soil's translation, the search's prior, has it taken out.
     const auto& features = extractor_.Extract(seg.blobs, motion::WithPitch(camera, pitch_rad_));
@@ -263,7 +269,7 @@ class MethodRun {
   sim::Pose2 previous_pose_, first_pose_;
   int64_t previous_utime_ = 0;
   double track_width_m_ = 0.0, prior_psi_sd_rad_ = 0.0;
-  std::optional<motion::GroundShiftEstimator> ground_shift_;
+  std::optional<motion::GroundShiftEstimator> ground_shift_, pitch_only_;
   std::optional<pipeline::VisualScale> soil_scale_;
   double soil_shift_m_ = -1.0;  // this frame's soil shift, -1 for none
   double pitch_rad_ = 0.0;      // the camera's pitch the soil measured
@@ -379,6 +385,10 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
   out.ground_shift_source = options.ground_shift.source;
   out.soil_scale = options.prior == MotionPrior::kImage && options.soil_scale &&
                    options.ground_shift.source == motion::GroundShiftSource::kSoil;
+  // The pitch is the soil's: with the plant masks as the image prior there is none.
+  out.camera_pitch = options.camera_pitch && (options.prior == MotionPrior::kWheels ||
+                                              (options.prior == MotionPrior::kImage &&
+                                               options.ground_shift.source == motion::GroundShiftSource::kSoil));
   const double step_m = options.sim.vehicle.speed_m_s / options.sim.vehicle.frame_rate_hz;
   Totals paper, ours;
   vision::SegmenterOptions seg_options = options.segmenter;
@@ -415,8 +425,10 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
     MethodRun ours_run(ours_o, camera, mosaic, options.match_tolerance_m);
     if (options.prior == MotionPrior::kWheels) {
       ours_run.UseWheelPrior(so.vehicle.track_width_m, options.prior_psi_sd_rad);
+      if (out.camera_pitch) ours_run.UsePitchOnly(motion::GroundShiftOptions::Soil(), camera);
     } else if (options.prior == MotionPrior::kImage) {
       motion::GroundShiftOptions g = options.ground_shift;
+      g.measure_pitch = g.measure_pitch && out.camera_pitch;
       if (g.source == motion::GroundShiftSource::kPlants) {
         g.plane_height_m = ours_o.features.plane_height_m;
       } else if (g.plants_fallback_height_m < 0.0) {

@@ -63,6 +63,14 @@ struct MotionEvalOptions {
   // read 1–1.5 % short on `field`).
   bool soil_scale = true;
   double soil_scale_min_distance_m = 0.1;
+  // Ours' features placed with the camera's pitch from frame to frame, read
+  // off the soil view's near and far halves (GroundShiftOptions::measure_pitch,
+  // GroundShift::pitch_rad): the camera's bounce moved them by about 12 mm
+  // a frame on `field`. With kImage the soil's shift gives it (and takes it
+  // out of the prior's translation); with kWheels a soil estimator of its
+  // own reads it (the prior stays the wheels'). kNone (the paper's own
+  // set-ups) never: nothing there is searched around.
+  bool camera_pitch = true;
 
   OptionErrors Validate() const;
 };
@@ -119,6 +127,7 @@ struct MotionEvaluation {
   MotionPrior prior = MotionPrior::kNone;
   motion::GroundShiftSource ground_shift_source = motion::GroundShiftSource::kSoil;  // kImage
   bool soil_scale = false;  // the soil's scale applied
+  bool camera_pitch = false;  // ours' features placed with the soil's pitch
   MotionMethodEvaluation paper, ours;
 };
 

@@ -85,19 +85,28 @@ TEST(MotionSystem, SecondSetUpMosaicRowFit) {
   EXPECT_LT(e.ours.drift_cm_per_m, 0.3 * e.paper.drift_cm_per_m);
 }
 
-// The vehicle's own camera searching around the wheels (issue 38), tuning
-// seeds 1–2: 94.5 % of 667 matches right (the scorer before session 33,
-// plants within 1 px and nothing on the ground: 88 %). 20 matches have a
+// The vehicle's own camera searching around the wheels (issue 38), its
+// features placed with the camera's pitch the soil reads: tuning seeds 1–2,
+// 49 of 58 pairs locked, 96.4 % of 1,110 matches right (session 34); with
+// the nominal camera 35 locked, 94.5 % of 667 (the bounce moves the
+// features beyond the 6 mm gate around the wheels). 28 matches have a
 // feature on no plant (a stone or clod segmented as plant matter), scored
 // by its ground point.
 TEST(MotionSystem, FieldWithTheWheelsPriorMatchesThePlantsAndTheStones) {
-  const MotionEvaluation e = EvaluateMotion(FieldSequences(MotionPrior::kWheels));
+  MotionEvalOptions o = FieldSequences(MotionPrior::kWheels);
+  const MotionEvaluation e = EvaluateMotion(o);
   ASSERT_EQ(e.ours.pairs, 58);
-  EXPECT_GE(e.ours.locked_pairs, 30);
-  EXPECT_GE(e.ours.matches, 500);
-  EXPECT_GT(e.ours.correct_correspondence_rate, 0.93);
+  EXPECT_TRUE(e.camera_pitch);
+  EXPECT_GE(e.ours.locked_pairs, 45);
+  EXPECT_GE(e.ours.matches, 900);
+  EXPECT_GT(e.ours.correct_correspondence_rate, 0.955);
   EXPECT_GT(e.ours.matches_on_ground, 0);
   EXPECT_LT(e.ours.matches_on_ground, e.ours.matches / 10);
+  o.camera_pitch = false;
+  const MotionEvaluation nominal = EvaluateMotion(o);
+  EXPECT_FALSE(nominal.camera_pitch);
+  EXPECT_LT(nominal.ours.locked_pairs, 40);
+  EXPECT_GT(nominal.ours.correct_correspondence_rate, 0.93);
 }
 
 // The vehicle's own camera with no odometry at all (issue 38): ours
