@@ -1,5 +1,7 @@
 #include "engine/motion/visual_odometry.h"
 
+#include "engine/motion/ground_shift.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -53,8 +55,11 @@ void VisualOdometry::Invalid(const std::string& why) {
 }
 
 const VisualMotion& VisualOdometry::Update(int64_t utime, std::span<const vision::Blob> blobs,
-                                           double prior_speed_m_s, double prior_yaw_rate_rad_s) {
-  const std::vector<Feature>& features = extractor_.Extract(blobs, camera_);
+                                           double prior_speed_m_s, double prior_yaw_rate_rad_s,
+                                           double camera_pitch_rad) {
+  const std::vector<Feature>& features =
+      camera_pitch_rad == 0.0 ? extractor_.Extract(blobs, camera_)
+                              : extractor_.Extract(blobs, WithPitch(camera_, camera_pitch_rad));
   return UpdateFeatures(utime, features, prior_speed_m_s, prior_yaw_rate_rad_s);
 }
 

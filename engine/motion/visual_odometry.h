@@ -82,8 +82,12 @@ class VisualOdometry {
 
   // The blobs (contours traced) of a frame captured at utime, and the
   // vehicle's expected forward speed and yaw rate since the previous frame.
+  // `camera_pitch_rad`: the camera's pitch against its mount's at this
+  // frame (GroundShift::pitch_rad, the bounce), which the features are
+  // placed with.
   const VisualMotion& Update(int64_t utime, std::span<const vision::Blob> blobs,
-                             double prior_speed_m_s, double prior_yaw_rate_rad_s);
+                             double prior_speed_m_s, double prior_yaw_rate_rad_s,
+                             double camera_pitch_rad = 0.0);
   // The same from features already extracted.
   const VisualMotion& UpdateFeatures(int64_t utime, std::span<const Feature> features,
                                      double prior_speed_m_s, double prior_yaw_rate_rad_s);

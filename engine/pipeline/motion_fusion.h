@@ -44,6 +44,16 @@ struct MotionFusionOptions {
   // that the wheels are taken to be at fault (PersistentDisagreement).
   int persistence_frames = 12;
   double persistence_z = 4.0;
+  // The camera's features placed with its pitch from frame to frame, read
+  // off the soil's texture (motion::GroundShiftOptions::Soil(), the near
+  // and far halves' along shifts): the camera's bounce moves them by about
+  // 12 mm a frame on `field`, twice the search's gate around the prior.
+  // On `field` (session 34, tuning seeds 1–4) placement over a 30 % wheel
+  // spin 10.6 → 9.9 mm and over stopped odometry 14.2 → 11.5 mm (means),
+  // with no fault 9.75 → 9.9 mm; about 12 ms a frame (the soil's view and
+  // five correlations). Where the soil gives no shift the pitch returns to
+  // level.
+  bool camera_pitch = true;
 
   OptionErrors Validate() const;
 };

@@ -67,6 +67,8 @@ Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& o
     system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
   }
   if (options_.motion.enabled) visual_.emplace(camera, options_.motion.visual);
+  if (options_.motion.enabled && options_.motion.camera_pitch)
+    camera_pitch_.emplace(motion::GroundShiftOptions::Soil(), camera);
 }
 
 void Pipeline::set_sink(treatment::NozzleSink sink) {
@@ -224,7 +226,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
     frame_.mode = tracker_.mode();
     return frame_;
   }
-  if (frame_.accepted) UpdateVisualMotion();
+  if (frame_.accepted) UpdateVisualMotion(image);
   if (frame_.accepted) {
     tracking::FeaturesFromBlobs(frame_.track_blobs, image.cols, image.rows, track_features_,
                                 tracker_.centroid_heights());
@@ -261,8 +263,17 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
 
 // The camera's motion since the previous frame; fed to the tracker as the
 // odometry of the frame's capture when the wheels have gone silent.
-void Pipeline::UpdateVisualMotion() {
+void Pipeline::UpdateVisualMotion(const cv::Mat& image) {
   if (!visual_) return;
+  double pitch = 0.0;
+  if (camera_pitch_) {
+    try {
+      pitch = camera_pitch_->Update(image, frame_.mask).pitch_rad;
+    } catch (const std::exception& e) {  // an image the soil view cannot read: the nominal camera
+      camera_pitch_->Reset();
+      frame_.faults.push_back(std::string("camera pitch: ") + e.what());
+    }
+  }
   const bool silent = last_wheel_utime_ >= 0 &&
                       (frame_.utime - last_wheel_utime_) * 1e-6 > options_.motion.substitute_after_s;
   // The search's prior: the grid's own motion over the last frames (the
@@ -276,7 +287,7 @@ void Pipeline::UpdateVisualMotion() {
   const std::optional<PlanarSpeed> grid = GridMotion();
   const PlanarSpeed prior = grid ? *grid : driven_;
   frame_.visual = visual_->Update(frame_.utime, frame_.blobs, prior.speed_m_s / visual_scale_.ratio(),
-                                  prior.yaw_rate_rad_s);
+                                  prior.yaw_rate_rad_s, pitch);
   if (!frame_.visual.valid) frame_.faults.push_back("camera motion: " + frame_.visual.reason);
   // The wheels are silent and the camera gave no motion: nothing is fed, so
   // the tracker dead-reckons on its own with the wide noise of silent

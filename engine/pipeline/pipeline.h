@@ -25,6 +25,7 @@
 
 #include "engine/common/options.h"
 #include "engine/geometry/camera_model.h"
+#include "engine/motion/ground_shift.h"
 #include "engine/motion/visual_odometry.h"
 #include "engine/pipeline/motion_fusion.h"
 #include "engine/tracking/grid_tracker.h"
@@ -157,7 +158,7 @@ class Pipeline {
   OdometrySample Fused(const OdometrySample& wheels, int64_t previous_utime);
   // `ticks`: as TreatmentSystem::TicksFrom's count.
   const PoseResult& DeadReckon(const OdometrySample& s, double sd_fraction, int ticks = 0);
-  void UpdateVisualMotion();
+  void UpdateVisualMotion(const cv::Mat& image);
   int FrameTicks() const;
 
   const geometry::CameraModel& camera_;
@@ -176,6 +177,7 @@ class Pipeline {
   std::vector<int> blob_of_feature_;
   std::vector<treatment::TickResult> frame_ticks_;
   std::optional<motion::VisualOdometry> visual_;
+  std::optional<motion::GroundShiftEstimator> camera_pitch_;  // options_.motion.camera_pitch
   PlanarSpeed driven_;  // what the tracker last dead-reckoned with (ground)
   FusedSource last_source_ = FusedSource::kWheels;
   int camera_substitutions_ = 0;
