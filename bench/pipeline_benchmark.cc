@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "engine/geometry/test_cameras.h"
+#include "engine/motion/visual_odometry.h"
 #include "engine/pipeline/pipeline.h"
 #include "engine/sim/simulator.h"
 #include "engine/treatment/treatment_system.h"
@@ -324,9 +325,15 @@ double ThreadCpuSeconds() {
 }
 
 // A fresh pipeline warmed on the pass's first frames.
-std::unique_ptr<Pipeline> Warmed(const Pass& pass, bool treat, int64_t* opened) {
+std::unique_ptr<Pipeline> Warmed(const Pass& pass, bool treat, int camera, int64_t* opened) {
   PipelineOptions options = ProductOptions(pass.options);
   options.treat = treat;
+  if (camera != 0) {  // the camera's motion as the second source, as `--visual-motion`
+    const sim::FieldOptions& f = pass.options.field;
+    options.motion.enabled = true;
+    options.motion.camera_pitch = camera == 1;
+    options.motion.visual = motion::VisualOdometryFor(f.crop_radius_m, f.crop_radius_m * f.crop_height_ratio);
+  }
   auto p = std::make_unique<Pipeline>(*pass.camera, options,
                                       [opened](int64_t, uint64_t mask) { *opened += mask != 0; });
   for (int i = 0; i < kWarmFrames; ++i) {
@@ -340,13 +347,14 @@ void BM_PipelineFrame(benchmark::State& state) {
   cv::setNumThreads(1);
   const int scale = static_cast<int>(state.range(0));
   const bool treat = state.range(1) != 0;
+  const int camera = static_cast<int>(state.range(2));
   const Pass& pass = PassAt(scale);
   if (static_cast<int>(pass.frames.size()) < kFrames) {
     state.SkipWithError("the pass ended before its frames were rendered");
     return;
   }
   int64_t opened = 0;
-  std::unique_ptr<Pipeline> p = Warmed(pass, treat, &opened);
+  std::unique_ptr<Pipeline> p = Warmed(pass, treat, camera, &opened);
   if (p->tracker().mode() != tracking::TrackerMode::kTracking) {
     state.SkipWithError("the tracker did not lock in the warm-up frames");
     return;
@@ -360,7 +368,7 @@ void BM_PipelineFrame(benchmark::State& state) {
     if (next == pass.frames.size()) {
       state.PauseTiming();
       p.reset();
-      p = Warmed(pass, treat, &opened);
+      p = Warmed(pass, treat, camera, &opened);
       next = kWarmFrames;
       ++restarts;
       state.ResumeTiming();
@@ -396,12 +404,16 @@ void BM_PipelineFrame(benchmark::State& state) {
 }
 // treat:1 is the product (the figures of the issue); treat:0 is segmentation
 // and tracking only, so that the treatment chain's share shows in one run.
+// camera:1 adds the camera's own motion (features, correspondence and the
+// soil's pitch: MotionFusionOptions), camera:2 the same without the pitch.
 BENCHMARK(BM_PipelineFrame)
-    ->ArgNames({"scale", "treat"})
-    ->Args({1, 1})
-    ->Args({2, 1})
-    ->Args({1, 0})
-    ->Args({2, 0})
+    ->ArgNames({"scale", "treat", "camera"})
+    ->Args({1, 1, 0})
+    ->Args({2, 1, 0})
+    ->Args({1, 0, 0})
+    ->Args({2, 0, 0})
+    ->Args({1, 1, 1})
+    ->Args({1, 1, 2})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2 * (kFrames - kWarmFrames));  // each timed frame of the pass twice
 
