@@ -278,6 +278,26 @@ class MethodRun {
   bool first_ = true;
 };
 
+// What ours searches around (options.prior), and with the soil the
+// camera's pitch and scale as `out` says they apply.
+void UsePrior(const MotionEvalOptions& options, const MotionEvaluation& out, double track_width_m,
+              double feature_plane_m, const geometry::CameraModel& camera, MethodRun& run) {
+  if (options.prior == MotionPrior::kWheels) {
+    run.UseWheelPrior(track_width_m, options.prior_psi_sd_rad);
+    if (out.camera_pitch) run.UsePitchOnly(motion::GroundShiftOptions::Soil(), camera);
+  } else if (options.prior == MotionPrior::kImage) {
+    motion::GroundShiftOptions g = options.ground_shift;
+    g.measure_pitch = g.measure_pitch && out.camera_pitch;
+    if (g.source == motion::GroundShiftSource::kPlants) {
+      g.plane_height_m = feature_plane_m;
+    } else if (g.plants_fallback_height_m < 0.0) {
+      g.plants_fallback_height_m = feature_plane_m;
+    }
+    run.UseImagePrior(g, camera, options.prior_psi_sd_rad);
+    if (out.soil_scale) run.UseSoilScale(options.soil_scale_min_distance_m);
+  }
+}
+
 double Mean(const std::vector<double>& v) {
   double s = 0.0;
   for (double x : v) s += x;
@@ -423,20 +443,7 @@ MotionEvaluation EvaluateMotion(const MotionEvalOptions& options) {
     MethodRun paper_run(paper_o, camera, mosaic, options.match_tolerance_m);
     if (options.prior != MotionPrior::kNone) motion::UsePriorSearch(ours_o.tracker, ours_o.features);
     MethodRun ours_run(ours_o, camera, mosaic, options.match_tolerance_m);
-    if (options.prior == MotionPrior::kWheels) {
-      ours_run.UseWheelPrior(so.vehicle.track_width_m, options.prior_psi_sd_rad);
-      if (out.camera_pitch) ours_run.UsePitchOnly(motion::GroundShiftOptions::Soil(), camera);
-    } else if (options.prior == MotionPrior::kImage) {
-      motion::GroundShiftOptions g = options.ground_shift;
-      g.measure_pitch = g.measure_pitch && out.camera_pitch;
-      if (g.source == motion::GroundShiftSource::kPlants) {
-        g.plane_height_m = ours_o.features.plane_height_m;
-      } else if (g.plants_fallback_height_m < 0.0) {
-        g.plants_fallback_height_m = ours_o.features.plane_height_m;
-      }
-      ours_run.UseImagePrior(g, camera, options.prior_psi_sd_rad);
-      if (out.soil_scale) ours_run.UseSoilScale(options.soil_scale_min_distance_m);
-    }
+    UsePrior(options, out, so.vehicle.track_width_m, ours_o.features.plane_height_m, camera, ours_run);
     sim::SimFrame frame;
     double first = -1.0, last = 0.0;
     for (int k = 0; k < options.frames && simulator.Next(frame); ++k) {
