@@ -1,9 +1,9 @@
 #include "engine/motion/visual_odometry.h"
 
-#include "engine/motion/ground_shift.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "engine/motion/ground_shift.h"
 
 namespace plantscale::motion {
 
