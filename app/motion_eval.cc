@@ -149,6 +149,7 @@ class MethodRun {
     const auto start = std::chrono::steady_clock::now();
     const motion::FrameMotion& m = tracker_.Update(features);
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    last_t_m_ = m.motion.t_m;
     ++totals.frames;
     ScoreMatches(features, m, frame, true_camera, by_instance, totals);
     if (!first_) pose_ = motion::Compose(pose_, Scaled(m));
@@ -207,7 +208,12 @@ class MethodRun {
     const motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
     soil_shift_m_ = shift.valid && shift.source == motion::GroundShiftSource::kSoil ? shift.t_m.norm() : -1.0;
     pitch_rad_ = shift.pitch_rad;
-    if (!shift.valid || first_) return;
+    // A step longer than the soil's view can measure (a narrow view at
+    // speed): the peak found is another shift's, and ours searches as without.
+    if (!shift.valid || first_ || !ground_shift_->CanMeasure(last_t_m_)) {
+      soil_shift_m_ = -1.0;
+      return;
+    }
     tracker_.SetMotionPrior({shift.psi_rad, shift.t_m}, prior_psi_sd_rad_);
     const PlanarMotion truth = TrueMotion(previous_pose_, frame.truth.pose);
     ++totals.prior_valid;
@@ -273,6 +279,7 @@ class MethodRun {
   std::optional<pipeline::VisualScale> soil_scale_;
   double soil_shift_m_ = -1.0;  // this frame's soil shift, -1 for none
   double pitch_rad_ = 0.0;      // the camera's pitch the soil measured
+  Eigen::Vector2d last_t_m_{0.0, 0.0};  // the previous frame's motion, locked or coasted
   VehiclePose2 pose_;           // the motions composed, Scaled
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;

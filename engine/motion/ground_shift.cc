@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -18,6 +19,7 @@ OptionErrors GroundShiftOptions::Validate() const {
   RequireInRange(e, "whiten", whiten, 0.0, 1.0);
   RequireInRange(e, "min_response", min_response, 0.0, 1.0);
   RequireInRange(e, "max_shift_fraction", max_shift_fraction, 0.01, 0.5);
+  RequireInRange(e, "min_peak_ratio", min_peak_ratio, 1.0, 100.0);
   RequireInRange(e, "min_plant_fraction", min_plant_fraction, 0.0, 1.0);
   if (source == GroundShiftSource::kSoil && plane_height_m != 0.0)
     e.push_back({"plane_height_m", "must be 0 for the soil's texture (it lies on the ground)"});
@@ -137,14 +139,40 @@ cv::Mat GroundShiftEstimator::BirdsEye(const cv::Mat& mask) const {
 
 namespace {
 
+// Cells either side of a correlation peak that belong to it (its main lobe
+// after the Hann window and a parabola's sub-cell spread).
+constexpr int kPeakExclusionCells = 4;
+
+// The correlation's peak over its highest value beyond kPeakExclusionCells
+// of it (wrapping, as the correlation does).
+double PeakRatio(const cv::Mat& c, cv::Point peak, double max_value) {
+  const int w = c.cols, h = c.rows;
+  double second = 0.0;
+  for (int y = 0; y < h; ++y) {
+    int dy = std::abs(y - peak.y);
+    dy = std::min(dy, h - dy);
+    const float* row = c.ptr<float>(y);
+    for (int x = 0; x < w; ++x) {
+      int dx = std::abs(x - peak.x);
+      dx = std::min(dx, w - dx);
+      if (dx <= kPeakExclusionCells && dy <= kPeakExclusionCells) continue;
+      second = std::max(second, static_cast<double>(row[x]));
+    }
+  }
+  return second > 0.0 ? max_value / second : std::numeric_limits<double>::infinity();
+}
+
 // The shift of `b` against `a` (b(x) ≈ a(x − shift)) at the peak of their
 // cross-correlation, its spectrum divided by its magnitude to the power
 // `whiten` (1: phase correlation, 0: plain correlation); the peak placed
 // to a fraction of a cell by a parabola through it and its neighbours
 // along each axis (through their logarithms with `gaussian_peak`).
 // `response`: the peak (whiten 1: 1 for two views one
-// shift apart, near 0 for views that share nothing).
-cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, bool gaussian_peak, double& response) {
+// shift apart, near 0 for views that share nothing). `ratio`, when given:
+// the peak over the highest value beyond `kPeakExclusionCells` of it (the
+// runner-up shift; 1: two shifts explain the views equally well).
+cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, bool gaussian_peak, double& response,
+                      double* ratio = nullptr) {
   cv::Mat fa, fb, cross;
   cv::dft(a, fa, cv::DFT_COMPLEX_OUTPUT);
   cv::dft(b, fb, cv::DFT_COMPLEX_OUTPUT);
@@ -180,6 +208,7 @@ cv::Point2d Correlate(const cv::Mat& a, const cv::Mat& b, double whiten, bool ga
   if (x > 0.5 * w) x -= w;
   if (y > 0.5 * h) y -= h;
   response = max_value;
+  if (ratio != nullptr) *ratio = PeakRatio(c, peak, max_value);
   return {x, y};
 }
 
@@ -312,7 +341,7 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
     previous_weight_ = std::move(weight);
     return out;
   }
-  cv::Point2d p = Windowed(previous_, view, window_, out.response);
+  cv::Point2d p = Windowed(previous_, view, window_, out.response, &out.peak_ratio);
   // The turn from the views as they are: each view's holes carried over by
   // the shift alone would sit a turn's few millimetres off in the halves.
   const cv::Mat previous_view = std::move(previous_), current_view = view;
@@ -322,6 +351,12 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
   if (!(out.response >= options_.min_response)) {
     out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
     out.reason = "no clear correlation peak (" + std::to_string(out.response) + ")";
+    return out;
+  }
+  if (!(out.peak_ratio >= options_.min_peak_ratio)) {
+    out.t_m = Eigen::Vector2d(p.x * options_.cell_m, p.y * options_.cell_m);
+    out.reason = "ambiguous correlation peak (" + std::to_string(out.peak_ratio) +
+                 " times the runner-up shift's)";
     return out;
   }
   cv::Mat previous_exchanged, current_exchanged;  // empty unless mask_both_views
@@ -360,13 +395,18 @@ GroundShift GroundShiftEstimator::Correlated(cv::Mat view, cv::Mat weight) {
   return out;
 }
 
+bool GroundShiftEstimator::CanMeasure(const Eigen::Vector2d& expected_t_m) const {
+  const double f = options_.max_shift_fraction * options_.cell_m;
+  return std::abs(expected_t_m.x()) <= f * size_.width && std::abs(expected_t_m.y()) <= f * size_.height;
+}
+
 cv::Point2d GroundShiftEstimator::Windowed(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& window,
-                                           double& response) const {
+                                           double& response, double* ratio) const {
   // The window on copies: a kept view is the next frame's previous one.
   cv::Mat a, b;
   cv::multiply(previous, window, a);
   cv::multiply(current, window, b);
-  return Correlate(a, b, options_.whiten, options_.gaussian_peak, response);
+  return Correlate(a, b, options_.whiten, options_.gaussian_peak, response, ratio);
 }
 
 void GroundShiftEstimator::MeasureHalves(const ViewPair& for_turn, const ViewPair& for_pitch, GroundShift& shift) {

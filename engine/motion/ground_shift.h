@@ -75,6 +75,15 @@ struct GroundShiftOptions {
   double min_response = 0.08;
   // A shift beyond this fraction of the view: no shift (the peak wrapped).
   double max_shift_fraction = 0.25;
+  // The peak less than this many times the runner-up shift's value (the
+  // highest beyond the peak's own lobe): no shift. Two shifts that explain
+  // the views about equally well mean the views share too little (a narrow
+  // view the vehicle crosses most of between frames) or the ground repeats
+  // (furrows). Tuning seeds 1–2, --prior image: the lowest ratio on field,
+  // long, treatment, B, C, D, lettuce-fast and cabbage-wide 2.6–6.9, on
+  // testbed (the masks standing in) 1.9; on the paper's first set-up (a
+  // 0.32 m view, 0.25 m a frame) half of the peaks are below 1.21.
+  double min_peak_ratio = 2.0;
   double min_plant_fraction = 0.002;  // of the view; less: no shift
   // kSoil: the plant mask closed by `soil_close_px`, each plant filled to
   // its convex hull and grown by `soil_plant_margin_px` is cut out, and the
@@ -157,6 +166,7 @@ struct GroundShift {
   double pitch_rad = 0.0;
   GroundShiftSource source = GroundShiftSource::kPlants;  // what gave the shift
   double response = 0.0;  // the correlation's peak (above 1 possible when whiten < 1)
+  double peak_ratio = 0.0;  // the peak over the runner-up shift's (min_peak_ratio)
   std::string reason;  // why not valid
 };
 
@@ -179,6 +189,12 @@ class GroundShiftEstimator {
   GroundShift Update(const cv::Mat& image, const cv::Mat& mask);
   // Forget the previous mask (a gap in the frames).
   void Reset();
+  // Whether a shift of `expected_t_m` (vehicle frame, e.g. the previous
+  // frame's motion or the wheels') lies within what the view can measure:
+  // max_shift_fraction of it across and along. A vehicle that crosses more
+  // of a narrow view between frames leaves too little of it in both, and a
+  // peak found there is another shift's.
+  bool CanMeasure(const Eigen::Vector2d& expected_t_m) const;
 
   // The bird's-eye view of `mask` (CV_32FC1, 0..1; row r at y = y0 + (r + ½)·cell).
   cv::Mat BirdsEye(const cv::Mat& mask) const;
@@ -211,7 +227,7 @@ class GroundShiftEstimator {
   GroundShift Correlated(cv::Mat view, cv::Mat weight);  // weight: the soil's (kSoil) or empty
   // The shift of `current` against `previous`, both multiplied by `window`.
   cv::Point2d Windowed(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& window,
-                       double& response) const;
+                       double& response, double* ratio = nullptr) const;
   // The turn and the pitch change from the view's near and far halves.
   struct ViewPair {
     const cv::Mat& previous;

@@ -112,9 +112,11 @@ double SoilTexture(double x, double y) {
   return octave(0.024, 11U) + 0.6 * octave(0.009, 29U);
 }
 
-// The frame: textured soil, and the plants (discs at height h) bright over it.
-cv::Mat Frame(const geometry::CameraModel& camera, const cv::Mat& mask, const Eigen::Vector2d& t,
-              double psi = 0.0) {
+// The frame: soil textured by `texture` (field coordinates, −0.5..0.5),
+// and the plants (discs at height h) bright over it.
+template <typename Texture>
+cv::Mat FrameOf(const geometry::CameraModel& camera, const cv::Mat& mask, const Eigen::Vector2d& t,
+                double psi, Texture texture) {
   cv::Mat image(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
   for (int v = 0; v < image.rows; ++v) {
     for (int u = 0; u < image.cols; ++u) {
@@ -125,10 +127,15 @@ cv::Mat Frame(const geometry::CameraModel& camera, const cv::Mat& mask, const Ei
       const auto g = camera.ImageToPlane({u + 0.5, v + 0.5}, 0.0);
       if (!g) continue;
       const Eigen::Vector2d f = FieldAt(*g, t, psi);
-      image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(90.0 + 70.0 * SoilTexture(f.x(), f.y()));
+      image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(90.0 + 70.0 * texture(f.x(), f.y()));
     }
   }
   return image;
+}
+
+cv::Mat Frame(const geometry::CameraModel& camera, const cv::Mat& mask, const Eigen::Vector2d& t,
+              double psi = 0.0) {
+  return FrameOf(camera, mask, t, psi, SoilTexture);
 }
 
 TEST(GroundShift, TheSoilsTextureGivesTheGroundsScaleWhateverThePlantsHeight) {
@@ -302,6 +309,45 @@ TEST(GroundShift, BareSoilAViewThatChangedAndAGapAreNotShifts) {
   EXPECT_EQ(estimator.Update(Mask(camera, Bed(1), 0.0, {0.0, 0.0})).reason, "first frame");
 }
 
+TEST(GroundShift, SoilThatRepeatsAlongIsAmbiguousAndAStepTooLongForTheViewIsNamed) {
+  // Soil that repeats every 6 cm along (a roller's or a drill's pattern):
+  // every shift that differs by a repeat explains the two views equally well.
+  const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
+  // Bare soil: plants' holes, moving with the ground, would tell the shifts apart.
+  const auto furrows = [](double x, double y) { return SoilTexture(x, std::fmod(y + 100.0, 0.06)); };
+  const cv::Mat bare(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
+  const auto run = [&](const GroundShiftOptions& o) {
+    GroundShiftEstimator estimator(o, camera);
+    std::vector<GroundShift> out;
+    Eigen::Vector2d at(0.0, -1.0);
+    for (int k = 0; k < 4; ++k, at.y() -= 0.045) {
+      out.push_back(estimator.Update(FrameOf(camera, bare, at, 0.0, furrows), bare));
+    }
+    return out;
+  };
+  GroundShiftOptions unchecked = GroundShiftOptions::Soil();
+  unchecked.min_peak_ratio = 1.0;
+  int wrong = 0;
+  for (const GroundShift& s : run(unchecked)) {
+    if (s.valid && std::abs(s.t_m.y() + 0.045) > 0.01) ++wrong;  // a furrow off, read as a shift
+  }
+  EXPECT_GE(wrong, 1);
+  const std::vector<GroundShift> checked = run(GroundShiftOptions::Soil());
+  for (size_t k = 1; k < checked.size(); ++k) {
+    EXPECT_FALSE(checked[k].valid) << k;
+    EXPECT_LT(checked[k].peak_ratio, GroundShiftOptions::Soil().min_peak_ratio) << k;
+    EXPECT_EQ(checked[k].reason.rfind("ambiguous correlation peak", 0), 0U) << checked[k].reason;
+  }
+  // A view 0.3 m along measures steps up to a quarter of it (about 7 cm
+  // here); the default view, 1.6 m along, a 0.2 m step too.
+  GroundShiftOptions narrow = GroundShiftOptions::Soil();
+  narrow.max_range_m = 0.3;
+  const GroundShiftEstimator short_view(narrow, camera), long_view(GroundShiftOptions::Soil(), camera);
+  EXPECT_TRUE(short_view.CanMeasure({0.005, -0.05}));
+  EXPECT_FALSE(short_view.CanMeasure({0.0, -0.2}));
+  EXPECT_TRUE(long_view.CanMeasure({0.0, -0.2}));
+}
+
 TEST(GroundShift, BadMasksAndOptionsAreNamed) {
   const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
   GroundShiftEstimator estimator(GroundShiftOptions{}, camera);
@@ -310,10 +356,12 @@ TEST(GroundShift, BadMasksAndOptionsAreNamed) {
   GroundShiftOptions bad;
   bad.cell_m = 0.0;
   bad.whiten = 2.0;
+  bad.min_peak_ratio = 0.5;
   const OptionErrors e = bad.Validate();
-  ASSERT_EQ(e.size(), 2U);
+  ASSERT_EQ(e.size(), 3U);
   EXPECT_EQ(e[0].key, "cell_m");
   EXPECT_EQ(e[1].key, "whiten");
+  EXPECT_EQ(e[2].key, "min_peak_ratio");
   EXPECT_THROW(GroundShiftEstimator(bad, camera), InvalidOptionsError);
   // The pitch needs the halves (the turn's) and the soil's texture.
   GroundShiftOptions pitch_alone = GroundShiftOptions::Soil();
@@ -330,3 +378,4 @@ TEST(GroundShift, BadMasksAndOptionsAreNamed) {
 
 }  // namespace
 }  // namespace plantscale::motion
+
