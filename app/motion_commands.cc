@@ -21,7 +21,7 @@ struct MotionArgs {
   std::optional<double> speed_m_s, frame_rate_hz, offset_m;
   bool json = false;
   std::string baseline;
-  std::string prior = "none";
+  std::string prior = "image";
   std::string ground_shift = "soil";
   std::string soil_scale = "on";
   std::string camera_pitch = "soil";
@@ -86,7 +86,7 @@ void PrintTable(const MotionEvaluation& e, bool with_paper, std::ostream& out) {
   };
   out << std::fixed << std::setprecision(4) << "motion on preset " << e.preset << " (" << e.seeds
       << " seeds x " << e.frames << " frames, " << std::setprecision(2) << e.distance_m
-      << " m per sequence)\n"
+      << " m per sequence, prior " << MotionPriorName(e.prior) << ")\n"
       << std::setprecision(4) << "  " << std::left << std::setw(30) << "figure" << std::right
       << std::setw(10) << "ours";
   if (with_paper) out << std::setw(12) << "paper's m.";
@@ -160,11 +160,12 @@ void AddMotionCommands(CommandRegistry& registry) {
   cmd->add_option("--baseline", a.baseline, "paper: the published method beside ours")
       ->check(CLI::IsMember({"paper"}));
   cmd->add_option("--prior", a.prior,
-                  "what ours searches each frame around: none (the smoothed previous motion, no "
-                  "odometry at all) or wheels (the simulated wheel odometry since the previous "
-                  "frame, as the vehicle's pipeline does; the pose still composes the camera's "
-                  "motion only), or image (the ground's shift between the two frames' plant "
-                  "masks, phase-correlated on the plane: no odometry at all)")
+                  "what ours searches each frame around: image (the ground's shift between the "
+                  "two frames, phase-correlated on the ground: no odometry at all; where it reads "
+                  "no clear shift, or the step is longer than its view can measure, as none), "
+                  "none (the smoothed previous motion, no odometry at all) or wheels (the "
+                  "simulated wheel odometry since the previous frame, as the vehicle's pipeline "
+                  "does; the pose still composes the camera's motion only)")
       ->check(CLI::IsMember({"none", "wheels", "image"}))
       ->capture_default_str();
   cmd->add_option("--ground-shift", a.ground_shift,

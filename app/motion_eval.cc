@@ -108,7 +108,7 @@ class MethodRun {
             motion::MosaicOptions mosaic, double tolerance_m)
       : extractor_(o.features), tracker_(o.tracker, camera, o.features.plane_height_m),
         mosaic_((mosaic.plane_height_m = o.mosaic_plane_height_m, mosaic), camera),
-        tolerance_m_(tolerance_m) {}
+        tolerance_m_(tolerance_m), last_t_m_(o.tracker.initial_motion.t_m) {}
 
   // Search around the wheels' motion since the previous frame (a track of
   // `track_width_m`, the rotation's σ per frame `psi_sd_rad`).
@@ -149,7 +149,7 @@ class MethodRun {
     const auto start = std::chrono::steady_clock::now();
     const motion::FrameMotion& m = tracker_.Update(features);
     totals.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    last_t_m_ = m.motion.t_m;
+    if (!first_) last_t_m_ = m.motion.t_m;
     ++totals.frames;
     ScoreMatches(features, m, frame, true_camera, by_instance, totals);
     if (!first_) pose_ = motion::Compose(pose_, Scaled(m));
@@ -279,7 +279,9 @@ class MethodRun {
   std::optional<pipeline::VisualScale> soil_scale_;
   double soil_shift_m_ = -1.0;  // this frame's soil shift, -1 for none
   double pitch_rad_ = 0.0;      // the camera's pitch the soil measured
-  Eigen::Vector2d last_t_m_{0.0, 0.0};  // the previous frame's motion, locked or coasted
+  // The previous frame's motion, locked or coasted (before the first pair:
+  // the nominal advance the tracker starts from).
+  Eigen::Vector2d last_t_m_;
   VehiclePose2 pose_;           // the motions composed, Scaled
   double first_distance_ = 0.0, last_distance_ = 0.0;
   bool first_ = true;
