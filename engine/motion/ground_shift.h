@@ -79,7 +79,7 @@ struct GroundShiftOptions {
   // highest beyond the peak's own lobe): no shift. Two shifts that explain
   // the views about equally well mean the views share too little (a narrow
   // view the vehicle crosses most of between frames) or the ground repeats
-  // (furrows). Tuning seeds 1–2, --prior image: the lowest ratio on field,
+  // (a roller's pattern). Tuning seeds 1–2, --prior image: the lowest ratio on field,
   // long, treatment, B, C, D, lettuce-fast and cabbage-wide 2.6–6.9, on
   // testbed (the masks standing in) 1.9; on the paper's first set-up (a
   // 0.32 m view, 0.25 m a frame) half of the peaks are below 1.21.

@@ -314,14 +314,14 @@ TEST(GroundShift, SoilThatRepeatsAlongIsAmbiguousAndAStepTooLongForTheViewIsName
   // every shift that differs by a repeat explains the two views equally well.
   const geometry::CameraModel camera(geometry::testing::ObliqueCamera());
   // Bare soil: plants' holes, moving with the ground, would tell the shifts apart.
-  const auto furrows = [](double x, double y) { return SoilTexture(x, std::fmod(y + 100.0, 0.06)); };
+  const auto repeating = [](double x, double y) { return SoilTexture(x, std::fmod(y + 100.0, 0.06)); };
   const cv::Mat bare(camera.height(), camera.width(), CV_8UC1, cv::Scalar(0));
   const auto run = [&](const GroundShiftOptions& o) {
     GroundShiftEstimator estimator(o, camera);
     std::vector<GroundShift> out;
     Eigen::Vector2d at(0.0, -1.0);
     for (int k = 0; k < 4; ++k, at.y() -= 0.045) {
-      out.push_back(estimator.Update(FrameOf(camera, bare, at, 0.0, furrows), bare));
+      out.push_back(estimator.Update(FrameOf(camera, bare, at, 0.0, repeating), bare));
     }
     return out;
   };
@@ -329,7 +329,7 @@ TEST(GroundShift, SoilThatRepeatsAlongIsAmbiguousAndAStepTooLongForTheViewIsName
   unchecked.min_peak_ratio = 1.0;
   int wrong = 0;
   for (const GroundShift& s : run(unchecked)) {
-    if (s.valid && std::abs(s.t_m.y() + 0.045) > 0.01) ++wrong;  // a furrow off, read as a shift
+    if (s.valid && std::abs(s.t_m.y() + 0.045) > 0.01) ++wrong;  // a repeat off, read as a shift
   }
   EXPECT_GE(wrong, 1);
   const std::vector<GroundShift> checked = run(GroundShiftOptions::Soil());
@@ -378,4 +378,3 @@ TEST(GroundShift, BadMasksAndOptionsAreNamed) {
 
 }  // namespace
 }  // namespace plantscale::motion
-
