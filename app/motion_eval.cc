@@ -206,14 +206,12 @@ class MethodRun {
 
   void SetImagePrior(const sim::SimFrame& frame, const vision::Segmentation& seg, Totals& totals) {
     const motion::GroundShift shift = ground_shift_->Update(frame.rendered.image, seg.mask);
-    soil_shift_m_ = shift.valid && shift.source == motion::GroundShiftSource::kSoil ? shift.t_m.norm() : -1.0;
-    pitch_rad_ = shift.pitch_rad;
     // A step longer than the soil's view can measure (a narrow view at
     // speed): the peak found is another shift's, and ours searches as without.
-    if (!shift.valid || first_ || !ground_shift_->CanMeasure(last_t_m_)) {
-      soil_shift_m_ = -1.0;
-      return;
-    }
+    const bool usable = shift.valid && !first_ && ground_shift_->CanMeasure(last_t_m_);
+    soil_shift_m_ = usable && shift.source == motion::GroundShiftSource::kSoil ? shift.t_m.norm() : -1.0;
+    pitch_rad_ = shift.pitch_rad;
+    if (!usable) return;
     tracker_.SetMotionPrior({shift.psi_rad, shift.t_m}, prior_psi_sd_rad_);
     const PlanarMotion truth = TrueMotion(previous_pose_, frame.truth.pose);
     ++totals.prior_valid;
