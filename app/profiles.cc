@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <numbers>
 #include <random>
@@ -14,6 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "app/config_loader.h"
 
@@ -239,6 +241,61 @@ Profiles LoadProfiles(const std::string& crop, const std::string& vehicle,
     p.vehicle = LoadVehicleProfile(vehicle, config_dir);
   }
   return p;
+}
+
+std::vector<std::string> ProfileWarnings(const Profiles& p) {
+  const CropProfile& c = p.crop;
+  const treatment::SprayBarOptions& bar = p.vehicle.bar;
+  const double half = 0.5 * bar.nozzles * bar.nozzle_spacing_m;
+  const double margin = 2.0 * c.planter_sd_m;
+  const auto cm = [](double m, bool sign = false) {
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(1) << (sign ? std::showpos : std::noshowpos) << m * 100.0 << " cm";
+    return o.str();
+  };
+  const auto mm = [](double m) {
+    std::ostringstream o;
+    o << std::setprecision(3) << m * 1000.0 << " mm";
+    return o.str();
+  };
+  std::vector<int> beyond, near_end;
+  for (int i = 0; i < c.rows; ++i) {
+    const int n = i - (c.rows - 1) / 2;  // 0: the central row
+    const double x = n * c.row_spacing_m;
+    const double past_end = std::max(x - (bar.centre_x_m + half), (bar.centre_x_m - half) - x);
+    if (past_end > 0.0) {
+      beyond.push_back(n);
+    } else if (past_end + margin > 0.0) {
+      near_end.push_back(n);
+    }
+  }
+  const auto names = [&](const std::vector<int>& rows) {
+    std::ostringstream o;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      o << (i == 0 ? "" : i + 1 == rows.size() ? " and " : ", ") << cm(rows[i] * c.row_spacing_m, true);
+    }
+    return o.str();
+  };
+  const std::string bar_text = "the spray bar of " + p.vehicle.file + " (" + std::to_string(bar.nozzles) +
+                               " nozzles of " + mm(bar.nozzle_spacing_m) + ", from " +
+                               cm(bar.centre_x_m - half) + " to " + cm(bar.centre_x_m + half) +
+                               " across the vehicle)";
+  std::vector<std::string> out;
+  if (!beyond.empty()) {
+    out.push_back(c.file + ": the row" + (beyond.size() > 1 ? "s at " : " at ") + names(beyond) + " of the " +
+                  std::to_string(c.rows) + "-row bed lie" + (beyond.size() > 1 ? "" : "s") + " beyond " +
+                  bar_text + ": " + (beyond.size() > 1 ? "their" : "its") + " plants will not be treated");
+  }
+  if (!near_end.empty()) {
+    out.push_back(c.file + ": the row" + (near_end.size() > 1 ? "s at " : " at ") + names(near_end) + " stand" +
+                  (near_end.size() > 1 ? "" : "s") + " within two planter sd (" + cm(margin) + ") of the end of " +
+                  bar_text + ": plants off the line towards the end, or the vehicle wandering, will be missed");
+  }
+  return out;
+}
+
+void PrintProfileWarnings(const Profiles& profiles, std::ostream& err) {
+  for (const std::string& w : ProfileWarnings(profiles)) err << "plantscale: warning: " << w << '\n';
 }
 
 CalibrationError ParseCalibrationError(const std::string& text, const std::string& where) {

@@ -12,7 +12,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <ostream>
 #include <string>
+#include <vector>
 
 #include "engine/geometry/camera_model.h"
 #include "engine/pipeline/pipeline.h"
@@ -80,6 +82,17 @@ ProfileNames DefaultProfileNames(const std::string& preset_name);
 // --crop / --vehicle when given (non-empty), else the preset's defaults.
 Profiles LoadProfiles(const std::string& crop, const std::string& vehicle,
                       const std::string& preset_name, const std::filesystem::path& config_dir);
+
+// What the two profiles cannot do together, as sentences naming both
+// files (empty: nothing). The bed is centred on the vehicle; a row whose
+// line lies beyond the spray bar's end (its outer nozzle's covered edge)
+// is never treated, and one whose line lies within two planter sd of it
+// loses the plants planted off the line towards the end (more when the
+// vehicle wanders across the bed). Neither is an error: a grower may treat
+// only the central rows of a wide bed.
+std::vector<std::string> ProfileWarnings(const Profiles& profiles);
+// Each of them on `err` as "plantscale: warning: ...".
+void PrintProfileWarnings(const Profiles& profiles, std::ostream& err);
 
 // A calibration a field calibration leaves: the engine's camera is off from
 // the true one by these amounts, each with a sign drawn per seed.

@@ -8,6 +8,8 @@
 #include <functional>
 #include <fstream>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "app/config_loader.h"
 #include "app/tracking_eval.h"
@@ -61,6 +63,46 @@ TEST(Profiles, FieldPresetDefaultsAreTheNominalCropByName) {
   EXPECT_EQ(o.treatment.scheduler.bar.nozzles, 64);
   // A preset without a nominal crop needs --crop and --vehicle.
   EXPECT_NE(ErrorOf([] { DefaultProfileNames("my-own"); }).find("give both"), std::string::npos);
+}
+
+// A bed wider than the spray bar is said, naming both files and the rows;
+// every shipped pairing of a preset's crop and vehicle says nothing.
+TEST(Profiles, RowsBeyondOrNearTheSprayBarsEndAreSaid) {
+  for (const char* preset : {"A", "B", "C", "D", "field", "long", "treatment", "testbed", "sanchiz_pla",
+                             "lettuce-fast", "cabbage-wide"}) {
+    EXPECT_TRUE(ProfileWarnings(LoadProfiles("", "", preset, DefaultConfigDir())).empty()) << preset;
+  }
+  Profiles p = LoadProfiles("", "", "field", DefaultConfigDir());  // silsoe: 64 × 22.5 mm, ±0.72 m
+  p.crop.file = "five-rows.yaml";
+  p.crop.rows = 5;
+  p.crop.row_spacing_m = 0.5;
+  p.crop.planter_sd_m = 0.016;
+  std::vector<std::string> w = ProfileWarnings(p);
+  ASSERT_EQ(w.size(), 1u);  // the rows at ±0.5 m are 0.22 m inside the bar's ends
+  EXPECT_NE(w[0].find("five-rows.yaml: the rows at -100.0 cm and +100.0 cm of the 5-row bed lie beyond"),
+            std::string::npos)
+      << w[0];
+  EXPECT_NE(w[0].find("silsoe.yaml (64 nozzles of 22.5 mm, from -72.0 cm to 72.0 cm across the vehicle)"),
+            std::string::npos)
+      << w[0];
+  EXPECT_NE(w[0].find("will not be treated"), std::string::npos);
+  // Three rows 0.7 m apart: the outer lines 2 cm inside the ends, planter sd 2 cm.
+  p.crop.rows = 3;
+  p.crop.row_spacing_m = 0.7;
+  p.crop.planter_sd_m = 0.02;
+  w = ProfileWarnings(p);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("the rows at -70.0 cm and +70.0 cm stand within two planter sd (4.0 cm) of the end"),
+            std::string::npos)
+      << w[0];
+  p.crop.planter_sd_m = 0.009;  // 1.8 cm: clear of the ends
+  EXPECT_TRUE(ProfileWarnings(p).empty());
+  // A bar moved 0.3 m to the right: only the left row is past its end.
+  p.vehicle.bar.centre_x_m = 0.3;
+  w = ProfileWarnings(p);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("the row at -70.0 cm of the 3-row bed lies beyond"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("from -42.0 cm to 102.0 cm"), std::string::npos) << w[0];
 }
 
 TEST(Profiles, AnUnknownVehicleGetsDefaultSuspension) {

@@ -91,6 +91,7 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
   if (args.publish.publish) {
     const Profiles profiles =
         LoadProfiles(args.crop, args.vehicle, request.options.preset, global.ConfigDir());
+    PrintProfileWarnings(profiles, std::cerr);
     SimRunConfig run = SimRunConfigOf(args.preset, global.ConfigDir(), request.options);
     run.crop = std::filesystem::absolute(profiles.crop.file).lexically_normal().string();
     run.vehicle = std::filesystem::absolute(profiles.vehicle.file).lexically_normal().string();

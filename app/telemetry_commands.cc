@@ -187,6 +187,7 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
       profiles->vehicle.calibration_file =
           ResolveConfigFile(a.calibration, dir / "cameras", "camera").string();
     }
+    PrintProfileWarnings(*profiles, std::cerr);
   }
   const SprayBarEndpoint bar = OpenSprayBar(
       a.publish, false,

@@ -244,6 +244,7 @@ TreatmentEvalOptions TreatmentEvalOptionsFrom(const TreatmentArgs& a, const Glob
   if (a.length_m) o.sim.length_m = *a.length_m;
   o.seeds = a.seeds;
   o.profiles = LoadProfiles(a.profiles.crop, a.profiles.vehicle, o.sim.preset, global.ConfigDir());
+  PrintProfileWarnings(*o.profiles, std::cerr);
   o.calibration_error = ParseCalibrationError(a.profiles.calibration_error, "--calibration-error");
   o.treatment = ProductTreatmentOptions(*o.profiles);
   ApplyTreatmentArgs(a, o.treatment);
