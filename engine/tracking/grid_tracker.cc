@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -67,6 +68,8 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "frame_forward_sd_m", frame_forward_sd_m);
   RequireNonNegative(e, "frame_bearing_sd_rad", frame_bearing_sd_rad);
   RequirePositive(e, "gate_chi2", gate_chi2);
+  RequirePositive(e, "strip_gate_chi2", strip_gate_chi2);
+  RequireNonNegative(e, "strip_sd_m", strip_sd_m);
   RequireNonNegative(e, "edge_margin_px", edge_margin_px);
   RequireInRange(e, "min_feature_area_fraction", min_feature_area_fraction, 0.0, 1.0);
   RequirePositive(e, "max_wheel_speed_m_s", max_wheel_speed_m_s);
@@ -717,9 +720,16 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
     const auto& g = in_view[static_cast<size_t>(c.plant)];
     report.associations.push_back({c.feature, g.m, g.n, c.gamma2});
   }
-  if (!Observable(matches, in_view, report)) return;
-  WhitenedUpdate(h, s, features, in_view, matches, bounce_prior, report);
-  if (options_.HeightFromSize()) {
+  const std::vector<Strip> strips = options_.merged_row_strips
+                                        ? FindStrips(h, s, features, in_view, matches, bounce_prior)
+                                        : std::vector<Strip>{};
+  report.strips = static_cast<int>(strips.size());
+  const bool observable = Observable(matches, in_view, report);
+  if (!observable && strips.empty()) return;
+  if (!observable) report.skipped_reason.clear();  // the strips alone: the rows' lateral position
+  WhitenedUpdate(h, s, features, in_view, observable ? matches : std::vector<Candidate>{}, strips,
+                 bounce_prior, report);
+  if (observable && options_.HeightFromSize()) {
     // The matches hold no merged or weed-sized blob (skipped_).
     std::vector<SizeMatch> sized;
     for (const Candidate& c : matches) {
@@ -757,19 +767,85 @@ void GridTracker::NoteLinesInView(const std::vector<geometry::GridPlant>& in_vie
 void GridTracker::MarkSkippedFeatures(std::span<const Feature> features,
                                       const std::vector<geometry::GridPlant>& in_view) {
   skipped_.assign(features.size(), false);
+  merged_.assign(features.size(), false);
   const double min_area_m2 = options_.min_feature_area_fraction * std::numbers::pi *
                              options_.crop_radius_m * options_.crop_radius_m;
   size_t usable = 0;
   for (size_t j = 0; j < features.size(); ++j) {
     const Feature& f = features[j];
-    const bool merged =
-        options_.skip_merged_features &&
-        std::count_if(in_view.begin(), in_view.end(),
-                      [&](const auto& g) { return f.BoxHolds(g.image_px); }) >= 2;
-    skipped_[j] = merged || f.area_m2 < min_area_m2;
+    merged_[j] = options_.skip_merged_features &&
+                 std::count_if(in_view.begin(), in_view.end(),
+                               [&](const auto& g) { return f.BoxHolds(g.image_px); }) >= 2;
+    skipped_[j] = merged_[j] || f.area_m2 < min_area_m2;
     usable += !skipped_[j] && !f.clipped;
   }
-  if (2 * usable < in_view.size()) skipped_.assign(features.size(), false);
+  // Too few others left: the merged blobs are what there is to track,
+  // unless they are taken as strips.
+  if (2 * usable < in_view.size()) {
+    for (size_t j = 0; j < features.size(); ++j) skipped_[j] = options_.merged_row_strips && merged_[j];
+  }
+}
+
+StripPrediction GridTracker::PredictStripAt(const ObservationModel& h, const GridState& s,
+                                            const std::vector<geometry::GridPlant>& in_view,
+                                            const Strip& strip, bool nuisance,
+                                            Eigen::Matrix2d* prior_out) const {
+  std::vector<int> order = strip.plants;
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return in_view[static_cast<size_t>(a)].m < in_view[static_cast<size_t>(b)].m;
+  });
+  std::vector<Prediction> preds;
+  Eigen::Matrix2d prior = Eigen::Matrix2d::Zero();
+  const double w = 1.0 / static_cast<double>(order.size());
+  for (const int i : order) {
+    const auto& g = in_view[static_cast<size_t>(i)];
+    preds.push_back(PredictPlant(h, s, g.m, g.n));
+    if (nuisance) preds.back().jacobian.rightCols<3>() = preds.back().bounce_jacobian;
+    if (OffsetIndex(g.m, g.n) < 0 && options_.plant_offsets) {
+      prior += w * w * preds.back().offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
+               preds.back().offset_jacobian.transpose();
+    }
+  }
+  StripPrediction out = PredictStrip(preds);
+  if (prior_out) *prior_out = prior;
+  return out;
+}
+
+// Merged blobs along one row (merged_row_strips) whose lateral innovation
+// passes the 1-dof gate. A plant matched by a point feature leaves the
+// strip; a strip needs two plants.
+std::vector<GridTracker::Strip> GridTracker::FindStrips(const ObservationModel& h, const GridState& s,
+                                                        std::span<const Feature> features,
+                                                        const std::vector<geometry::GridPlant>& in_view,
+                                                        const std::vector<Candidate>& matches,
+                                                        const Eigen::Vector3d& bounce_prior) const {
+  std::vector<bool> matched(in_view.size(), false);
+  for (const Candidate& c : matches) matched[static_cast<size_t>(c.plant)] = true;
+  const bool nuisance = options_.model_bounce && !PersistentBounce();
+  std::vector<Strip> strips;
+  for (size_t j = 0; j < features.size(); ++j) {
+    const Feature& f = features[j];
+    if (!merged_[j] || f.clipped) continue;
+    Strip strip{static_cast<int>(j), {}};
+    bool one_row = true;
+    std::optional<int> row;
+    for (size_t i = 0; i < in_view.size(); ++i) {
+      if (!f.BoxHolds(in_view[i].image_px)) continue;
+      one_row = one_row && (!row || *row == in_view[i].n);
+      row = in_view[i].n;
+      if (!matched[i]) strip.plants.push_back(static_cast<int>(i));
+    }
+    if (!one_row || strip.plants.size() < 2) continue;
+    Eigen::Matrix2d prior = Eigen::Matrix2d::Zero();
+    const StripPrediction sp = PredictStripAt(h, s, in_view, strip, false, &prior);
+    const Measurement z = h.Measure(f);
+    Eigen::Matrix2d cov = sp.jacobian * p_ * sp.jacobian.transpose() + prior + z.covariance;
+    if (nuisance) cov += sp.bounce_jacobian * bounce_prior.asDiagonal() * sp.bounce_jacobian.transpose();
+    const double nu = sp.normal.dot(z.value - sp.value);
+    const double var = sp.normal.dot(cov * sp.normal) + options_.strip_sd_m * options_.strip_sd_m;
+    if (nu * nu <= options_.strip_gate_chi2 * var) strips.push_back(std::move(strip));
+  }
+  return strips;
 }
 
 // Covariance of a plant's predicted measurement: the filter's, plus the
@@ -883,12 +959,18 @@ bool GridTracker::Observable(const std::vector<Candidate>& matches,
 void GridTracker::WhitenedUpdate(const ObservationModel& h, const GridState& s,
                                  std::span<const Feature> features,
                                  const std::vector<geometry::GridPlant>& in_view,
-                                 const std::vector<Candidate>& matches,
+                                 const std::vector<Candidate>& matches, const std::vector<Strip>& strips,
                                  const Eigen::Vector3d& bounce_prior, FrameReport& report) {
   if (options_.plant_offsets) {
     for (const Candidate& c : matches) {
       const auto& g = in_view[static_cast<size_t>(c.plant)];
       if (OffsetIndex(g.m, g.n) < 0) AddOffset(g.m, g.n);
+    }
+    for (const Strip& strip : strips) {
+      for (const int i : strip.plants) {
+        const auto& g = in_view[static_cast<size_t>(i)];
+        if (OffsetIndex(g.m, g.n) < 0) AddOffset(g.m, g.n);
+      }
     }
   }
   const int persistent = static_cast<int>(x_.size());
@@ -902,7 +984,8 @@ void GridTracker::WhitenedUpdate(const ObservationModel& h, const GridState& s,
     p_ = std::move(p);
   }
   const int n = static_cast<int>(x_.size());
-  const Eigen::Index stacked = 2 * static_cast<Eigen::Index>(matches.size());
+  const Eigen::Index stacked =
+      2 * static_cast<Eigen::Index>(matches.size()) + static_cast<Eigen::Index>(strips.size());
   PseudoObservation compressed{Eigen::MatrixXd::Zero(stacked, n), Eigen::VectorXd(stacked), {}};
   std::vector<bool> touched(static_cast<size_t>(n), false);
   for (int i = 0; i < head(); ++i) touched[static_cast<size_t>(i)] = true;
@@ -923,6 +1006,21 @@ void GridTracker::WhitenedUpdate(const ObservationModel& h, const GridState& s,
     const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
     compressed.factor.middleRows(r, 2) = c.matrixL().solve(pred.jacobian);
     compressed.residual.segment<2>(r) = c.matrixL().solve(z.value - pred.value);
+  }
+  // Each strip: one row, its lateral innovation over its σ.
+  for (size_t k = 0; k < strips.size(); ++k) {
+    const StripPrediction sp = PredictStripAt(h, s, in_view, strips[k], nuisance);
+    for (const int i : strips[k].plants) {
+      const auto& g = in_view[static_cast<size_t>(i)];
+      const int offset = OffsetIndex(g.m, g.n);
+      for (int q = 0; offset >= 0 && q < PlantStates(); ++q) touched[static_cast<size_t>(offset + q)] = true;
+    }
+    const Measurement z = h.Measure(features[static_cast<size_t>(strips[k].feature)]);
+    const double sd =
+        std::sqrt(sp.normal.dot(z.covariance * sp.normal) + options_.strip_sd_m * options_.strip_sd_m);
+    const Eigen::Index r = 2 * static_cast<Eigen::Index>(matches.size()) + static_cast<Eigen::Index>(k);
+    compressed.factor.row(r) = sp.normal.transpose() * sp.jacobian / sd;
+    compressed.residual(r) = sp.normal.dot(z.value - sp.value) / sd;
   }
   for (int i = 0; i < n; ++i) {
     if (touched[static_cast<size_t>(i)]) compressed.support.push_back(i);

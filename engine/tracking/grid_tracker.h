@@ -35,6 +35,7 @@ namespace plantscale::tracking {
 
 class ObservationModel;  // observation_model.h
 struct Prediction;
+struct StripPrediction;  // observation_model.h
 
 enum class ObservationSpace {
   kGround,  // centroids on the virtual ground plane (ours)
@@ -193,6 +194,24 @@ struct TrackerOptions {
   // as plants predicted in view would be left (plants touching everywhere,
   // as on preset A).
   bool skip_merged_features = true;
+  // A merged blob whose box holds the predictions of two or more plants of
+  // one row and of no other row is those plants touching along the row
+  // (late in the season, or tall neighbours in perspective): its centroid
+  // lies between them along the row, where their visible areas weigh it,
+  // but on the row's line across it. With merged_row_strips it is a
+  // measurement of the row's lateral position alone (a strip): the
+  // centroid's distance across the row from the mean of those plants'
+  // predictions, one degree of freedom gated at strip_gate_chi2, R widened
+  // by strip_sd_m for the unequal weights. Such blobs are then never taken
+  // as one plant's centroid, and a frame whose point matches cannot
+  // observe the grid still updates on its strips. (Taken along the row as
+  // well, with a tenth of a plant spacing as its sd, the strips' centroids
+  // made A's lateral error 6.9 → 13.9 mm: docs/results/2026-11-29-unseen-fields.md.)
+  // Needs skip_merged_features. Off: the thesis's point features only
+  // (with the proviso above).
+  bool merged_row_strips = true;
+  double strip_gate_chi2 = 3.84;  // 95 % for 1 dof
+  double strip_sd_m = 0.01;
   // A blob smaller than this fraction of the crop's area (π crop_radius_m²,
   // when the crop's radius is set) is a weed or a leaf cut off by shadow,
   // not a crop's centroid: associated with a crop whose own blob missed its
@@ -234,6 +253,7 @@ struct FrameReport {
   std::string skipped_reason;  // why no update was made, when it was not
   int predicted = 0;           // grid plants in view
   int matched = 0;
+  int strips = 0;              // merged blobs along one row taken for its lateral position
   int lines_shifted = 0;       // reference shifts (eq. 4.6) before this frame's update
   double nis = 0.0;            // stacked normalised innovation squared
   std::vector<Association> associations;
@@ -421,13 +441,31 @@ class GridTracker {
                               const Eigen::Vector3d& bounce_prior) const;
   static std::vector<Candidate> Associate(std::vector<Candidate> candidates, size_t plants,
                                           size_t features);
+  // A merged blob along one row (merged_row_strips): the feature and the
+  // plants of the view (indices) its box holds.
+  struct Strip {
+    int feature;
+    std::vector<int> plants;
+  };
+  // The strip's prediction (observation_model.h) at the current state, its
+  // plants ordered along the row; with `nuisance` the bounce's columns are
+  // the per-frame nuisance states'. `prior`, when given, gets the offset
+  // prior of its plants not yet carried as states.
+  StripPrediction PredictStripAt(const ObservationModel& h, const geometry::GridState& s,
+                                 const std::vector<geometry::GridPlant>& in_view, const Strip& strip,
+                                 bool nuisance, Eigen::Matrix2d* prior = nullptr) const;
+  std::vector<Strip> FindStrips(const ObservationModel& h, const geometry::GridState& s,
+                                std::span<const Feature> features,
+                                const std::vector<geometry::GridPlant>& in_view,
+                                const std::vector<Candidate>& matches,
+                                const Eigen::Vector3d& bounce_prior) const;
   bool Observable(const std::vector<Candidate>& matches,
                   const std::vector<geometry::GridPlant>& in_view, FrameReport& report) const;
   void WhitenedUpdate(const ObservationModel& h, const geometry::GridState& s,
                       std::span<const Feature> features,
                       const std::vector<geometry::GridPlant>& in_view,
-                      const std::vector<Candidate>& matches, const Eigen::Vector3d& bounce_prior,
-                      FrameReport& report);
+                      const std::vector<Candidate>& matches, const std::vector<Strip>& strips,
+                      const Eigen::Vector3d& bounce_prior, FrameReport& report);
   // Applies z (eqs. 4.73–4.74); returns the normalised innovation squared.
   double Apply(const PseudoObservation& z);
   // TrackerOptions::height_from_size: observes the δh of the plants matched
@@ -453,6 +491,7 @@ class GridTracker {
   Eigen::MatrixXd p_;
   std::vector<PlantOffset> offsets_;
   std::vector<bool> skipped_;  // Update scratch: feature j is not associated
+  std::vector<bool> merged_;   // ... and j's box holds two or more predictions
   // Per band of image rows: running mean equivalent radius √(A/π) of
   // matched crop blobs, and how many went in (height_from_size).
   std::vector<double> band_radius_m_;

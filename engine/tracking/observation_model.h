@@ -4,6 +4,7 @@
 // measured centroid is there (eq. 4.28).
 
 #include <Eigen/Core>
+#include <span>
 
 #include "engine/geometry/camera_model.h"
 #include "engine/geometry/centroid_height.h"
@@ -46,6 +47,22 @@ struct Measurement {
   Eigen::Vector2d value;
   Eigen::Matrix2d covariance;
 };
+
+// Plants touching along one row, seen as one blob (a strip,
+// TrackerOptions::merged_row_strips): its centroid is taken as the mean of
+// their predictions, and only across the row. `normal`: the unit normal of
+// the line through the first and last of `plants` (ordered along the row),
+// held at the prediction; `value` and `jacobian`: the mean of the plants'
+// predictions and of their Jacobians, so that the strip's lateral position
+// is normalᵀ·value with the Jacobian normalᵀ·jacobian. `plants` holds two or
+// more predictions with Jacobians of one size.
+struct StripPrediction {
+  Eigen::Vector2d normal;
+  Eigen::Vector2d value;
+  Eigen::MatrixXd jacobian;
+  Eigen::Matrix<double, 2, 3> bounce_jacobian;  // the mean of the plants'
+};
+StripPrediction PredictStrip(std::span<const Prediction> plants);
 
 class ObservationModel {
  public:
