@@ -70,6 +70,7 @@ OptionErrors TrackerOptions::Validate() const {
   RequirePositive(e, "gate_chi2", gate_chi2);
   RequirePositive(e, "strip_gate_chi2", strip_gate_chi2);
   RequireNonNegative(e, "strip_sd_m", strip_sd_m);
+  RequireInRange(e, "strip_max_offset_fraction", strip_max_offset_fraction, 0.0, 0.5);
   RequireNonNegative(e, "edge_margin_px", edge_margin_px);
   RequireInRange(e, "min_feature_area_fraction", min_feature_area_fraction, 0.0, 1.0);
   RequirePositive(e, "max_wheel_speed_m_s", max_wheel_speed_m_s);
@@ -725,7 +726,7 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
                                         : std::vector<Strip>{};
   report.strips = static_cast<int>(strips.size());
   const bool observable = Observable(matches, in_view, report);
-  if (!observable && strips.empty()) return;
+  if (!observable && (strips.empty() || !options_.strips_alone)) return;
   if (!observable) report.skipped_reason.clear();  // the strips alone: the rows' lateral position
   WhitenedUpdate(h, s, features, in_view, observable ? matches : std::vector<Candidate>{}, strips,
                  bounce_prior, report);
@@ -843,6 +844,11 @@ std::vector<GridTracker::Strip> GridTracker::FindStrips(const ObservationModel& 
     if (nuisance) cov += sp.bounce_jacobian * bounce_prior.asDiagonal() * sp.bounce_jacobian.transpose();
     const double nu = sp.normal.dot(z.value - sp.value);
     const double var = sp.normal.dot(cov * sp.normal) + options_.strip_sd_m * options_.strip_sd_m;
+    // Whatever the covariance allows, a strip is its row's only when its
+    // centroid lies within strip_max_offset_fraction of a row spacing
+    // across from it: a grid held far off (after a loss) would otherwise
+    // take a neighbouring row's strips for its own.
+    if (std::abs(nu) > options_.strip_max_offset_fraction * s.row_spacing_m) continue;
     if (nu * nu <= options_.strip_gate_chi2 * var) strips.push_back(std::move(strip));
   }
   return strips;

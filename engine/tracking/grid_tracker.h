@@ -203,15 +203,20 @@ struct TrackerOptions {
   // centroid's distance across the row from the mean of those plants'
   // predictions, one degree of freedom gated at strip_gate_chi2, R widened
   // by strip_sd_m for the unequal weights. Such blobs are then never taken
-  // as one plant's centroid, and a frame whose point matches cannot
-  // observe the grid still updates on its strips. (Taken along the row as
-  // well, with a tenth of a plant spacing as its sd, the strips' centroids
-  // made A's lateral error 6.9 → 13.9 mm: docs/results/2026-11-29-unseen-fields.md.)
-  // Needs skip_merged_features. Off: the thesis's point features only
-  // (with the proviso above).
+  // as one plant's centroid. (Taken along the row as well, with a tenth of
+  // a plant spacing as its sd, the strips' centroids pulled the grid both
+  // ways: docs/results/2026-11-29-unseen-fields.md.) Needs
+  // skip_merged_features. Off: the thesis's point features only (with the
+  // proviso above).
   bool merged_row_strips = true;
   double strip_gate_chi2 = 3.84;  // 95 % for 1 dof
   double strip_sd_m = 0.01;
+  double strip_max_offset_fraction = 0.25;  // of the row spacing (FindStrips)
+  // A frame whose point matches cannot observe the grid updates on its
+  // strips alone; off, it makes no update (as before), and where plants
+  // touch the grid coasts and is lost more often (the figures:
+  // docs/results/2026-11-29-unseen-fields.md).
+  bool strips_alone = true;
   // A blob smaller than this fraction of the crop's area (π crop_radius_m²,
   // when the crop's radius is set) is a weed or a leaf cut off by shadow,
   // not a crop's centroid: associated with a crop whose own blob missed its
