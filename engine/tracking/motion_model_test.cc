@@ -168,17 +168,41 @@ TEST(ObservationModel, FocalJacobianMatchesTheCameraModel) {
   }
 }
 
+// The field's camera (virtual plane 0.1 m) and a crop of 0.14 m leaf-tip
+// radius with its tips at 0.112 m: centroids located on its heights.
+struct FieldObservation {
+  geometry::CameraModel camera{[] {
+    geometry::CameraOptions co = geometry::testing::ThesisCamera();
+    co.virtual_plane_height_m = 0.1;
+    return co;
+  }()};
+  geometry::CentroidHeights heights{camera, [] {
+                                      geometry::CentroidHeightOptions ho;
+                                      ho.shape = {0.14, 0.112};
+                                      return ho;
+                                    }()};
+  TrackerOptions options;
+  ObservationModel model{camera, options, &heights};
+};
+
+// The central difference of f (a vector or a number) at x along state i.
+template <typename F>
+auto CentralDifference(const F& f, const Eigen::VectorXd& x, int i) {
+  const double h = 1e-6;
+  Eigen::VectorXd hi = x;
+  Eigen::VectorXd lo = x;
+  hi(i) += h;
+  lo(i) -= h;
+  using Value = decltype(f(x));
+  const Value d = (f(hi) - f(lo)) / (2 * h);
+  return d;
+}
+
 // The whole prediction of a plant with its offset and its own centroid
 // height δh, located on the crop's centroid heights: ∂/∂ every state.
 TEST(ObservationModel, PredictionJacobianWithPlantHeightMatchesFiniteDifferences) {
-  geometry::CameraOptions co = geometry::testing::ThesisCamera();
-  co.virtual_plane_height_m = 0.1;
-  const geometry::CameraModel camera(co);
-  geometry::CentroidHeightOptions ho;
-  ho.shape = {0.14, 0.112};
-  const geometry::CentroidHeights heights(camera, ho);
-  TrackerOptions o;
-  const ObservationModel model(camera, o, &heights);
+  const FieldObservation field;
+  const ObservationModel& model = field.model;
   // Core (t_x, Y, Ψ, r̄, l̄), the wheel scale k, then (δx, δy, δh).
   Eigen::VectorXd x(9);
   x << 0.02, 1.3, 0.03, 0.475, 0.45, -0.03, 0.01, -0.02, 0.015;
@@ -188,12 +212,8 @@ TEST(ObservationModel, PredictionJacobianWithPlantHeightMatchesFiniteDifferences
   const Prediction p = predict(x);
   ASSERT_EQ(p.jacobian.cols(), 9);
   for (int i = 0; i < 9; ++i) {
-    const double h = 1e-6;
-    Eigen::VectorXd hi = x;
-    Eigen::VectorXd lo = x;
-    hi(i) += h;
-    lo(i) -= h;
-    const Eigen::Vector2d fd = (predict(hi).value - predict(lo).value) / (2 * h);
+    const Eigen::Vector2d fd =
+        CentralDifference([&](const Eigen::VectorXd& v) -> Eigen::Vector2d { return predict(v).value; }, x, i);
     // The located height's own slope over the ground (a few mm per metre)
     // times δh/(H − h) is left out of J: under 3e-4 here (J's entries reach 1.5).
     EXPECT_LT((fd - p.jacobian.col(i)).cwiseAbs().maxCoeff(), 3e-4) << "state " << i;
@@ -212,14 +232,8 @@ TEST(ObservationModel, PredictionJacobianWithPlantHeightMatchesFiniteDifferences
 // normal held at the prediction, against ∂/∂ every state; the plants carry
 // their own offsets and heights.
 TEST(ObservationModel, StripAcrossItsRowMatchesFiniteDifferences) {
-  geometry::CameraOptions co = geometry::testing::ThesisCamera();
-  co.virtual_plane_height_m = 0.1;
-  const geometry::CameraModel camera(co);
-  geometry::CentroidHeightOptions ho;
-  ho.shape = {0.14, 0.112};
-  const geometry::CentroidHeights heights(camera, ho);
-  TrackerOptions o;
-  const ObservationModel model(camera, o, &heights);
+  const FieldObservation field;
+  const ObservationModel& model = field.model;
   // Core (t_x, Y, Ψ, r̄, l̄), the wheel scale k, then (δx, δy, δh) of each plant.
   Eigen::VectorXd x(15);
   x << 0.02, 1.3, 0.03, 0.475, 0.45, -0.03, 0.01, -0.02, 0.015, -0.004, 0.006, -0.01, 0.003, 0.0, 0.02;
@@ -236,12 +250,8 @@ TEST(ObservationModel, StripAcrossItsRowMatchesFiniteDifferences) {
   // The normal is across the rows: the grid's bearing is 0.03 rad.
   EXPECT_NEAR(std::abs(p.normal.x()), std::cos(0.03), 0.01);
   for (int i = 0; i < 15; ++i) {
-    const double h = 1e-6;
-    Eigen::VectorXd hi = x;
-    Eigen::VectorXd lo = x;
-    hi(i) += h;
-    lo(i) -= h;
-    const double fd = p.normal.dot(strip(hi).value - strip(lo).value) / (2 * h);
+    const double fd =
+        CentralDifference([&](const Eigen::VectorXd& v) { return p.normal.dot(strip(v).value); }, x, i);
     // As the single plant's test: the located height's slope is left out of J.
     EXPECT_NEAR(fd, p.normal.dot(p.jacobian.col(i)), 3e-4) << "state " << i;
   }
