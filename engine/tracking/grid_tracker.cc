@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -781,7 +780,7 @@ void GridTracker::MarkSkippedFeatures(std::span<const Feature> features,
     usable += !skipped_[j] && !f.clipped;
   }
   // Too few others left: the merged blobs are what there is to track,
-  // unless they are taken as strips.
+  // unless strips are taken (then no merged blob is one plant's centroid).
   if (2 * usable < in_view.size()) {
     for (size_t j = 0; j < features.size(); ++j) skipped_[j] = options_.merged_row_strips && merged_[j];
   }

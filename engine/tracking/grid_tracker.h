@@ -202,8 +202,9 @@ struct TrackerOptions {
   // measurement of the row's lateral position alone (a strip): the
   // centroid's distance across the row from the mean of those plants'
   // predictions, one degree of freedom gated at strip_gate_chi2, R widened
-  // by strip_sd_m for the unequal weights. Such blobs are then never taken
-  // as one plant's centroid. (Taken along the row as well, with a tenth of
+  // by strip_sd_m for the unequal weights. With strips on, no merged blob
+  // (along a row or across rows) is taken as one plant's centroid, even
+  // when few others are left. (Taken along the row as well, with a tenth of
   // a plant spacing as its sd, the strips' centroids pulled the grid both
   // ways: docs/results/2026-11-29-unseen-fields.md.) Needs
   // skip_merged_features. Off: the thesis's point features only (with the
