@@ -280,16 +280,21 @@ std::vector<std::string> ProfileWarnings(const Profiles& p) {
                                " nozzles of " + mm(bar.nozzle_spacing_m) + ", from " +
                                cm(bar.centre_x_m - half) + " to " + cm(bar.centre_x_m + half) +
                                " across the vehicle)";
+  // "FILE: the rows at A and B", and the verb's ending for them.
+  const auto subject = [&](const std::vector<int>& rows) {
+    return c.file + ": the row" + (rows.size() > 1 ? "s at " : " at ") + names(rows);
+  };
+  const auto verb_s = [](const std::vector<int>& rows) { return std::string(rows.size() > 1 ? "" : "s"); };
   std::vector<std::string> out;
   if (!beyond.empty()) {
-    out.push_back(c.file + ": the row" + (beyond.size() > 1 ? "s at " : " at ") + names(beyond) + " of the " +
-                  std::to_string(c.rows) + "-row bed lie" + (beyond.size() > 1 ? "" : "s") + " beyond " +
-                  bar_text + ": " + (beyond.size() > 1 ? "their" : "its") + " plants will not be treated");
+    out.push_back(subject(beyond) + " of the " + std::to_string(c.rows) + "-row bed lie" + verb_s(beyond) +
+                  " beyond " + bar_text + ": " + (beyond.size() > 1 ? "their" : "its") +
+                  " plants will not be treated");
   }
   if (!near_end.empty()) {
-    out.push_back(c.file + ": the row" + (near_end.size() > 1 ? "s at " : " at ") + names(near_end) + " stand" +
-                  (near_end.size() > 1 ? "" : "s") + " within two planter sd (" + cm(margin) + ") of the end of " +
-                  bar_text + ": plants off the line towards the end, or the vehicle wandering, will be missed");
+    out.push_back(subject(near_end) + " stand" + verb_s(near_end) + " within two planter sd (" + cm(margin) +
+                  ") of the end of " + bar_text +
+                  ": plants off the line towards the end, or the vehicle wandering, will be missed");
   }
   return out;
 }

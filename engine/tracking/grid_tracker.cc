@@ -801,10 +801,7 @@ StripPrediction GridTracker::PredictStripAt(const ObservationModel& h, const Gri
     const auto& g = in_view[static_cast<size_t>(i)];
     preds.push_back(PredictPlant(h, s, g.m, g.n));
     if (nuisance) preds.back().jacobian.rightCols<3>() = preds.back().bounce_jacobian;
-    if (OffsetIndex(g.m, g.n) < 0 && options_.plant_offsets) {
-      prior += w * w * preds.back().offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
-               preds.back().offset_jacobian.transpose();
-    }
+    if (OffsetIndex(g.m, g.n) < 0 && options_.plant_offsets) prior += w * w * NewPlantPrior(preds.back());
   }
   StripPrediction out = PredictStrip(preds);
   if (prior_out) *prior_out = prior;
@@ -853,6 +850,13 @@ std::vector<GridTracker::Strip> GridTracker::FindStrips(const ObservationModel& 
   return strips;
 }
 
+// What the prior of a plant's own states (not yet in the filter) adds to
+// the covariance of its predicted measurement.
+Eigen::Matrix2d GridTracker::NewPlantPrior(const Prediction& pred) const {
+  return pred.offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
+         pred.offset_jacobian.transpose();
+}
+
 // Covariance of a plant's predicted measurement: the filter's, plus the
 // prior of a new plant's offset and of a bounce that does not persist. H
 // touches only the grid states, the bounce and this plant's own states, so
@@ -867,10 +871,7 @@ Eigen::Matrix2d GridTracker::PredictionCovariance(const Prediction& pred, int of
   }
   const Eigen::MatrixXd hs = pred.jacobian(Eigen::all, used);
   Eigen::Matrix2d hph = hs * p_(used, used) * hs.transpose();
-  if (offset < 0 && options_.plant_offsets) {
-    hph += pred.offset_jacobian * ObservationModel::PlantPrior(options_).asDiagonal() *
-           pred.offset_jacobian.transpose();
-  }
+  if (offset < 0 && options_.plant_offsets) hph += NewPlantPrior(pred);
   if (options_.model_bounce && !PersistentBounce()) {
     hph += pred.bounce_jacobian * bounce_prior.asDiagonal() * pred.bounce_jacobian.transpose();
   }

@@ -439,6 +439,7 @@ class GridTracker {
   void NoteLinesInView(const std::vector<geometry::GridPlant>& in_view);
   void MarkSkippedFeatures(std::span<const Feature> features,
                            const std::vector<geometry::GridPlant>& in_view);
+  Eigen::Matrix2d NewPlantPrior(const Prediction& pred) const;
   Eigen::Matrix2d PredictionCovariance(const Prediction& pred, int offset,
                                        const Eigen::Vector3d& bounce_prior) const;
   std::vector<Candidate> Gate(const ObservationModel& h, const geometry::GridState& s,
