@@ -99,7 +99,7 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
         Fixed(a.weeds_per_m2_seen, 2) + " over the " + Fixed(a.surveyed_area_m2 - a.unseen_canopy_m2, 1) +
             " m² that the crops' canopy leaves in view: the estimate of the band's density (under a canopy "
             "weeds are unseen, not absent). A lower bound: a weed touching a crop's leaves is seen as part "
-            "of that crop, and weeds 1–2 cm across are recorded only when seen in enough frames)");
+            "of that crop, and weeds 1–2 cm across are recorded only when seen in enough frames");
   }
   Row(out, "area treated", a.area_treated_m2 ? Fixed(*a.area_treated_m2, 2) + " m²" : std::string("n/a (no map tiles)"));
   Row(out, "product used", a.product_l ? Fixed(*a.product_l, 3) + " L at " + Fixed(a.rate_l_ha, 0) + " L/ha"
