@@ -30,7 +30,9 @@ PACKAGES=(
 FUZZ_PACKAGES=(clang libclang-rt-dev)
 # The full test suite also opens a report in headless Chromium (cli.report_browser).
 # The archive tests (tests/pg_server.sh) start PostgreSQL with PostGIS.
-TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3)
+# The learned segmenter's test trains a model (train-segmenter: Debian's
+# PyTorch and ONNX for /usr/bin/python3; training only, never on the vehicle).
+TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3 python3-numpy python3-torch python3-onnx)
 
 ensure_packages() {
   local missing=()

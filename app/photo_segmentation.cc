@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <ostream>
 
+#include "app/learned_model.h"
 #include "app/progress.h"
 #include "engine/common/options.h"
 #include "engine/vision/segmenter.h"
@@ -206,8 +207,51 @@ void ForEachImage(const std::vector<fs::path>& inputs, const fs::path& out, cons
   bar.Finish();
 }
 
+cv::Mat ClassOverlay(const cv::Mat& image, const cv::Mat& classes) {
+  cv::Mat bgr;
+  if (image.channels() == 1) cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+  else bgr = image.clone();
+  const cv::Vec3b tint[3] = {{0, 0, 0}, {40, 220, 40}, {40, 40, 255}};
+  for (int y = 0; y < bgr.rows; ++y) {
+    cv::Vec3b* p = bgr.ptr<cv::Vec3b>(y);
+    const uint8_t* c = classes.ptr<uint8_t>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (c[x] == 0) continue;
+      for (int k = 0; k < 3; ++k) p[x][k] = static_cast<uint8_t>((p[x][k] + tint[c[x]][k]) / 2);
+    }
+  }
+  return bgr;
+}
+
+namespace {
+
+void WritePng(const fs::path& path, const cv::Mat& image) {
+  maps::WriteStaged(path, [&](const fs::path& tmp) {
+    if (!cv::imwrite(tmp.string(), image)) throw std::runtime_error("cannot write " + path.string());
+  });
+}
+
+PhotoClassFractions ClassifyOne(vision::LearnedSegmenter& model, const fs::path& out, const fs::path& file) {
+  const cv::Mat image = ReadImage(file);
+  const vision::ClassMaps maps = model.Classify(image);
+  const std::string stem = file.stem().string();
+  WritePng(out / (stem + "_classes.png"), maps.classes);
+  WritePng(out / (stem + "_overlay.png"), ClassOverlay(image, maps.classes));
+  const double n = static_cast<double>(maps.classes.total());
+  return {file.filename().string(), image.cols, image.rows,
+          cv::countNonZero(maps.classes == 1) / n, cv::countNonZero(maps.classes == 2) / n};
+}
+
+}  // namespace
+
 SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log) {
   SegmentPhotosResult result;
+  if (!request.model.empty()) {
+    vision::LearnedSegmenter model = LoadSegmenter(ReadLearnedModel(request.model));
+    ForEachImage(request.inputs, request.out, "segment", request.progress, log, result,
+                 [&](const fs::path& file) { result.fractions.push_back(ClassifyOne(model, request.out, file)); });
+    return result;
+  }
   ForEachImage(request.inputs, request.out, "segment", request.progress, log, result,
                [&request](const fs::path& file) { SegmentOne(request, file); });
   return result;

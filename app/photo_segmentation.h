@@ -21,6 +21,17 @@ struct SegmentPhotosRequest {
   std::string index = "exg";    // colour index for colour images: exg | exgr | cive
   int min_area_px = 0;          // 0: 1e-5 of the image's pixels, at least 4
   bool progress = true;
+  // A learned crop/weed model (MODEL.onnx with MODEL.json beside it): then
+  // NAME_classes.png (0 soil, 1 crop, 2 weed) and NAME_overlay.png instead
+  // of the mask and blobs.
+  std::filesystem::path model;
+};
+
+// A photograph's crop and weed pixel fractions (segment --model).
+struct PhotoClassFractions {
+  std::string name;
+  int width_px = 0, height_px = 0;
+  double crop = 0.0, weed = 0.0;
 };
 
 // What a batch of photographs came to (segment, detect-rows).
@@ -28,6 +39,7 @@ struct ImageBatchResult {
   int images = 0;
   int failed = 0;
   std::vector<std::string> errors;  // "FILE: reason"
+  std::vector<PhotoClassFractions> fractions;  // segment --model: one per photograph segmented
 };
 using SegmentPhotosResult = ImageBatchResult;
 
@@ -55,6 +67,10 @@ cv::Mat ReadImage(const std::filesystem::path& path);
 vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& request,
                                                const cv::Mat& image, cv::Mat& input);
 
+// Throws DataError when request.model cannot be loaded (before any image).
 SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log);
+
+// The photograph with crop pixels tinted green and weed pixels red.
+cv::Mat ClassOverlay(const cv::Mat& image, const cv::Mat& classes);
 
 }  // namespace plantscale::app

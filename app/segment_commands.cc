@@ -160,13 +160,27 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   return 0;
 }
 
-int SegmentCommand(const SegmentPhotosRequest& request) {
-  const SegmentPhotosResult r = SegmentPhotos(request, std::cerr);
+int SegmentCommand(const SegmentPhotosRequest& request, bool json) {
+  SegmentPhotosResult r;
+  try {
+    r = SegmentPhotos(request, std::cerr);
+  } catch (const DataError& e) {  // the model: nothing was segmented
+    std::cerr << "plantscale segment: error: " << e.what() << '\n';
+    return 2;
+  }
   for (const std::string& e : r.errors) std::cerr << "plantscale segment: error: " << e << '\n';
   std::cout << "plantscale segment: " << r.images << " image(s) segmented into "
             << request.out.string() << "/";
   if (r.failed > 0) std::cout << ", " << r.failed << " failed";
   std::cout << '\n';
+  if (json && !request.model.empty()) {
+    nlohmann::json photos = nlohmann::json::array();
+    for (const PhotoClassFractions& f : r.fractions) {
+      photos.push_back({{"name", f.name}, {"width_px", f.width_px}, {"height_px", f.height_px},
+                        {"crop_fraction", f.crop}, {"weed_fraction", f.weed}});
+    }
+    std::cout << nlohmann::json{{"model", request.model.string()}, {"photographs", photos}}.dump(2) << '\n';
+  }
   return r.failed > 0 ? 1 : 0;
 }
 
@@ -186,15 +200,18 @@ void AddSegmentCommands(CommandRegistry& registry) {
   std::string& seg_out = registry.Keep(std::string{});
   std::vector<std::string>& seg_inputs = registry.Keep(std::vector<std::string>{});
   bool& seg_quiet = registry.Keep(false);
+  bool& seg_json = registry.Keep(false);
+  std::string& seg_model = registry.Keep(std::string{});
   CLI::App* segment = registry.Add(
       "segment", "plant masks and blob lists for photographs (PNG/JPEG, colour or NIR)", [&] {
         seg.inputs.assign(seg_inputs.begin(), seg_inputs.end());
         seg.out = seg_out;
         seg.progress = !seg_quiet;
-        return SegmentCommand(seg);
+        seg.model = seg_model;
+        return SegmentCommand(seg, seg_json);
       });
   segment->add_option("inputs", seg_inputs, "image files or folders of images")->required();
-  segment->add_option("--out", seg_out, "output folder (NAME_mask.png, NAME_blobs.csv)")
+  segment->add_option("--out", seg_out, "output folder (NAME_mask.png, NAME_blobs.csv; with --model NAME_classes.png, NAME_overlay.png)")
       ->required();
   segment->add_option("--method", seg.method,
                       "auto (colour: exg, grey: nir), exg (excess green + Otsu), nir (local "
@@ -208,6 +225,10 @@ void AddSegmentCommands(CommandRegistry& registry) {
                       "drop smaller blobs (default: 1e-5 of the image, at least 4)")
       ->check(CLI::NonNegativeNumber);
   segment->add_flag("--quiet", seg_quiet, "no progress bar");
+  segment->add_option("--model", seg_model,
+                      "a learned crop/weed model (MODEL.onnx, its card MODEL.json beside it): writes "
+                      "NAME_classes.png (0 soil, 1 crop, 2 weed) and NAME_overlay.png instead");
+  segment->add_flag("--json", seg_json, "with --model: print each photograph's crop and weed fractions as JSON");
 
   EvaluateArgs& ev = registry.Keep(EvaluateArgs{});
   CLI::App* cmd = registry.Add(

@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# train-segmenter, segment --model and evaluate classes: outputs, JSON keys
+# and bad input (one line naming the file and the reason, exit 2, nothing
+# half-written). The training itself is tested in app/learned_model_test.cc.
+# usage: learning_cli_test.sh PLANTSCALE WORKDIR SOURCE_DIR
+set -euo pipefail
+# shellcheck source=cli_lib.sh
+source "$(dirname "$0")/cli_lib.sh"
+bin="$1"; work="$2"; src="$3"
+model="$src/config/models/peanut.onnx"
+rm -rf "$work"; mkdir -p "$work"
+
+# Labelled frames made by the simulator (a clone has no photographs): grey
+# near-infrared (field) and colour (sanchiz_pla).
+"$bin" simulate --preset field --length-m 2 --every 10 --out "$work/grey" --quiet >/dev/null
+"$bin" simulate --preset sanchiz_pla --length-m 2 --every 10 --out "$work/colour" --quiet >/dev/null
+
+bad() {  # bad NAME: a copy of the grey pass to spoil
+  rm -rf "$work/$1"; cp -r "$work/grey" "$work/$1"
+}
+train() { "$bin" train-segmenter --quiet --epochs 1 --out "$work/m/$1.onnx" "${@:2}"; }
+
+# A photograph without its label.
+bad nolabel; rm "$work/nolabel/labels/000010.png"
+expect 2 'frames/000010.png: no label' -- train a --images "$work/nolabel/frames" --labels "$work/nolabel/labels"
+# A label of another size (a colour pass's label for a grey frame).
+bad size; cp "$work/colour/labels/000000.png" "$work/size/labels/000000.png"
+cmp -s "$work/colour/labels/000000.png" "$work/grey/labels/000000.png" && fail "the two presets' labels are alike"
+expect 2 'labels/000000.png: label is [0-9]+×[0-9]+, its photograph 640×480' -- \
+  train b --images "$work/size/frames" --labels "$work/size/labels"
+# Ids outside 0–2 (a frame given as its own label).
+bad ids; cp "$work/ids/frames/000000.png" "$work/ids/labels/000000.png"
+expect 2 'labels/000000.png: label id [0-9]+ at \([0-9]+, [0-9]+\) is outside 0–2' -- \
+  train c --images "$work/ids/frames" --labels "$work/ids/labels"
+# An empty folder; an input size that is no multiple of 16.
+mkdir -p "$work/empty"
+expect 2 'empty: no PNG or JPEG images' -- train d --images "$work/empty" --labels "$work/grey/labels"
+expect 2 'input-size.*multiple of 16' -- train e --images "$work/grey/frames" --labels "$work/grey/labels" \
+  --input-size 300x200
+# Missing training packages: said, with the apt-get line, nothing installed.
+PLANTSCALE_PYTHON=/bin/false expect 2 'python3-torch.*apt-get install' -- \
+  train f --images "$work/grey/frames" --labels "$work/grey/labels"
+[[ ! -e "$work/m" ]] || [[ -z "$(ls -A "$work/m")" ]] || fail "bad input left files in $work/m: $(ls -A "$work/m")"
+
+# The shipped model on colour frames: classes, overlay, JSON fractions.
+expect 0 'segmented' -- "$bin" segment --model "$model" --json --quiet "$work/colour/frames" --out "$work/seg"
+"$bin" segment --model "$model" --json --quiet "$work/colour/frames" --out "$work/seg" >"$work/seg.json"
+for f in "$work"/colour/frames/*.png; do
+  n=$(basename "$f" .png)
+  [[ -s "$work/seg/${n}_classes.png" && -s "$work/seg/${n}_overlay.png" ]] || fail "no classes/overlay for $n"
+done
+grep -q '"crop_fraction"' "$work/seg.json" || fail "segment --json has no crop_fraction"
+grep -q '"weed_fraction"' "$work/seg.json" || fail "segment --json has no weed_fraction"
+# A colour model on grey frames: each frame refused by name, exit 1.
+expect 1 '000000.png: the model takes colour photographs and this one is grey' -- \
+  "$bin" segment --model "$model" --quiet "$work/grey/frames" --out "$work/seg_grey"
+
+# evaluate classes: JSON keys; the IoUs are fractions.
+"$bin" evaluate classes --images "$work/colour/frames" --labels "$work/colour/labels" --model "$model" \
+  --json --quiet >"$work/classes.json"
+for key in miou soil crop weed confusion crop_min_share ms_per_megapixel photographs; do
+  grep -q "\"$key\"" "$work/classes.json" || fail "evaluate classes --json lacks $key"
+done
+miou=$(num miou "$work/classes.json")
+awk -v m="$miou" 'BEGIN { exit !(m > 0 && m <= 1) }' || fail "model mIoU $miou is not in (0, 1]"
+
+# A corrupt model file, and a card that is not one: exit 2 naming the file.
+mkdir -p "$work/corrupt"
+echo "not an onnx graph" >"$work/corrupt/m.onnx"
+cp "${model%.onnx}.json" "$work/corrupt/m.json"
+expect 2 'corrupt/m.onnx: not an ONNX model' -- \
+  "$bin" segment --model "$work/corrupt/m.onnx" --quiet "$work/colour/frames" --out "$work/seg_c"
+cp "$model" "$work/corrupt/n.onnx"; echo '{"format": "other"}' >"$work/corrupt/n.json"
+expect 2 'corrupt/n.json: not a plantscale model card' -- \
+  "$bin" evaluate classes --images "$work/colour/frames" --labels "$work/colour/labels" --model "$work/corrupt/n.onnx"
+[[ ! -e "$work/seg_c" ]] || [[ -z "$(ls -A "$work/seg_c")" ]] || fail "a model that failed to load left outputs"
+
+finish learning_cli
