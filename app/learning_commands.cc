@@ -35,7 +35,8 @@ int TrainCommand(TrainArgs& a) {
   std::ostringstream command;
   command << "plantscale train-segmenter --images " << Quote(a.images) << " --labels " << Quote(a.labels)
           << " --out " << Quote(a.out) << " --epochs " << r.epochs << " --seed " << r.seed << " --input-size "
-          << a.input_size << " --validation-fraction " << r.validation_fraction << " --width " << r.width;
+          << a.input_size << " --validation-fraction " << r.validation_fraction << " --width " << r.width
+          << " --max-minutes " << r.max_minutes;
   if (!r.licence.empty()) command << " --licence " << Quote(r.licence);
   if (!r.attribution.empty()) command << " --attribution " << Quote(r.attribution);
   r.command_line = command.str();
@@ -111,6 +112,10 @@ void AddLearningCommands(CommandRegistry& registry) {
       ->capture_default_str();
   train->add_option("--threads", t.request.threads, "CPU threads for training (0: every core)")
       ->check(CLI::Range(0, 256))
+      ->capture_default_str();
+  train->add_option("--max-minutes", t.request.max_minutes,
+                    "time budget: when the epochs would not fit, training anneals by time and ends within it (0: none)")
+      ->check(CLI::Range(0.0, 100000.0))
       ->capture_default_str();
   train->add_option("--licence", t.request.licence, "the photographs' licence, into the model's card");
   train->add_option("--attribution", t.request.attribution, "the photographs' attribution, into the model's card");

@@ -1,5 +1,7 @@
 #include "app/rows_commands.h"
 
+#include "app/learned_model.h"
+
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -10,6 +12,7 @@
 #include <optional>
 
 #include "app/config_loader.h"
+#include "app/learned_model.h"
 #include "app/photo_segmentation.h"
 #include "app/rows_eval.h"
 #include "app/segment_commands.h"
@@ -128,9 +131,10 @@ cv::Mat Overlay(const cv::Mat& image, const rows::RowDetection& det) {
   return out;
 }
 
-bool DetectOne(const fs::path& file, const fs::path& out, rows::RowDetector& detector) {
+bool DetectOne(const fs::path& file, const fs::path& out, rows::RowDetector& detector,
+               vision::LearnedSegmenter* model) {
   const cv::Mat image = ReadImage(file);
-  const rows::RowDetection det = DetectRowsInPhoto(image, detector);
+  const rows::RowDetection det = DetectRowsInPhoto(image, detector, model);
   const std::string stem = file.stem().string();
   WriteCsv(out / (stem + "_rows.csv"), det);
   const fs::path png = out / (stem + "_rows.png");
@@ -149,7 +153,13 @@ bool DetectOne(const fs::path& file, const fs::path& out, rows::RowDetector& det
 }
 
 int DetectRowsCommand(const DetectRowsRequest& request) {
-  const DetectRowsResult r = DetectRows(request, std::cerr);
+  DetectRowsResult r;
+  try {
+    r = DetectRows(request, std::cerr);
+  } catch (const DataError& e) {  // the model: nothing was detected
+    std::cerr << "plantscale detect-rows: error: " << e.what() << '\n';
+    return 2;
+  }
   for (const std::string& e : r.errors) std::cerr << "plantscale detect-rows: error: " << e << '\n';
   std::cout << "plantscale detect-rows: " << r.images << " image(s) into " << request.out.string()
             << "/, rows found in " << r.with_rows;
@@ -168,6 +178,7 @@ struct RowsEvalArgs {
   double tilt_deg = 12.0;
   std::string images;
   std::string labels;
+  std::string model;
   bool json = false;
 };
 
@@ -176,7 +187,16 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
     const fs::path images = a.images;
     const fs::path labels =
         a.labels.empty() ? images.parent_path() / "label" : fs::path(a.labels);
-    const PhotoRowsEvaluation e = EvaluateRowsOnPhotos(images, labels);
+    std::optional<vision::LearnedSegmenter> model;
+    if (!a.model.empty()) {
+      try {
+        model.emplace(LoadSegmenter(ReadLearnedModel(a.model)));
+      } catch (const DataError& x) {
+        std::cerr << "plantscale evaluate rows: error: " << x.what() << '\n';
+        return 2;
+      }
+    }
+    const PhotoRowsEvaluation e = EvaluateRowsOnPhotos(images, labels, model ? &*model : nullptr);
     for (const std::string& err : e.errors) {
       std::cerr << "plantscale evaluate rows: error: " << err << '\n';
     }
@@ -193,6 +213,7 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
                                   {"image_rows_scored", e.image_rows_scored},
                                   {"crda_mean", e.crda_mean},
                                   {"per_image", per_image},
+                                  {"mask", a.model.empty() ? "excess green" : "model crop class"},
                                   {"source", "labelled photographs"}}
                        .dump(2)
                 << '\n';
@@ -239,9 +260,11 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
 DetectRowsResult DetectRows(const DetectRowsRequest& request, std::ostream& log) {
   DetectRowsResult result;
   rows::RowDetector detector{rows::RowDetectorOptions{}};
+  std::optional<vision::LearnedSegmenter> model;
+  if (!request.model.empty()) model.emplace(LoadSegmenter(ReadLearnedModel(request.model)));
   ForEachImage(request.inputs, request.out, "detect-rows", request.progress, log, result,
                [&](const fs::path& file) {
-                 if (DetectOne(file, request.out, detector)) ++result.with_rows;
+                 if (DetectOne(file, request.out, detector, model ? &*model : nullptr)) ++result.with_rows;
                });
   return result;
 }
@@ -252,17 +275,22 @@ void AddRowsCommands(CommandRegistry& registry) {
   std::string& out = registry.Keep(std::string{});
   std::vector<std::string>& inputs = registry.Keep(std::vector<std::string>{});
   bool& quiet = registry.Keep(false);
+  std::string& model = registry.Keep(std::string{});
   CLI::App* detect = registry.Add(
       "detect-rows", "crop rows in photographs from unknown cameras (PNG/JPEG, any size)", [&] {
         req.inputs.assign(inputs.begin(), inputs.end());
         req.out = out;
         req.progress = !quiet;
+        req.model = model;
         return DetectRowsCommand(req);
       });
   detect->add_option("inputs", inputs, "image files or folders of images")->required();
   detect->add_option("--out", out, "output folder (NAME_rows.csv, NAME_rows.png, NAME_rows.json)")
       ->required();
   detect->add_flag("--quiet", quiet, "no progress bar");
+  detect->add_option("--model", model,
+                     "a learned crop/weed model (MODEL.onnx, MODEL.json beside it): rows in its crop class, "
+                     "not in every plant");
 
   RowsEvalArgs& args = registry.Keep(RowsEvalArgs{});
   CLI::App* cmd = registry.Add(
@@ -276,6 +304,7 @@ void AddRowsCommands(CommandRegistry& registry) {
   cmd->add_option("--images", args.images,
                   "score labelled photographs in this folder instead (extra measurement)");
   cmd->add_option("--labels", args.labels, "their label images (default: IMAGES/../label)");
+  cmd->add_option("--model", args.model, "with --images: rows in this learned model's crop class");
   cmd->add_flag("--json", args.json, "print one JSON object");
 }
 

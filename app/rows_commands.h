@@ -17,6 +17,7 @@ struct DetectRowsRequest {
   std::vector<std::filesystem::path> inputs;  // files and folders
   std::filesystem::path out;
   bool progress = true;
+  std::filesystem::path model;  // a learned crop/weed model: rows in its crop class
 };
 
 struct DetectRowsResult : ImageBatchResult {

@@ -14,7 +14,12 @@
 namespace plantscale::app {
 namespace fs = std::filesystem;
 
-rows::RowDetection DetectRowsInPhoto(const cv::Mat& image, rows::RowDetector& detector) {
+rows::RowDetection DetectRowsInPhoto(const cv::Mat& image, rows::RowDetector& detector,
+                                     vision::LearnedSegmenter* model) {
+  if (model != nullptr) {
+    const cv::Mat crop = model->Classify(image).classes == static_cast<int>(vision::PixelClass::kCrop);
+    return detector.Detect(crop);
+  }
   cv::Mat input;
   vision::Segmenter segmenter(PhotoSegmenterOptions(SegmentPhotosRequest{}, image, input));
   return detector.Detect(segmenter.Process(input).mask);
@@ -289,7 +294,8 @@ PhotoRowScore ScorePhoto(const cv::Mat& image, const cv::Mat& label, const rows:
 
 }  // namespace
 
-PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path& labels) {
+PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path& labels,
+                                         vision::LearnedSegmenter* model) {
   PhotoRowsEvaluation e;
   rows::RowDetector detector{rows::RowDetectorOptions{}};
   const std::vector<fs::path> files = CollectImages({images}, e.errors);
@@ -304,7 +310,7 @@ PhotoRowsEvaluation EvaluateRowsOnPhotos(const fs::path& images, const fs::path&
       const cv::Mat image = ReadImage(file);
       cv::Mat label = ReadImage(label_file);
       if (label.channels() == 3) cv::cvtColor(label, label, cv::COLOR_BGR2GRAY);
-      const rows::RowDetection det = DetectRowsInPhoto(image, detector);
+      const rows::RowDetection det = DetectRowsInPhoto(image, detector, model);
       ++e.images;
       if (det.confidence > 0.0) ++e.images_with_rows;
       PhotoRowScore score = ScorePhoto(image, label, det, file.filename().string());

@@ -13,14 +13,17 @@
 #include <vector>
 
 #include "engine/rows/row_detector.h"
+#include "engine/vision/learned_segmenter.h"
 #include "engine/sim/simulator.h"
 
 namespace plantscale::app {
 
 // What `plantscale detect-rows` does with one photograph (8-bit grey or
-// BGR): the plant mask of `plantscale segment --method auto`, then the row
-// detector.
-rows::RowDetection DetectRowsInPhoto(const cv::Mat& image, rows::RowDetector& detector);
+// BGR): the plant mask of `plantscale segment --method auto`, or with a
+// learned model its crop class (weeds between the rows no longer pull
+// them), then the row detector.
+rows::RowDetection DetectRowsInPhoto(const cv::Mat& image, rows::RowDetector& detector,
+                                     vision::LearnedSegmenter* model = nullptr);
 
 struct RowsEvalOptions {
   sim::SimulatorOptions sim;
@@ -68,7 +71,8 @@ struct PhotoRowsEvaluation {
   std::vector<std::string> errors;
 };
 PhotoRowsEvaluation EvaluateRowsOnPhotos(const std::filesystem::path& images,
-                                         const std::filesystem::path& labels);
+                                         const std::filesystem::path& labels,
+                                         vision::LearnedSegmenter* model = nullptr);
 
 // CRDA of one image row: detected u of the three true rows against the true
 // u (left, central, right), with the true spacing d; a missing detection

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -204,6 +205,7 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
   const pid_t pid = ::fork();
   if (pid == 0) {
     ::signal(SIGINT, SIG_DFL);
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);  // this process killed: the optimiser stops too
     ::dup2(fds[1], STDOUT_FILENO);
     const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     if (err >= 0) ::dup2(err, STDERR_FILENO);
@@ -303,6 +305,9 @@ nlohmann::json MakeCard(const TrainSegmenterRequest& r, const Dataset& d, const 
         {"epochs", r.epochs},
         {"best_epoch", o.done.value("best_epoch", 0)},
         {"interrupted", o.done.value("interrupted", false)},
+        {"epochs_run", o.done.value("epochs_run", 0)},
+        {"stopped_for_time", o.done.value("stopped_for_time", false)},
+        {"max_minutes", r.max_minutes},
         {"seed", r.seed},
         {"seconds", o.done.value("seconds", 0.0)},
         {"torch", o.start.value("torch", "")}}},
@@ -408,7 +413,8 @@ std::string TrainSegmenter(const TrainSegmenterRequest& r, std::ostream& log) {
   const fs::path onnx = work / "model.onnx";
   std::vector<std::string> argv{TrainingPython(), TrainerScript(), "--data", work.string(), "--out", onnx.string(),
                                 "--epochs", std::to_string(r.epochs), "--seed", std::to_string(r.seed),
-                                "--width", std::to_string(r.width), "--threads", std::to_string(r.threads)};
+                                "--width", std::to_string(r.width), "--threads", std::to_string(r.threads),
+                                "--max-minutes", std::to_string(r.max_minutes)};
   if (!r.reference.empty()) argv.insert(argv.end(), {"--reference", fs::absolute(r.reference).string()});
   log << "train-segmenter: " << train.size() << " to train on, " << validation.size() << " to validate on, "
       << r.epochs << " epoch(s), seed " << r.seed << '\n';
@@ -440,6 +446,10 @@ std::string TrainSegmenter(const TrainSegmenterRequest& r, std::ostream& log) {
   }
   fs::rename(onnx, r.out);
   fs::rename(card_tmp, CardPath(r.out));
+  if (o.done.value("stopped_for_time", false)) {
+    log << "train-segmenter: the time budget (--max-minutes " << r.max_minutes << ") ended training after epoch "
+        << o.done.value("epochs_run", 0) << " of " << r.epochs << " (the learning rate annealed by time)\n";
+  }
   if (o.done.value("interrupted", false)) {
     log << "train-segmenter: interrupted; kept the best model so far (epoch " << o.done.value("best_epoch", 0)
         << ")\n";

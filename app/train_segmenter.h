@@ -29,6 +29,9 @@ struct TrainSegmenterRequest {
   double validation_fraction = 0.15;
   int width = 16;            // the network's channels at its first scale
   int threads = 0;           // 0: every core
+  // A time budget for the optimiser (0: none): when the epochs would not
+  // fit, the learning rate anneals by time and training ends within it.
+  double max_minutes = 14.0;
   std::string licence;       // of the photographs (into the card)
   std::string attribution;   // of the photographs (into the card)
   std::string command_line;  // how this was run (into the card)

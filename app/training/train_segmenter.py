@@ -66,20 +66,28 @@ class Normalise(nn.Module):
         return self.conv(x)
 
 
+def conv1(cin, cout):
+    return nn.Sequential(nn.Conv2d(cin, cout, 1, bias=False), nn.BatchNorm2d(cout), nn.ReLU(inplace=True))
+
+
 class SegNet(nn.Module):
-    """A U-Net of four scales (1/2 .. 1/16), width w; output at 1/2 scale."""
+    """A U-Net of four scales (1/2 .. 1/16), width w; output at 1/2 scale.
+
+    The decoder merges each skip by concatenation and a 1x1 convolution, then
+    one 3x3 convolution: most of a U-Net's cost is its full-width decoder.
+    """
 
     def __init__(self, channels, mean, std, width=16):
         super().__init__()
         w = width
         self.norm = Normalise(mean, std)
-        self.stem = nn.Sequential(conv_bn(channels, w, 2), conv_bn(w, w))          # 1/2
+        self.stem = conv_bn(channels, w, 2)                                          # 1/2
         self.down1 = nn.Sequential(conv_bn(w, 2 * w, 2), conv_bn(2 * w, 2 * w))     # 1/4
         self.down2 = nn.Sequential(conv_bn(2 * w, 3 * w, 2), conv_bn(3 * w, 3 * w))  # 1/8
         self.down3 = nn.Sequential(conv_bn(3 * w, 4 * w, 2), conv_bn(4 * w, 4 * w))  # 1/16
-        self.up2 = conv_bn(4 * w + 3 * w, 3 * w)
-        self.up1 = conv_bn(3 * w + 2 * w, 2 * w)
-        self.up0 = conv_bn(2 * w + w, w)
+        self.up2 = nn.Sequential(conv1(4 * w + 3 * w, 3 * w), conv_bn(3 * w, 3 * w))
+        self.up1 = nn.Sequential(conv1(3 * w + 2 * w, 2 * w), conv_bn(2 * w, 2 * w))
+        self.up0 = nn.Sequential(conv1(2 * w + w, w), conv_bn(w, w))
         self.head = nn.Conv2d(w, CLASSES, 1)
 
     @staticmethod
@@ -210,6 +218,9 @@ def main():
     p.add_argument("--crops-per-image", type=int, default=4)
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--lr", type=float, default=3e-3)
+    p.add_argument("--max-minutes", type=float, default=0.0,
+                   help="a time budget (0: none): when the epochs would not fit, the learning rate anneals by "
+                        "time instead and training ends within it; the best model is kept")
     p.add_argument("--reference", help="write the model's logits on the first validation image here (.npy)")
     p.add_argument("--test-data", help="a folder like --data (all of it held out): the best model's figures on it at the end")
     a = p.parse_args()
@@ -244,23 +255,38 @@ def main():
     opt = torch.optim.AdamW([q for q in model.parameters() if q.requires_grad], lr=a.lr, weight_decay=1e-4)
     steps_per_epoch = max(1, math.ceil(len(train_idx) * a.crops_per_image / a.batch))
     total_steps = steps_per_epoch * a.epochs
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=a.lr, total_steps=total_steps, pct_start=0.15)
+
+    def progress(step):
+        """How far the run is: by steps, or by time when the time budget binds first."""
+        p = step / total_steps
+        if a.max_minutes > 0:
+            p = max(p, (time.time() - start) / (60.0 * a.max_minutes))
+        return min(p, 1.0)
+
+    def set_lr(p):
+        # linear warm-up over the first 5 %, then a cosine down to 2 % of the peak
+        lr = a.lr * (p / 0.05 if p < 0.05 else 0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * (p - 0.05) / 0.95)))
+        for g in opt.param_groups:
+            g["lr"] = lr
     rng = random.Random(a.seed)
     aug = Augmenter(rng, a.crop)
 
     best = {"miou": -1.0, "epoch": 0, "val": None}
+    stopped_for_time = False
     emit(event="start", torch=torch.__version__, train=len(train_idx), validation=len(val_idx), channels=channels,
          epochs=a.epochs, steps_per_epoch=steps_per_epoch, mean=mean, std=std,
          parameters=sum(q.numel() for q in model.parameters()))
     start = time.time()
+    step = 0
     for epoch in range(1, a.epochs + 1):
         model.train()
         order = [i for i in range(len(train_idx)) for _ in range(a.crops_per_image)]
         rng.shuffle(order)
         losses = []
         for s in range(steps_per_epoch):
-            if interrupted["flag"]:
+            if interrupted["flag"] or progress(step) >= 1.0:
                 break
+            set_lr(progress(step))
             batch = order[s * a.batch:(s + 1) * a.batch] or [rng.randrange(len(train_idx))]
             pairs = [aug(tr_images[i], tr_labels[i]) for i in batch]
             x = torch.from_numpy(np.stack([q[0] for q in pairs]).transpose(0, 3, 1, 2).copy())
@@ -271,7 +297,7 @@ def main():
             opt.zero_grad()
             loss.backward()
             opt.step()
-            sched.step()
+            step += 1
             losses.append(float(loss))
         if interrupted["flag"] and not losses:
             break
@@ -291,12 +317,17 @@ def main():
              seconds=round(time.time() - start, 1))
         if interrupted["flag"]:
             break
+        if progress(step) >= 1.0 and epoch < a.epochs:
+            emit(event="budget", epoch=epoch, seconds=round(time.time() - start, 1))
+            stopped_for_time = True
+            break
     test = None
     if a.test_data and best["epoch"] > 0:
         model.load_state_dict(best["state"])
         test = evaluate(model, np.load(os.path.join(a.test_data, "images.npy")),
                         np.load(os.path.join(a.test_data, "labels.npy")))
-    emit(event="done", interrupted=interrupted["flag"], best_epoch=best["epoch"], test=test,
+    emit(event="done", interrupted=interrupted["flag"], stopped_for_time=stopped_for_time,
+         epochs_run=epoch if a.epochs else 0, best_epoch=best["epoch"], test=test,
          validation=best["val"], seconds=round(time.time() - start, 1), mean=mean, std=std,
          width=a.width, parameters=sum(q.numel() for q in model.parameters()))
     return 0 if best["epoch"] > 0 else 3
