@@ -72,40 +72,24 @@ nlohmann::json Number(double v) { return std::isnan(v) ? nlohmann::json() : nloh
 }  // namespace
 
 ClassEvaluation EvaluateClasses(const ClassEvalRequest& r, std::ostream& log) {
-  std::error_code ec;
-  if (!fs::is_directory(r.images, ec)) throw DataError(r.images.string() + ": not a folder");
-  if (!fs::is_directory(r.labels, ec)) throw DataError(r.labels.string() + ": not a folder");
-  std::vector<std::string> errors;
-  const std::vector<fs::path> files = CollectImages({r.images}, errors);
-  if (!errors.empty()) throw DataError(errors.front());
+  const std::vector<LabelledPhoto> photos = ListLabelledPhotos(r.images, r.labels);
   std::optional<vision::LearnedSegmenter> model;
   if (!r.model.empty()) model.emplace(LoadSegmenter(ReadLearnedModel(r.model)));
   ClassEvaluation e;
   std::vector<int64_t> model_counts(9, 0);
   std::vector<std::vector<int64_t>> rule_counts(kShares, std::vector<int64_t>(9, 0));
   double model_seconds = 0;
-  ProgressBar bar(log, "evaluate classes", static_cast<int>(files.size()), r.progress);
-  for (const fs::path& file : files) {
-    const fs::path label_path = r.labels / (file.stem().string() + ".png");
-    if (!fs::exists(label_path, ec)) throw DataError(file.string() + ": no label (expected " + label_path.string() + ")");
+  ProgressBar bar(log, "evaluate classes", static_cast<int>(photos.size()), r.progress);
+  for (const LabelledPhoto& photo : photos) {
     cv::Mat image, label;
-    try {
-      image = ReadImage(file);
-    } catch (const DataError& x) {
-      throw DataError(file.string() + ": " + x.what());
-    }
-    try {
-      label = ReadLabelImage(label_path, image.size());
-    } catch (const DataError& x) {
-      throw DataError(label_path.string() + ": " + x.what());
-    }
+    ReadLabelledPhoto(photo, image, label);
     if (model) {
       const auto t0 = std::chrono::steady_clock::now();
       vision::ClassMaps maps;
       try {
         maps = model->Classify(image);
       } catch (const DataError& x) {
-        throw DataError(file.string() + ": " + x.what());
+        throw DataError(photo.image.string() + ": " + x.what());
       }
       model_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       AddConfusion(label, maps.classes, model_counts);

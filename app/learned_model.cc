@@ -94,7 +94,12 @@ vision::LearnedSegmenter LoadSegmenter(const LearnedModel& model) {
 }
 
 cv::Mat ReadLabelImage(const fs::path& path, cv::Size size) {
-  const cv::Mat label = ReadImage(path);
+  cv::Mat label = ReadImage(path);
+  if (label.channels() == 3) {  // a grey label saved as colour: its ids in every channel
+    cv::Mat ch[3];
+    cv::split(label, ch);
+    if (cv::countNonZero(ch[0] != ch[1]) == 0 && cv::countNonZero(ch[1] != ch[2]) == 0) label = ch[0];
+  }
   if (label.channels() != 1) {
     throw DataError("a label must be single-channel (ids 0 soil, 1 crop, 2 weed); this one has " +
                     std::to_string(label.channels()) + " channels");
@@ -112,6 +117,35 @@ cv::Mat ReadLabelImage(const fs::path& path, cv::Size size) {
                     ") is outside 0–2 (0 soil, 1 crop, 2 weed)");
   }
   return label;
+}
+
+std::vector<LabelledPhoto> ListLabelledPhotos(const fs::path& images, const fs::path& labels) {
+  std::error_code ec;
+  if (!fs::is_directory(images, ec)) throw DataError(images.string() + ": not a folder");
+  if (!fs::is_directory(labels, ec)) throw DataError(labels.string() + ": not a folder");
+  std::vector<std::string> errors;
+  const std::vector<fs::path> files = CollectImages({images}, errors);
+  if (!errors.empty()) throw DataError(errors.front());
+  std::vector<LabelledPhoto> photos;
+  for (const fs::path& file : files) {
+    const fs::path label = labels / (file.stem().string() + ".png");
+    if (!fs::exists(label, ec)) throw DataError(file.string() + ": no label (expected " + label.string() + ")");
+    photos.push_back({file, label});
+  }
+  return photos;
+}
+
+void ReadLabelledPhoto(const LabelledPhoto& photo, cv::Mat& image, cv::Mat& label) {
+  try {
+    image = ReadImage(photo.image);
+  } catch (const DataError& e) {
+    throw DataError(photo.image.string() + ": " + e.what());
+  }
+  try {
+    label = ReadLabelImage(photo.label, image.size());
+  } catch (const DataError& e) {
+    throw DataError(photo.label.string() + ": " + e.what());
+  }
 }
 
 void AddConfusion(const cv::Mat& truth, const cv::Mat& predicted, std::vector<int64_t>& counts) {

@@ -47,6 +47,21 @@ vision::LearnedSegmenter LoadSegmenter(const LearnedModel& model);
 // outside 0–2 with where it is).
 cv::Mat ReadLabelImage(const std::filesystem::path& path, cv::Size size);
 
+// A photograph and its label (LABELS/NAME.png for IMAGES/NAME.*).
+struct LabelledPhoto {
+  std::filesystem::path image;
+  std::filesystem::path label;
+};
+
+// Every photograph of `images` with its label in `labels`, sorted by name.
+// Throws DataError naming the folder (not one, no images) or the first
+// photograph without a label.
+std::vector<LabelledPhoto> ListLabelledPhotos(const std::filesystem::path& images,
+                                              const std::filesystem::path& labels);
+
+// Reads both, checked (ReadImage, ReadLabelImage); DataError names the file.
+void ReadLabelledPhoto(const LabelledPhoto& photo, cv::Mat& image, cv::Mat& label);
+
 // The confusion matrix (rows truth, columns prediction) of one image added
 // to `counts` (3 × 3).
 void AddConfusion(const cv::Mat& truth, const cv::Mat& predicted, std::vector<int64_t>& counts);

@@ -70,32 +70,16 @@ struct Dataset {
 
 // Every photograph of `request.images` with its label, checked, resized.
 Dataset LoadDataset(const TrainSegmenterRequest& r, std::ostream& log) {
-  std::error_code ec;
-  if (!fs::is_directory(r.images, ec)) throw DataError(r.images.string() + ": not a folder");
-  if (!fs::is_directory(r.labels, ec)) throw DataError(r.labels.string() + ": not a folder");
-  std::vector<std::string> errors;
-  const std::vector<fs::path> files = CollectImages({r.images}, errors);
-  if (!errors.empty()) throw DataError(errors.front());
+  const std::vector<LabelledPhoto> photos = ListLabelledPhotos(r.images, r.labels);
   Dataset d;
-  std::vector<cv::Mat> originals;
-  for (const fs::path& file : files) {
-    const fs::path label = r.labels / (file.stem().string() + ".png");
-    if (!fs::exists(label, ec)) {
-      throw DataError(file.string() + ": no label (expected " + label.string() + ")");
-    }
-    cv::Mat image;
-    try {
-      image = ReadImage(file);
-    } catch (const DataError& e) {
-      throw DataError(file.string() + ": " + e.what());
-    }
-    try {
-      const cv::Mat lab = ReadLabelImage(label, image.size());
-      for (int c = 0; c < vision::kPixelClassCount; ++c) d.pixels[c] += cv::countNonZero(lab == c);
-      d.labels.push_back(lab);
-    } catch (const DataError& e) {
-      throw DataError(label.string() + ": " + e.what());
-    }
+  vision::LearnedModelSpec spec;
+  spec.input_width_px = r.input_width_px;
+  spec.input_height_px = r.input_height_px;
+  const cv::Size size(r.input_width_px, r.input_height_px);
+  for (const LabelledPhoto& photo : photos) {
+    cv::Mat image, label;
+    ReadLabelledPhoto(photo, image, label);
+    for (int c = 0; c < vision::kPixelClassCount; ++c) d.pixels[c] += cv::countNonZero(label == c);
     if (image.channels() == 3) {
       cv::Mat ch[3];
       cv::split(image, ch);
@@ -103,23 +87,15 @@ Dataset LoadDataset(const TrainSegmenterRequest& r, std::ostream& log) {
       if (grey) image = ch[0];
     }
     d.colour = d.colour || image.channels() == 3;
-    d.names.push_back(file.filename().string());
-    originals.push_back(image);
+    d.names.push_back(photo.image.filename().string());
+    spec.channels = image.channels();  // resized as it is; grey made colour below in a colour set
+    d.images.push_back(vision::ResizeForModel(image, spec));
+    cv::Mat resized;
+    cv::resize(label, resized, size, 0, 0, cv::INTER_NEAREST);
+    d.labels.push_back(resized);
   }
-  vision::LearnedModelSpec spec;
-  spec.input_width_px = r.input_width_px;
-  spec.input_height_px = r.input_height_px;
-  spec.channels = d.colour ? 3 : 1;
-  for (size_t i = 0; i < originals.size(); ++i) {
-    cv::Mat img = originals[i];
-    if (d.colour && img.channels() == 1) cv::cvtColor(img, img, cv::COLOR_GRAY2BGR);
-    d.images.push_back(vision::ResizeForModel(img, spec));
-    cv::Mat lab;
-    cv::resize(d.labels[i], lab, spec.input_width_px == d.labels[i].cols && spec.input_height_px == d.labels[i].rows
-                                     ? d.labels[i].size()
-                                     : cv::Size(spec.input_width_px, spec.input_height_px),
-               0, 0, cv::INTER_NEAREST);
-    d.labels[i] = lab;
+  for (cv::Mat& image : d.images) {
+    if (d.colour && image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
   }
   log << "train-segmenter: " << d.names.size() << " labelled " << (d.colour ? "colour" : "grey")
       << " photograph(s) from " << r.images.string() << ", resized to " << r.input_width_px << "×"

@@ -1,7 +1,5 @@
 #include "engine/vision/learned_segmenter.h"
 
-#include <algorithm>
-#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
@@ -111,21 +109,20 @@ ClassMaps LearnedSegmenter::FromLogits(const cv::Mat& logits, cv::Size size) {
       cv::resize(plane, planes[c], size, 0, 0, cv::INTER_LINEAR);
     }
   }
-  ClassMaps maps{cv::Mat(size, CV_8UC1), cv::Mat(size, CV_32FC1)};
-  for (int y = 0; y < size.height; ++y) {
-    const float* l0 = planes[0].ptr<float>(y);
-    const float* l1 = planes[1].ptr<float>(y);
-    const float* l2 = planes[2].ptr<float>(y);
-    uint8_t* cls = maps.classes.ptr<uint8_t>(y);
-    float* conf = maps.confidence.ptr<float>(y);
-    for (int x = 0; x < size.width; ++x) {
-      const float best = std::max(l0[x], std::max(l1[x], l2[x]));
-      const int k = l0[x] >= l1[x] && l0[x] >= l2[x] ? 0 : (l1[x] >= l2[x] ? 1 : 2);
-      const float sum = std::exp(l0[x] - best) + std::exp(l1[x] - best) + std::exp(l2[x] - best);
-      cls[x] = static_cast<uint8_t>(k);
-      conf[x] = 1.0f / sum;
-    }
+  // Whole-plane operations (OpenCV vectorises them): the largest logit, the
+  // softmax of the chosen class as 1 / Σ exp(l_k − max), and the first class
+  // reaching the largest logit.
+  cv::Mat best = cv::max(planes[0], cv::max(planes[1], planes[2]));
+  cv::Mat sum(size, CV_32FC1, cv::Scalar(0)), e;
+  for (const cv::Mat& plane : planes) {
+    cv::exp(plane - best, e);
+    sum += e;
   }
+  ClassMaps maps;
+  cv::divide(1.0, sum, maps.confidence, CV_32F);
+  maps.classes = cv::Mat(size, CV_8UC1, cv::Scalar(2));
+  maps.classes.setTo(1, planes[1] >= best);
+  maps.classes.setTo(0, planes[0] >= best);
   return maps;
 }
 
