@@ -82,7 +82,7 @@ json Text() {
                 "foxglove.TextPrimitive");
 }
 // Primitive kinds plantscale never sends: always empty arrays.
-json EmptyArray() { return {{"type", "array"}, {"maxItems", 0}}; }
+json EmptyArray() { return {{"type", "array"}, {"items", {{"type", "object"}}}, {"maxItems", 0}}; }
 
 }  // namespace
 
@@ -225,15 +225,15 @@ json Pose() {
 }
 
 json Command() {
-  // utime and seq: integers, or decimal strings for clients whose numbers
-  // are doubles (exact only below 2^53); mac: 64 hex digits or empty.
-  const json int64 = {{"type", json::array({"integer", "string"})}};
-  return Object({{"utime", int64},
-                 {"seq", int64},
+  // What the gateway serves (integers). An operator may send utime and seq
+  // as decimal strings too (CommandFromJson), for clients whose numbers are
+  // doubles (exact only below 2^53).
+  return Object({{"utime", Integer()},
+                 {"seq", Integer()},
                  {"command", Integer(-128, 127)},
                  {"mode", Integer(-128, 127)},
                  {"origin", String()},
-                 {"mac", String()}},
+                 {"mac", String()}},  // 64 hex digits, or empty: unsigned
                 "plantscale.Command");
 }
 

@@ -12,6 +12,7 @@
 #include <boost/beast/websocket/ssl.hpp>
 #include <chrono>
 #include <deque>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
@@ -48,6 +49,7 @@ OptionErrors GatewayOptions::Validate() const {
     if (key_file.empty()) e.push_back({"key_file", "required (TLS is always on)"});
   }
   if (max_clients < 1) e.push_back({"max_clients", "must be >= 1"});
+  if (max_pending < 1) e.push_back({"max_pending", "must be >= 1"});
   if (handshake_timeout_s < 1) e.push_back({"handshake_timeout_s", "must be >= 1"});
   if (limits.max_message_bytes < 64) e.push_back({"limits.max_message_bytes", "must be >= 64"});
   if (refusal_burst < 1) e.push_back({"refusal_burst", "must be >= 1"});
@@ -92,6 +94,7 @@ struct Gateway::Impl {
   int open_clients = 0;                          // of those, past the WebSocket upgrade
   std::vector<CachedMessage> latest;                           // per topic
   std::map<std::string, CachedMessage> tiles;                  // newest revision per tile
+  size_t tile_bytes = 0;
   RefusalLimiter refusals;
   RefusalLimiter command_audit;
 
@@ -461,6 +464,13 @@ void Gateway::Impl::Accept() {
       return Accept();
     }
     beast::error_code ignored;
+    // A flood of connections that never finish their handshake: shed at
+    // once, counted, no event (the flood would be the log's).
+    if (static_cast<int>(sessions.size()) - open_clients >= options.max_pending) {
+      socket.close(ignored);
+      Count(&GatewayStats::shed);
+      return Accept();
+    }
     const auto endpoint = socket.remote_endpoint(ignored);
     const std::string remote = endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
     std::shared_ptr<Session> session;
@@ -503,7 +513,17 @@ void Gateway::Impl::Dispatch(const std::vector<Converted>& converted) {
     auto json = std::make_shared<const std::string>(c.json);
     CachedMessage cached{c.utime, json};
     latest[static_cast<size_t>(c.topic)] = cached;
-    if (!c.cache_key.empty()) tiles[c.cache_key] = cached;
+    if (!c.cache_key.empty()) {
+      CachedMessage& slot = tiles[c.cache_key];
+      const size_t before = slot.json ? slot.json->size() : 0;
+      if (tile_bytes - before + json->size() <= options.max_cached_tile_bytes) {
+        tile_bytes = tile_bytes - before + json->size();
+        slot = cached;
+      } else {
+        if (!slot.json) tiles.erase(c.cache_key);
+        Count(&GatewayStats::tiles_not_cached);
+      }
+    }
     // Deliver may close (and erase) a session: iterate over a copy.
     const std::vector<std::shared_ptr<Session>> now(sessions.begin(), sessions.end());
     for (const auto& s : now) s->Deliver(c.topic, c.utime, json);
@@ -522,7 +542,14 @@ Gateway::Gateway(const GatewayOptions& options, Users users, Transport& transpor
     boost::system::error_code ec;
     d.tls->use_certificate_chain_file(options.cert_file.string(), ec);
     if (ec) throw GatewayError("certificate " + options.cert_file.string() + ": " + ec.message());
+    if (!std::ifstream(options.key_file).good()) {
+      throw GatewayError("key " + options.key_file.string() + ": cannot be read");
+    }
     d.tls->use_private_key_file(options.key_file.string(), ssl::context::pem, ec);
+    if (ec && ec.message().find("mismatch") != std::string::npos) {
+      throw GatewayError("key " + options.key_file.string() + " does not belong to certificate " +
+                         options.cert_file.string() + " (" + ec.message() + ")");
+    }
     if (ec) throw GatewayError("key " + options.key_file.string() + ": " + ec.message());
     if (SSL_CTX_check_private_key(d.tls->native_handle()) != 1) {
       throw GatewayError("key " + options.key_file.string() + " does not belong to certificate " +
@@ -587,7 +614,12 @@ void Gateway::FlushOutgoing() {
 
 void RunTransportLoop(Transport& transport, Gateway& gateway, const std::atomic<bool>& stop) {
   while (!stop.load()) {
-    transport.Handle(50);
+    try {
+      transport.Handle(50);
+    } catch (const TransportError&) {
+      if (stop.load()) break;  // the stopping signal interrupted LCM's wait
+      throw;
+    }
     gateway.FlushOutgoing();
   }
   gateway.FlushOutgoing();

@@ -51,6 +51,10 @@ struct GatewayOptions {
   std::filesystem::path key_file;   // PEM private key of that certificate
   bool insecure_loopback = false;   // plain ws://, only with host 127.0.0.1
   int max_clients = 32;
+  int max_pending = 64;
+  // Map tiles kept to send a new client (a 5 km bed's tiles as JSON are
+  // ~150 MB); tiles beyond it are served live but not to later clients.
+  size_t max_cached_tile_bytes = 256 * 1024 * 1024;             // connections in TLS handshake or upgrade; more are closed at once
   int handshake_timeout_s = 10;     // TLS handshake and HTTP upgrade
   std::string name = "plantscale gateway";
   ClientQueueOptions queue;
@@ -66,6 +70,7 @@ struct GatewayStats {
   int clients = 0;
   int64_t connections = 0;        // accepted WebSocket sessions
   int64_t refused = 0;            // connections refused (token, upgrade, too many)
+  int64_t shed = 0;               // closed at accept: max_pending handshakes already
   int64_t lcm_messages = 0;       // received from the transport
   int64_t lcm_rejected = 0;       // could not be decoded or converted
   int64_t commands_forwarded = 0;
@@ -74,6 +79,7 @@ struct GatewayStats {
   int64_t dropped_thumbnails = 0;
   int64_t dropped_detail = 0;
   int64_t slow_clients_closed = 0;
+  int64_t tiles_not_cached = 0;   // beyond max_cached_tile_bytes
   int64_t refusal_events = 0;     // events published for refusals (rate-limited)
 };
 
@@ -101,6 +107,9 @@ class Gateway {
   std::unique_ptr<Impl> impl_;
 };
 
+// The transport's handler refers to the gateway: do not handle the
+// transport after the gateway is destroyed.
+//
 // Handles the transport and flushes the gateway's outgoing messages until
 // `stop` is set. Throws TransportError.
 void RunTransportLoop(Transport& transport, Gateway& gateway, const std::atomic<bool>& stop);

@@ -99,10 +99,11 @@ std::pair<int, std::string> Upgrade(uint16_t port, const std::string& target, bo
   req.set(http::field::sec_websocket_version, "13");
   if (subprotocol) req.set(http::field::sec_websocket_protocol, kSubprotocol);
   if (!bearer.empty()) req.set(http::field::authorization, "Bearer " + bearer);
-  http::write(stream, req);
+  beast::error_code ec;
+  http::write(stream, req, ec);
+  if (ec) return {0, ec.message()};
   beast::flat_buffer buffer;
   http::response<http::string_body> res;
-  beast::error_code ec;
   http::read(stream, buffer, res, ec);
   if (ec) return {0, ec.message()};
   return {static_cast<int>(res.result_int()), res.body()};
@@ -126,6 +127,7 @@ class GatewayServer : public ::testing::Test {
     o.insecure_loopback = true;
     o.port = 0;
     o.refusal_burst = 2;
+    o.max_pending = 4;
     gateway_ = std::make_unique<Gateway>(o, std::move(users), transport_);
     transport_.Subscribe(channels::kCommand, [this](const ReceivedMessage& m) {
       std::lock_guard lock(mutex_);
@@ -212,6 +214,21 @@ TEST_F(GatewayServer, RefusalEventsAreRateLimited) {
   EXPECT_EQ(gateway_->stats().refusal_events, 2);  // the burst; the rest counted into a later one
   std::lock_guard lock(mutex_);
   EXPECT_EQ(events_.size(), 2u);
+}
+
+TEST_F(GatewayServer, ConnectionsThatNeverUpgradeAreShedBeyondMaxPending) {
+  asio::io_context ioc;
+  std::vector<asio::ip::tcp::socket> idle;
+  for (int i = 0; i < 4; ++i) {
+    idle.emplace_back(ioc);
+    idle.back().connect({asio::ip::make_address("127.0.0.1"), gateway_->port()});
+  }
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(Upgrade(gateway_->port(), "/?token=" + viewer_token_).first, 0);  // closed unanswered
+  EXPECT_EQ(gateway_->stats().shed, 1);
+  idle.clear();
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(Upgrade(gateway_->port(), "/?token=" + viewer_token_).first, 101);
 }
 
 TEST_F(GatewayServer, AnUpgradeWithoutTheSubprotocolIsRefused) {

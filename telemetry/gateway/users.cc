@@ -71,6 +71,9 @@ void RandomBytes(uint8_t* out, size_t n) {
 [[noreturn]] void Fail(const fs::path& file, const std::string& reason) {
   throw UsersError("users file " + file.string() + ": " + reason);
 }
+[[noreturn]] void FailWrite(const fs::path& file, const std::string& reason) {
+  throw UsersWriteError("users file " + file.string() + ": " + reason);
+}
 
 void CheckMode(const fs::path& file) {
   struct stat st {};
@@ -180,14 +183,14 @@ void WriteUsers(const Users& users, const fs::path& file) {
   const fs::path tmp = file.string() + ".tmp";
   ::unlink(tmp.c_str());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) Fail(file, std::string("cannot write ") + tmp.string() + ": " + std::strerror(errno));
+  if (fd < 0) FailWrite(file, std::string("cannot write ") + tmp.string() + ": " + std::strerror(errno));
   const ssize_t written = ::write(fd, text.data(), text.size());
   const bool ok = written == static_cast<ssize_t>(text.size()) && ::fsync(fd) == 0;
   ::close(fd);
   if (!ok || ::rename(tmp.c_str(), file.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     ::unlink(tmp.c_str());
-    Fail(file, "cannot write: " + why);
+    FailWrite(file, "cannot write: " + why);
   }
 }
 

@@ -29,6 +29,11 @@ class UsersError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+// The users file could not be written (an I/O failure, not bad input).
+class UsersWriteError : public UsersError {
+ public:
+  using UsersError::UsersError;
+};
 
 enum class Role { kViewer, kOperator };
 const char* RoleName(Role role);
@@ -62,7 +67,7 @@ User MakeUser(const std::string& name, Role role, std::string_view token);
 // user twice or holds no user.
 Users ReadUsers(const std::filesystem::path& file);
 // Writes the users to `file` (mode 0600) through a temporary file renamed
-// over it. Throws UsersError when it cannot.
+// over it. Throws UsersWriteError when it cannot.
 void WriteUsers(const Users& users, const std::filesystem::path& file);
 // Adds a user with a new token to `file` (created when missing) and returns
 // the token. Throws UsersError for a bad name, or a name already there
