@@ -3,6 +3,7 @@
 #include "app/archive_commands.h"
 #include "app/command_auth_commands.h"
 #include "app/export_commands.h"
+#include "app/gateway_commands.h"
 #include "app/log_eval_commands.h"
 #include "app/motion_commands.h"
 #include "app/rows_commands.h"
@@ -30,6 +31,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddUiCommands(registry_);
   AddSprayBarCommands(registry_);
   AddCommandAuthCommands(registry_);
+  AddGatewayCommands(registry_);
 }
 
 }  // namespace plantscale::app
