@@ -23,6 +23,7 @@ PACKAGES=(
   libgdal-dev gdal-bin
   libvtk9-dev
   libssl-dev
+  libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )
@@ -30,7 +31,8 @@ PACKAGES=(
 FUZZ_PACKAGES=(clang libclang-rt-dev)
 # The full test suite also opens a report in headless Chromium (cli.report_browser).
 # The archive tests (tests/pg_server.sh) start PostgreSQL with PostGIS.
-TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3)
+# The gateway's test (cli.gateway) runs npm's Foxglove client under Node.js over TLS.
+TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3 nodejs npm openssl)
 
 ensure_packages() {
   local missing=()
