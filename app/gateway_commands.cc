@@ -43,12 +43,14 @@ struct UsersAddArgs {
 void ParseListen(const std::string& listen, gw::GatewayOptions& o) {
   const size_t colon = listen.rfind(':');
   const auto bad = [&](const std::string& why) {
-    throw ConfigError("command line", "--listen", "'" + listen + "': " + why + " (e.g. 0.0.0.0:8765)");
+    throw ConfigError("command line", "--listen",
+                      "'" + listen + "': " + why + " (e.g. 0.0.0.0:8765)");
   };
   if (colon == std::string::npos || colon == 0) bad("must be HOST:PORT");
   o.host = listen.substr(0, colon);
   const std::string port = listen.substr(colon + 1);
-  if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos) {
+  if (port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos) {
     bad("the port must be a number 1-65535");
   }
   o.port = std::stoi(port);
@@ -63,16 +65,20 @@ int RunGateway(const GatewayArgs& a) {
   o.key_file = a.key;
   o.max_clients = a.max_clients;
   if (a.insecure_loopback && (!a.cert.empty() || !a.key.empty())) {
-    throw ConfigError("command line", "--insecure-loopback", "plain ws:// takes no --cert or --key");
+    throw ConfigError("command line", "--insecure-loopback",
+                      "plain ws:// takes no --cert or --key");
   }
   const OptionErrors errors = o.Validate();
   if (!errors.empty()) {
-    std::map<std::string, std::string> flag = {{"host", "--listen"},          {"port", "--listen"},
-                                               {"cert_file", "--cert"},       {"key_file", "--key"},
+    std::map<std::string, std::string> flag = {{"host", "--listen"},
+                                               {"port", "--listen"},
+                                               {"cert_file", "--cert"},
+                                               {"key_file", "--key"},
                                                {"insecure_loopback", "--insecure-loopback"},
                                                {"max_clients", "--max-clients"}};
     const auto it = flag.find(errors[0].key);
-    throw ConfigError("command line", it != flag.end() ? it->second : errors[0].key, errors[0].reason);
+    throw ConfigError("command line", it != flag.end() ? it->second : errors[0].key,
+                      errors[0].reason);
   }
   gw::Users users;
   try {
@@ -95,9 +101,11 @@ int RunGateway(const GatewayArgs& a) {
   const std::string scheme = a.insecure_loopback ? "ws" : "wss";
   std::cout << "gateway: " << scheme << "://" << o.host << ":" << gateway->port() << "/ for "
             << users.users.size() << " users of " << a.users << ", LCM " << a.lcm_url
-            << "; connect with " << scheme << "://HOST:" << gateway->port() << "/?token=TOKEN" << std::endl;
+            << "; connect with " << scheme << "://HOST:" << gateway->port() << "/?token=TOKEN"
+            << std::endl;
   if (a.insecure_loopback) {
-    std::cerr << "plantscale: warning: --insecure-loopback: plain ws:// (no TLS) on 127.0.0.1 only\n";
+    std::cerr
+        << "plantscale: warning: --insecure-loopback: plain ws:// (no TLS) on 127.0.0.1 only\n";
   }
   g_stop = false;
   std::signal(SIGINT, OnStopSignal);
@@ -107,18 +115,21 @@ int RunGateway(const GatewayArgs& a) {
   std::signal(SIGTERM, SIG_DFL);
   gateway->Stop();
   const gw::GatewayStats s = gateway->stats();
-  std::cout << "gateway: stopped; " << s.connections << " connections, " << s.refused << " refused ("
-            << s.refusal_events << " refusal events), " << s.lcm_messages << " LCM messages ("
-            << s.lcm_rejected << " rejected), " << s.commands_forwarded << " commands forwarded, "
-            << s.commands_refused << " refused, " << s.protocol_errors << " protocol errors, dropped "
-            << s.dropped_thumbnails << " thumbnails and " << s.dropped_detail << " detail messages, "
-            << s.slow_clients_closed << " slow clients closed\n";
+  std::cout << "gateway: stopped; " << s.connections << " connections, " << s.refused
+            << " refused (" << s.refusal_events << " refusal events), " << s.lcm_messages
+            << " LCM messages (" << s.lcm_rejected << " rejected), " << s.commands_forwarded
+            << " commands forwarded, " << s.commands_refused << " refused, " << s.protocol_errors
+            << " protocol errors, dropped " << s.dropped_thumbnails << " thumbnails and "
+            << s.dropped_detail << " detail messages, " << s.slow_clients_closed
+            << " slow clients closed\n";
   return 0;
 }
 
 int RunUsersAdd(const UsersAddArgs& a) {
   const auto role = gw::ParseRole(a.role);
-  if (!role) throw ConfigError("command line", "--role", "must be viewer or operator (got '" + a.role + "')");
+  if (!role)
+    throw ConfigError("command line", "--role",
+                      "must be viewer or operator (got '" + a.role + "')");
   std::string token;
   try {
     token = gw::AddUser(a.users, a.name, *role, a.replace);
@@ -127,8 +138,9 @@ int RunUsersAdd(const UsersAddArgs& a) {
   } catch (const gw::UsersError& e) {
     throw ConfigError("command line", "--users", e.what());
   }
-  std::cout << "users: " << (a.replace ? "set" : "added") << " " << a.name << " (" << gw::RoleName(*role)
-            << ") in " << a.users << " (mode 0600, only a salted hash of the token is kept).\n"
+  std::cout << "users: " << (a.replace ? "set" : "added") << " " << a.name << " ("
+            << gw::RoleName(*role) << ") in " << a.users
+            << " (mode 0600, only a salted hash of the token is kept).\n"
             << "Give the token below to " << a.name
             << " (wss://HOST:PORT/?token=TOKEN); it is shown this once:\n"
             << token << "\n";
@@ -140,16 +152,21 @@ int RunUsersAdd(const UsersAddArgs& a) {
 void AddGatewayCommands(CommandRegistry& registry) {
   GatewayArgs& g = registry.Keep(GatewayArgs{});
   CLI::App* gateway = registry.Add(
-      "gateway", "serve the vehicle's LCM channels over wss:// to Foxglove, Lichtblick and the station",
+      "gateway",
+      "serve the vehicle's LCM channels over wss:// to Foxglove, Lichtblick and the station",
       [&g] { return RunGateway(g); });
-  gateway->add_option("--lcm-url", g.lcm_url, "LCM URL of the vehicle's channels")->capture_default_str();
-  gateway->add_option("--listen", g.listen, "HOST:PORT to listen on (0.0.0.0:PORT: every interface)")
+  gateway->add_option("--lcm-url", g.lcm_url, "LCM URL of the vehicle's channels")
+      ->capture_default_str();
+  gateway
+      ->add_option("--listen", g.listen, "HOST:PORT to listen on (0.0.0.0:PORT: every interface)")
       ->capture_default_str();
   gateway->add_option("--cert", g.cert, "TLS certificate chain, PEM (docs/remote.md: openssl req)");
   gateway->add_option("--key", g.key, "the certificate's private key, PEM");
-  gateway->add_option("--users", g.users, "users file (plantscale users add), mode 0600")->required();
-  gateway->add_flag("--insecure-loopback", g.insecure_loopback,
-                    "plain ws:// without TLS, only with --listen 127.0.0.1:PORT (tests, a local tunnel)");
+  gateway->add_option("--users", g.users, "users file (plantscale users add), mode 0600")
+      ->required();
+  gateway->add_flag(
+      "--insecure-loopback", g.insecure_loopback,
+      "plain ws:// without TLS, only with --listen 127.0.0.1:PORT (tests, a local tunnel)");
   gateway->add_option("--max-clients", g.max_clients, "connections at once; more are refused (503)")
       ->capture_default_str();
 
@@ -157,12 +174,16 @@ void AddGatewayCommands(CommandRegistry& registry) {
   users->require_subcommand(1);
   UsersAddArgs& u = registry.Keep(UsersAddArgs{});
   CLI::App* add = registry.Add(
-      "add", "add a user with a new token (printed once, alone on the last line); stores only its hash",
+      "add",
+      "add a user with a new token (printed once, alone on the last line); stores only its hash",
       [&u] { return RunUsersAdd(u); }, users);
   add->add_option("NAME", u.name, "user name (1-64 of A-Z a-z 0-9 . _ @ -)")->required();
-  add->add_option("--role", u.role, "viewer (sees) or operator (may also send commands)")->required();
-  add->add_option("--users", u.users, "users file (created with mode 0600 when missing)")->required();
-  add->add_flag("--replace", u.replace, "give an existing user a new token (the old one stops working)");
+  add->add_option("--role", u.role, "viewer (sees) or operator (may also send commands)")
+      ->required();
+  add->add_option("--users", u.users, "users file (created with mode 0600 when missing)")
+      ->required();
+  add->add_flag("--replace", u.replace,
+                "give an existing user a new token (the old one stops working)");
 }
 
 }  // namespace plantscale::app

@@ -51,7 +51,8 @@ const json* Items(const json& j, const char* key, size_t max_items, std::string&
   return &*it;
 }
 
-ClientMessage ParseIds(const json& j, const char* key, const ProtocolLimits& limits, bool unsubscribe) {
+ClientMessage ParseIds(const json& j, const char* key, const ProtocolLimits& limits,
+                       bool unsubscribe) {
   std::string why;
   const json* items = Items(j, key, limits.max_items, why);
   if (!items) return Error(why);
@@ -73,7 +74,8 @@ ClientMessage ParseSubscribe(const json& j, const ProtocolLimits& limits) {
   Subscribe s;
   for (const json& item : *items) {
     Subscribe::Item x;
-    if (!item.is_object() || !Uint32(item, "id", x.id) || !Uint32(item, "channelId", x.channel_id)) {
+    if (!item.is_object() || !Uint32(item, "id", x.id) ||
+        !Uint32(item, "channelId", x.channel_id)) {
       return Error("each subscription needs uint32 'id' and 'channelId'");
     }
     s.subscriptions.push_back(x);
@@ -91,11 +93,14 @@ ClientMessage ParseAdvertise(const json& j, const ProtocolLimits& limits) {
     if (!item.is_object() || !Uint32(item, "id", c.id) ||
         !BoundedString(item, "topic", limits.max_string_bytes, c.topic) ||
         !BoundedString(item, "encoding", limits.max_string_bytes, c.encoding)) {
-      return Error("each client channel needs uint32 'id' and strings 'topic' and 'encoding' (at most " +
-                   std::to_string(limits.max_string_bytes) + " bytes)");
+      return Error(
+          "each client channel needs uint32 'id' and strings 'topic' and 'encoding' (at most " +
+          std::to_string(limits.max_string_bytes) + " bytes)");
     }
-    if (item.contains("schemaName") && !BoundedString(item, "schemaName", limits.max_string_bytes, c.schema_name)) {
-      return Error("'schemaName' must be a string of at most " + std::to_string(limits.max_string_bytes) + " bytes");
+    if (item.contains("schemaName") &&
+        !BoundedString(item, "schemaName", limits.max_string_bytes, c.schema_name)) {
+      return Error("'schemaName' must be a string of at most " +
+                   std::to_string(limits.max_string_bytes) + " bytes");
     }
     a.channels.push_back(std::move(c));
   }
@@ -166,14 +171,17 @@ std::string AdvertiseAll() {
 }
 
 std::string Status(int level, const std::string& message) {
-  return json{{"op", "status"}, {"level", level}, {"message", message}}.dump(-1, ' ', false, json::error_handler_t::replace);
+  return json{{"op", "status"}, {"level", level}, {"message", message}}.dump(
+      -1, ' ', false, json::error_handler_t::replace);
 }
 
 std::string MessageDataHeader(uint32_t subscription_id, uint64_t timestamp_ns) {
   std::string h(13, '\0');
   h[0] = 0x01;
-  for (int i = 0; i < 4; ++i) h[1 + static_cast<size_t>(i)] = static_cast<char>((subscription_id >> (8 * i)) & 0xff);
-  for (int i = 0; i < 8; ++i) h[5 + static_cast<size_t>(i)] = static_cast<char>((timestamp_ns >> (8 * i)) & 0xff);
+  for (int i = 0; i < 4; ++i)
+    h[1 + static_cast<size_t>(i)] = static_cast<char>((subscription_id >> (8 * i)) & 0xff);
+  for (int i = 0; i < 8; ++i)
+    h[5 + static_cast<size_t>(i)] = static_cast<char>((timestamp_ns >> (8 * i)) & 0xff);
   return h;
 }
 

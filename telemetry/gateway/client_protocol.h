@@ -58,8 +58,8 @@ struct ProtocolError {
   std::string reason;  // one line, for a status message to the client
 };
 
-using ClientMessage =
-    std::variant<Subscribe, Unsubscribe, ClientAdvertise, ClientUnadvertise, ClientMessageData, ProtocolError>;
+using ClientMessage = std::variant<Subscribe, Unsubscribe, ClientAdvertise, ClientUnadvertise,
+                                   ClientMessageData, ProtocolError>;
 
 // A text frame: one JSON object with an "op". Never throws.
 ClientMessage ParseClientText(std::string_view text, const ProtocolLimits& limits = {});

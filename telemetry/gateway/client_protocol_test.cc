@@ -15,7 +15,8 @@ std::string ErrorOf(const ClientMessage& m) {
 }
 
 TEST(GatewayProtocol, SubscribeListsItsSubscriptions) {
-  const auto m = ParseClientText(R"({"op":"subscribe","subscriptions":[{"id":0,"channelId":3},{"id":7,"channelId":5}]})");
+  const auto m = ParseClientText(
+      R"({"op":"subscribe","subscriptions":[{"id":0,"channelId":3},{"id":7,"channelId":5}]})");
   const auto* s = std::get_if<Subscribe>(&m);
   ASSERT_NE(s, nullptr) << ErrorOf(m);
   ASSERT_EQ(s->subscriptions.size(), 2u);
@@ -46,17 +47,28 @@ TEST(GatewayProtocol, MalformedTextIsAnErrorWithAReason) {
   EXPECT_EQ(ErrorOf(ParseClientText("{")), "not valid JSON");
   EXPECT_EQ(ErrorOf(ParseClientText("[1,2]")), "not a JSON object");
   EXPECT_EQ(ErrorOf(ParseClientText(R"({"op":5})")), "no 'op' string");
-  EXPECT_EQ(ErrorOf(ParseClientText(R"({"op":"getParameters"})")), "unsupported op 'getParameters'");
-  EXPECT_EQ(ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":{}})")), "'subscriptions' must be an array");
-  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})")).find("uint32"),
+  EXPECT_EQ(ErrorOf(ParseClientText(R"({"op":"getParameters"})")),
+            "unsupported op 'getParameters'");
+  EXPECT_EQ(ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":{}})")),
+            "'subscriptions' must be an array");
+  EXPECT_NE(
+      ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})"))
+          .find("uint32"),
+      std::string::npos);
+  EXPECT_NE(ErrorOf(ParseClientText(
+                        R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})"))
+                .find("uint32"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})")).find("uint32"),
-            std::string::npos);
-  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":[{"id":1.5,"channelId":1}]})")).find("uint32"),
-            std::string::npos);
-  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"unsubscribe","subscriptionIds":["a"]})")).find("uint32"),
-            std::string::npos);
-  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"advertise","channels":[{"id":1,"topic":7,"encoding":"json"}]})")).find("topic"),
+  EXPECT_NE(
+      ErrorOf(ParseClientText(R"({"op":"subscribe","subscriptions":[{"id":1.5,"channelId":1}]})"))
+          .find("uint32"),
+      std::string::npos);
+  EXPECT_NE(
+      ErrorOf(ParseClientText(R"({"op":"unsubscribe","subscriptionIds":["a"]})")).find("uint32"),
+      std::string::npos);
+  EXPECT_NE(ErrorOf(ParseClientText(
+                        R"({"op":"advertise","channels":[{"id":1,"topic":7,"encoding":"json"}]})"))
+                .find("topic"),
             std::string::npos);
 }
 
@@ -64,15 +76,18 @@ TEST(GatewayProtocol, OversizeInputIsRefusedBeforeParsing) {
   ProtocolLimits limits;
   limits.max_message_bytes = 100;
   const std::string big = R"({"op":"subscribe","subscriptions":[)" + std::string(200, ' ') + "]}";
-  EXPECT_EQ(ErrorOf(ParseClientText(big, limits)), "message of " + std::to_string(big.size()) + " bytes (at most 100)");
-  EXPECT_NE(ErrorOf(ParseClientBinary(std::string(101, '\x01'), limits)).find("at most 100"), std::string::npos);
+  EXPECT_EQ(ErrorOf(ParseClientText(big, limits)),
+            "message of " + std::to_string(big.size()) + " bytes (at most 100)");
+  EXPECT_NE(ErrorOf(ParseClientBinary(std::string(101, '\x01'), limits)).find("at most 100"),
+            std::string::npos);
   // Too many items, and a string beyond its bound.
   limits = ProtocolLimits{};
   limits.max_items = 2;
-  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"unsubscribe","subscriptionIds":[1,2,3]})", limits)).find("at most 2"),
+  EXPECT_NE(ErrorOf(ParseClientText(R"({"op":"unsubscribe","subscriptionIds":[1,2,3]})", limits))
+                .find("at most 2"),
             std::string::npos);
-  const std::string long_topic = R"({"op":"advertise","channels":[{"id":1,"topic":")" + std::string(300, 'a') +
-                                 R"(","encoding":"json"}]})";
+  const std::string long_topic = R"({"op":"advertise","channels":[{"id":1,"topic":")" +
+                                 std::string(300, 'a') + R"(","encoding":"json"}]})";
   EXPECT_FALSE(std::holds_alternative<ClientAdvertise>(ParseClientText(long_topic)));
 }
 
@@ -89,8 +104,10 @@ TEST(GatewayProtocol, ClientMessageDataIsLittleEndianChannelThenPayload) {
   EXPECT_EQ(d->channel_id, 258u);
   EXPECT_EQ(d->payload, R"({"x":1})");
   EXPECT_EQ(ErrorOf(ParseClientBinary("")), "empty binary message");
-  EXPECT_EQ(ErrorOf(ParseClientBinary(std::string("\x01\x02", 2))), "client message data shorter than its 5-byte header");
-  EXPECT_EQ(ErrorOf(ParseClientBinary(std::string("\x02\x00\x00\x00\x00", 5))), "unsupported binary opcode 2");
+  EXPECT_EQ(ErrorOf(ParseClientBinary(std::string("\x01\x02", 2))),
+            "client message data shorter than its 5-byte header");
+  EXPECT_EQ(ErrorOf(ParseClientBinary(std::string("\x02\x00\x00\x00\x00", 5))),
+            "unsupported binary opcode 2");
 }
 
 TEST(GatewayProtocol, MessageDataHeaderIsOpcodeSubscriptionAndNanoseconds) {

@@ -8,7 +8,8 @@ OptionErrors ClientQueueOptions::Validate() const {
   OptionErrors e;
   if (max_bytes == 0) e.push_back({"max_bytes", "must be > 0"});
   if (essential_max_bytes < max_bytes) {
-    e.push_back({"essential_max_bytes", "must be >= max_bytes (" + std::to_string(max_bytes) + ")"});
+    e.push_back(
+        {"essential_max_bytes", "must be >= max_bytes (" + std::to_string(max_bytes) + ")"});
   }
   if (grid_interval_us <= 0) e.push_back({"grid_interval_us", "must be > 0"});
   return e;
@@ -20,10 +21,14 @@ ClientQueue::ClientQueue(const ClientQueueOptions& options) : options_(options) 
 
 DropClass ClientQueue::Classify(TopicClass topic_class, int64_t utime) {
   switch (topic_class) {
-    case TopicClass::kThumbnail: return DropClass::kThumbnail;
-    case TopicClass::kDetail: return DropClass::kDetail;
-    case TopicClass::kEssential: return DropClass::kEssential;
-    case TopicClass::kGrid: break;
+    case TopicClass::kThumbnail:
+      return DropClass::kThumbnail;
+    case TopicClass::kDetail:
+      return DropClass::kDetail;
+    case TopicClass::kEssential:
+      return DropClass::kEssential;
+    case TopicClass::kGrid:
+      break;
   }
   const bool restart = utime < last_grid_utime_;
   if (utime == last_grid_utime_ || restart || last_grid_utime_ == INT64_MIN ||
@@ -35,7 +40,8 @@ DropClass ClientQueue::Classify(TopicClass topic_class, int64_t utime) {
 }
 
 bool ClientQueue::DropOldest(DropClass c) {
-  const auto it = std::find_if(queue_.begin(), queue_.end(), [c](const OutMessage& m) { return m.drop == c; });
+  const auto it =
+      std::find_if(queue_.begin(), queue_.end(), [c](const OutMessage& m) { return m.drop == c; });
   if (it == queue_.end()) return false;
   bytes_ -= it->bytes();
   ++dropped_[static_cast<size_t>(c)];
@@ -61,12 +67,14 @@ std::optional<OutMessage> ClientQueue::Pop() {
 }
 
 RefusalLimiter::RefusalLimiter(int burst, int64_t interval_us)
-    : burst_(std::max(burst, 1)), interval_us_(std::max<int64_t>(interval_us, 1)), tokens_(burst_) {}
+    : burst_(std::max(burst, 1)),
+      interval_us_(std::max<int64_t>(interval_us, 1)),
+      tokens_(burst_) {}
 
 bool RefusalLimiter::Take(int64_t now_us) {
   if (last_us_ != INT64_MIN && now_us > last_us_) {
     tokens_ = std::min<double>(burst_, tokens_ + static_cast<double>(now_us - last_us_) /
-                                                    static_cast<double>(interval_us_));
+                                                     static_cast<double>(interval_us_));
   }
   last_us_ = std::max(last_us_, now_us);
   if (tokens_ < 1.0) return false;
@@ -90,7 +98,8 @@ std::optional<std::string> RefusalLimiter::Refused(int64_t now_us, const std::st
 
 std::optional<std::string> RefusalLimiter::Flush(int64_t now_us) {
   if (held_back_ == 0 || !Take(now_us)) return std::nullopt;
-  std::string text = std::to_string(held_back_) + " refusals held back by the rate limit, the last: " + last_reason_;
+  std::string text = std::to_string(held_back_) +
+                     " refusals held back by the rate limit, the last: " + last_reason_;
   held_back_ = 0;
   return text;
 }

@@ -24,15 +24,15 @@ enum class DropClass { kThumbnail = 0, kDetail = 1, kEssential = 2 };
 struct OutMessage {
   DropClass drop = DropClass::kEssential;
   bool binary = false;
-  std::string header;                           // message data header (may be empty)
-  std::shared_ptr<const std::string> payload;   // shared between the clients
+  std::string header;                          // message data header (may be empty)
+  std::shared_ptr<const std::string> payload;  // shared between the clients
   size_t bytes() const { return header.size() + (payload ? payload->size() : 0); }
 };
 
 struct ClientQueueOptions {
-  size_t max_bytes = 512 * 1024;               // droppable messages go beyond this
+  size_t max_bytes = 512 * 1024;  // droppable messages go beyond this
   size_t essential_max_bytes = 16 * 1024 * 1024;
-  int64_t grid_interval_us = 400'000;          // the grid state kept at ≥ 2 Hz (2.5 Hz of 12.5)
+  int64_t grid_interval_us = 400'000;  // the grid state kept at ≥ 2 Hz (2.5 Hz of 12.5)
 
   OptionErrors Validate() const;
 };

@@ -21,7 +21,8 @@ TEST(GatewayQueue, DropsThumbnailsFirstThenDetailNeverEssential) {
   ASSERT_TRUE(q.Push(Message(DropClass::kThumbnail, 300, "t1")));
   ASSERT_TRUE(q.Push(Message(DropClass::kDetail, 300, "d1")));
   EXPECT_EQ(q.bytes(), 900u);
-  ASSERT_TRUE(q.Push(Message(DropClass::kThumbnail, 300, "t2")));  // 1200: the oldest thumbnail goes
+  ASSERT_TRUE(
+      q.Push(Message(DropClass::kThumbnail, 300, "t2")));  // 1200: the oldest thumbnail goes
   EXPECT_EQ(q.dropped(DropClass::kThumbnail), 1);
   EXPECT_EQ(q.bytes(), 900u);
   ASSERT_TRUE(q.Push(Message(DropClass::kEssential, 300, "e2")));  // t2 goes, then still 900

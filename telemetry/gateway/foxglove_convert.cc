@@ -53,25 +53,21 @@ std::vector<Topic> MakeTopics() {
 
 json Vec3(double x, double y, double z = 0.0) { return {{"x", x}, {"y", y}, {"z", z}}; }
 json IdentityPose(double x = 0.0, double y = 0.0) {
-  return {{"position", Vec3(x, y)}, {"orientation", {{"x", 0.0}, {"y", 0.0}, {"z", 0.0}, {"w", 1.0}}}};
+  return {{"position", Vec3(x, y)},
+          {"orientation", {{"x", 0.0}, {"y", 0.0}, {"z", 0.0}, {"w", 1.0}}}};
 }
-json Rgba(double r, double g, double b, double a) { return {{"r", r}, {"g", g}, {"b", b}, {"a", a}}; }
+json Rgba(double r, double g, double b, double a) {
+  return {{"r", r}, {"g", g}, {"b", b}, {"a", a}};
+}
 
 json Entity(const json& stamp, std::string frame, std::string id) {
-  return {{"timestamp", stamp},
-          {"frame_id", std::move(frame)},
-          {"id", std::move(id)},
-          {"lifetime", {{"sec", 0}, {"nsec", 0}}},
-          {"frame_locked", false},
-          {"metadata", json::array()},
-          {"arrows", json::array()},
-          {"cubes", json::array()},
-          {"spheres", json::array()},
-          {"cylinders", json::array()},
-          {"lines", json::array()},
-          {"triangles", json::array()},
-          {"texts", json::array()},
-          {"models", json::array()}};
+  return {{"timestamp", stamp},       {"frame_id", std::move(frame)},
+          {"id", std::move(id)},      {"lifetime", {{"sec", 0}, {"nsec", 0}}},
+          {"frame_locked", false},    {"metadata", json::array()},
+          {"arrows", json::array()},  {"cubes", json::array()},
+          {"spheres", json::array()}, {"cylinders", json::array()},
+          {"lines", json::array()},   {"triangles", json::array()},
+          {"texts", json::array()},   {"models", json::array()}};
 }
 
 json LinePrimitive(int type, json points, const json& color, double thickness_m) {
@@ -86,17 +82,25 @@ json LinePrimitive(int type, json points, const json& color, double thickness_m)
 }
 
 json Sphere(double x, double y, double diameter_m, const json& color) {
-  return {{"pose", IdentityPose(x, y)}, {"size", Vec3(diameter_m, diameter_m, 0.005)}, {"color", color}};
+  return {{"pose", IdentityPose(x, y)},
+          {"size", Vec3(diameter_m, diameter_m, 0.005)},
+          {"color", color}};
 }
 
 const char* ModeName(int8_t mode) {
   switch (mode) {
-    case plantscale_grid_state_t::MODE_INITIALISING: return "initialising";
-    case plantscale_grid_state_t::MODE_TRACKING: return "tracking";
-    case plantscale_grid_state_t::MODE_DEAD_RECKONING: return "dead_reckoning";
-    case plantscale_grid_state_t::MODE_LOST: return "lost";
-    case plantscale_grid_state_t::MODE_TRUTH: return "truth";
-    default: return "unknown";
+    case plantscale_grid_state_t::MODE_INITIALISING:
+      return "initialising";
+    case plantscale_grid_state_t::MODE_TRACKING:
+      return "tracking";
+    case plantscale_grid_state_t::MODE_DEAD_RECKONING:
+      return "dead_reckoning";
+    case plantscale_grid_state_t::MODE_LOST:
+      return "lost";
+    case plantscale_grid_state_t::MODE_TRUTH:
+      return "truth";
+    default:
+      return "unknown";
   }
 }
 
@@ -105,7 +109,8 @@ double Sd(double variance) { return std::sqrt(std::max(variance, 0.0)); }
 template <typename Message, typename ToJson>
 void Add(std::vector<Converted>& out, int topic, const Message& m, ToJson&& to_json) {
   // Strings from the vehicle may hold bytes that are not UTF-8: replaced, not thrown on.
-  out.push_back({topic, m.utime, to_json(m).dump(-1, ' ', false, json::error_handler_t::replace), {}});
+  out.push_back(
+      {topic, m.utime, to_json(m).dump(-1, ' ', false, json::error_handler_t::replace), {}});
 }
 
 int64_t Int64Field(const json& j, const char* key) {
@@ -121,7 +126,8 @@ int64_t Int64Field(const json& j, const char* key) {
     } catch (const std::exception&) {
     }
   }
-  throw DataError(std::string("plantscale.Command: ") + key + " must be an integer or a decimal string");
+  throw DataError(std::string("plantscale.Command: ") + key +
+                  " must be an integer or a decimal string");
 }
 
 int8_t Int8Field(const json& j, const char* key) {
@@ -130,7 +136,8 @@ int8_t Int8Field(const json& j, const char* key) {
   }
   const int64_t v = j.at(key).get<int64_t>();
   if (v < -128 || v > 127) {
-    throw DataError(std::string("plantscale.Command: ") + key + " out of range (got " + std::to_string(v) + ")");
+    throw DataError(std::string("plantscale.Command: ") + key + " out of range (got " +
+                    std::to_string(v) + ")");
   }
   return static_cast<int8_t>(v);
 }
@@ -172,7 +179,8 @@ json Timestamp(int64_t utime) {
 std::string Base64(const uint8_t* data, size_t size) {
   std::string out(4 * ((size + 2) / 3), '\0');
   if (size == 0) return out;
-  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()), data, static_cast<int>(size));
+  const int n =
+      EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()), data, static_cast<int>(size));
   out.resize(static_cast<size_t>(n));
   return out;
 }
@@ -219,7 +227,8 @@ json GridSceneJson(const plantscale_grid_state_t& m, int rows_each_side) {
     const Eigen::Vector2d b = geometry::PlantInVehicle(e.state, m_hi, n);
     const Eigen::Vector2d along = geometry::PlantInVehicle(e.state, m_lo + 1, n) - a;
     const Eigen::Vector2d u = along.normalized() * half_line;
-    json points = json::array({Vec3(a.x() - u.x(), a.y() - u.y()), Vec3(b.x() + u.x(), b.y() + u.y())});
+    json points =
+        json::array({Vec3(a.x() - u.x(), a.y() - u.y()), Vec3(b.x() + u.x(), b.y() + u.y())});
     entity["lines"].push_back(LinePrimitive(0, std::move(points), row_colour, 0.01));
     for (int line = m_lo; line <= m_hi; ++line) {
       const Eigen::Vector2d p = geometry::PlantInVehicle(e.state, line, n);
@@ -245,12 +254,15 @@ json PlantsSceneJson(const plantscale_plant_list_t& m) {
       colour = Rgba(0.9, 0.15, 0.1, 0.8);
       cls = "weed";
     }
-    const double diameter = std::max(0.01, 2.0 * std::sqrt(std::max(p.size_m2, 0.0) / std::numbers::pi));
+    const double diameter =
+        std::max(0.01, 2.0 * std::sqrt(std::max(p.size_m2, 0.0) / std::numbers::pi));
     entity["spheres"].push_back(Sphere(p.position_m.x(), p.position_m.y(), diameter, colour));
     // 95 % ellipse: centre + sqrt(chi2 λi) ei (cos t, sin t).
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (p.covariance + p.covariance.transpose()));
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(
+        0.5 * (p.covariance + p.covariance.transpose()));
     const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(0.0);
-    const Eigen::Matrix2d axes = eig.eigenvectors() * (kChi2_95_2d * lambda).cwiseSqrt().asDiagonal();
+    const Eigen::Matrix2d axes =
+        eig.eigenvectors() * (kChi2_95_2d * lambda).cwiseSqrt().asDiagonal();
     json points = json::array();
     constexpr int kPoints = 32;
     for (int i = 0; i < kPoints; ++i) {
@@ -333,12 +345,9 @@ json NozzlesJson(const plantscale_nozzles_t& m) {
                      {"y_m", s.position_m.y()},
                      {"plant_id", s.plant_id}});
   }
-  return {{"timestamp", Timestamp(m.utime)},
-          {"seq", m.seq},
-          {"open", std::move(open)},
-          {"fault", bar.fault},
-          {"open_count", open_count},
-          {"failsafe", bar.failsafe},
+  return {{"timestamp", Timestamp(m.utime)}, {"seq", m.seq},
+          {"open", std::move(open)},         {"fault", bar.fault},
+          {"open_count", open_count},        {"failsafe", bar.failsafe},
           {"shots", std::move(shots)}};
 }
 
@@ -346,12 +355,9 @@ json OdometryJson(const plantscale_odometry_t& m) {
   if (!std::isfinite(m.left_m_s) || !std::isfinite(m.right_m_s) || !std::isfinite(m.distance_m)) {
     throw DataError("plantscale_odometry_t: non-finite speed or distance");
   }
-  return {{"timestamp", Timestamp(m.utime)},
-          {"seq", m.seq},
-          {"left_m_s", m.left_m_s},
-          {"right_m_s", m.right_m_s},
-          {"distance_m", m.distance_m},
-          {"valid", m.valid != 0}};
+  return {{"timestamp", Timestamp(m.utime)}, {"seq", m.seq},
+          {"left_m_s", m.left_m_s},          {"right_m_s", m.right_m_s},
+          {"distance_m", m.distance_m},      {"valid", m.valid != 0}};
 }
 
 json PoseJson(const plantscale_pose_t& m) {
@@ -425,11 +431,10 @@ std::vector<Converted> ConvertLcm(const std::string& channel, const void* data, 
       each.operator()<plantscale_plant_list_t>(
           [&](const auto& m) { Add(out, topic(ch::kPlants), m, PlantsSceneJson); });
     } else if (channel == ch::kMapTiles) {
-      each.operator()<plantscale_map_tile_t>(
-          [&](const auto& m) {
-            Add(out, topic(ch::kMapTiles), m, MapTileGridJson);
-            out.back().cache_key = std::to_string(m.tile_x) + "," + std::to_string(m.tile_y);
-          });
+      each.operator()<plantscale_map_tile_t>([&](const auto& m) {
+        Add(out, topic(ch::kMapTiles), m, MapTileGridJson);
+        out.back().cache_key = std::to_string(m.tile_x) + "," + std::to_string(m.tile_y);
+      });
     } else if (channel == ch::kThumbnail) {
       each.operator()<plantscale_thumbnail_t>(
           [&](const auto& m) { Add(out, topic(ch::kThumbnail), m, ThumbnailJson); });
@@ -446,7 +451,8 @@ std::vector<Converted> ConvertLcm(const std::string& channel, const void* data, 
       each.operator()<plantscale_odometry_t>(
           [&](const auto& m) { Add(out, topic(ch::kOdometry), m, OdometryJson); });
     } else if (channel == ch::kPose || channel == ch::kSimTruthPose) {
-      each.operator()<plantscale_pose_t>([&](const auto& m) { Add(out, topic(channel), m, PoseJson); });
+      each.operator()<plantscale_pose_t>(
+          [&](const auto& m) { Add(out, topic(channel), m, PoseJson); });
     } else if (channel == ch::kCommand) {
       each.operator()<plantscale_command_t>(
           [&](const auto& m) { Add(out, topic(ch::kCommand), m, CommandJson); });

@@ -11,6 +11,8 @@
 // "vehicle" (the grid's rows: x right of the camera, y forward; grid_model.h),
 // "camera" (the thumbnail).
 
+#include <cstdint>
+#include <nlohmann/json.hpp>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <plantscale_lcmtypes/plantscale_grid_state_t.hpp>
@@ -21,9 +23,6 @@
 #include <plantscale_lcmtypes/plantscale_plant_list_t.hpp>
 #include <plantscale_lcmtypes/plantscale_pose_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
-
-#include <cstdint>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 

@@ -66,7 +66,7 @@ TEST(GatewayConvert, GridSceneDrawsEachRowThroughItsPlantsInTheVehicleFrame) {
   ASSERT_EQ(scene.at("entities").size(), 1u);
   const json& e = scene.at("entities")[0];
   EXPECT_EQ(e.at("frame_id"), "vehicle");
-  ASSERT_EQ(e.at("lines").size(), 3u);   // rows -1, 0, 1
+  ASSERT_EQ(e.at("lines").size(), 3u);    // rows -1, 0, 1
   ASSERT_EQ(e.at("spheres").size(), 9u);  // lines 1..3 on each
   // The central row's first plant (m = 1, n = 0): grid_model.h eq. A.1.
   const geometry::GridState s = FromLcm(m).state;
@@ -93,7 +93,8 @@ TEST(GatewayConvert, PlantEllipseIsTheNinetyFivePercentContour) {
   EXPECT_EQ(e.at("id"), "plant/12");
   EXPECT_EQ(e.at("frame_id"), "field");
   const json& sphere = e.at("spheres")[0];
-  EXPECT_NEAR(sphere.at("size").at("x").get<double>(), 2.0 * std::sqrt(0.01 / std::numbers::pi), 1e-12);
+  EXPECT_NEAR(sphere.at("size").at("x").get<double>(), 2.0 * std::sqrt(0.01 / std::numbers::pi),
+              1e-12);
   EXPECT_DOUBLE_EQ(sphere.at("color").at("g").get<double>(), 0.75);  // crop green
   const json& loop = e.at("lines")[0];
   EXPECT_EQ(loop.at("type"), 1);  // LINE_LOOP
@@ -108,8 +109,8 @@ TEST(GatewayConvert, PlantEllipseIsTheNinetyFivePercentContour) {
     // Every point on the contour: Mahalanobis distance squared = chi2(0.95, 2).
     EXPECT_NEAR(dx * dx / 4e-4 + dy * dy / 1e-4, kChi2_95_2d, 1e-9);
   }
-  EXPECT_NEAR(max_dx, std::sqrt(kChi2_95_2d * 4e-4), 1e-9);  // 4.90 cm
-  EXPECT_NEAR(max_dy, std::sqrt(kChi2_95_2d * 1e-4), 1e-9);  // 2.45 cm
+  EXPECT_NEAR(max_dx, std::sqrt(kChi2_95_2d * 4e-4), 1e-9);       // 4.90 cm
+  EXPECT_NEAR(max_dy, std::sqrt(kChi2_95_2d * 1e-4), 1e-9);       // 2.45 cm
   EXPECT_DOUBLE_EQ(loop.at("color").at("b").get<double>(), 1.0);  // sprayed: blue
 }
 
@@ -201,7 +202,8 @@ TEST(GatewayConvert, CommandRoundTripsFieldForFieldWithItsMac) {
 }
 
 TEST(GatewayConvert, BadCommandsAreRefusedNamingTheField) {
-  const json good = {{"utime", 1}, {"seq", 2}, {"command", 1}, {"mode", 0}, {"origin", "s"}, {"mac", ""}};
+  const json good = {{"utime", 1}, {"seq", 2},      {"command", 1},
+                     {"mode", 0},  {"origin", "s"}, {"mac", ""}};
   EXPECT_NO_THROW(CommandFromJson(good));
   const auto refused = [](json j, const std::string& field) {
     try {
@@ -276,10 +278,14 @@ TEST(GatewayConvert, EveryTopicHasAnObjectSchemaNamedAsItsTitle) {
     EXPECT_EQ(t.schema.at("title"), t.schema_name) << t.name;
     EXPECT_EQ(TopicIndex(t.name), &t - Topics().data());
   }
-  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kThumbnail))].schema_name, "foxglove.CompressedImage");
-  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kMapTiles))].schema_name, "foxglove.Grid");
-  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kEvents))].schema_name, "foxglove.Log");
-  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kPlants))].schema_name, "foxglove.SceneUpdate");
+  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kThumbnail))].schema_name,
+            "foxglove.CompressedImage");
+  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kMapTiles))].schema_name,
+            "foxglove.Grid");
+  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kEvents))].schema_name,
+            "foxglove.Log");
+  EXPECT_EQ(Topics()[static_cast<size_t>(TopicIndex(channels::kPlants))].schema_name,
+            "foxglove.SceneUpdate");
 }
 
 }  // namespace

@@ -87,42 +87,40 @@ json EmptyArray() { return {{"type", "array"}, {"items", {{"type", "object"}}}, 
 }  // namespace
 
 json CompressedImage() {
-  return Object({{"timestamp", Time()},
-                 {"frame_id", String()},
-                 {"data", Base64()},
-                 {"format", String()}},
-                "foxglove.CompressedImage");
+  return Object(
+      {{"timestamp", Time()}, {"frame_id", String()}, {"data", Base64()}, {"format", String()}},
+      "foxglove.CompressedImage");
 }
 
 json SceneUpdate() {
-  const json deletion =
-      Object({{"timestamp", Time()}, {"type", Integer(0, 1)}, {"id", String()}},
-             "foxglove.SceneEntityDeletion");
+  const json deletion = Object({{"timestamp", Time()}, {"type", Integer(0, 1)}, {"id", String()}},
+                               "foxglove.SceneEntityDeletion");
   const json duration = Object({{"sec", Integer()}, {"nsec", Integer(0, 999999999)}}, "duration");
-  const json entity = Object({{"timestamp", Time()},
-                              {"frame_id", String()},
-                              {"id", String()},
-                              {"lifetime", duration},
-                              {"frame_locked", Boolean()},
-                              {"metadata", Array(Object({{"key", String()}, {"value", String()}},
-                                                        "foxglove.KeyValuePair"))},
-                              {"arrows", EmptyArray()},
-                              {"cubes", EmptyArray()},
-                              {"spheres", Array(Sphere())},
-                              {"cylinders", EmptyArray()},
-                              {"lines", Array(Line())},
-                              {"triangles", EmptyArray()},
-                              {"texts", Array(Text())},
-                              {"models", EmptyArray()}},
-                             "foxglove.SceneEntity");
+  const json entity =
+      Object({{"timestamp", Time()},
+              {"frame_id", String()},
+              {"id", String()},
+              {"lifetime", duration},
+              {"frame_locked", Boolean()},
+              {"metadata",
+               Array(Object({{"key", String()}, {"value", String()}}, "foxglove.KeyValuePair"))},
+              {"arrows", EmptyArray()},
+              {"cubes", EmptyArray()},
+              {"spheres", Array(Sphere())},
+              {"cylinders", EmptyArray()},
+              {"lines", Array(Line())},
+              {"triangles", EmptyArray()},
+              {"texts", Array(Text())},
+              {"models", EmptyArray()}},
+             "foxglove.SceneEntity");
   return Object({{"deletions", Array(deletion)}, {"entities", Array(entity)}},
                 "foxglove.SceneUpdate");
 }
 
 json Grid() {
-  const json field = Object({{"name", String()}, {"offset", Integer(0, 4294967295)},
-                             {"type", Integer(0, 8)}},
-                            "foxglove.PackedElementField");
+  const json field =
+      Object({{"name", String()}, {"offset", Integer(0, 4294967295)}, {"type", Integer(0, 8)}},
+             "foxglove.PackedElementField");
   return Object({{"timestamp", Time()},
                  {"frame_id", String()},
                  {"pose", PoseSchema()},

@@ -1,7 +1,6 @@
 #include "telemetry/gateway/server.h"
 
 #include <openssl/ssl.h>
-#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 
 #include <boost/asio.hpp>
 #include <boost/asio/ssl.hpp>
@@ -15,6 +14,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <set>
 #include <thread>
 #include <type_traits>
@@ -39,7 +39,8 @@ OptionErrors GatewayOptions::Validate() const {
   boost::system::error_code ec;
   asio::ip::make_address(host, ec);
   if (ec) e.push_back({"host", "must be an IP address (got '" + host + "')"});
-  if (port < 0 || port > 65535) e.push_back({"port", "must be 0-65535 (got " + std::to_string(port) + ")"});
+  if (port < 0 || port > 65535)
+    e.push_back({"port", "must be 0-65535 (got " + std::to_string(port) + ")"});
   if (insecure_loopback) {
     if (host != "127.0.0.1") {
       e.push_back({"insecure_loopback", "plain ws:// only on 127.0.0.1 (got host " + host + ")"});
@@ -67,7 +68,8 @@ class Session : public std::enable_shared_from_this<Session> {
  public:
   virtual ~Session() = default;
   virtual void Begin() = 0;
-  virtual void Deliver(int topic, int64_t utime, const std::shared_ptr<const std::string>& json) = 0;
+  virtual void Deliver(int topic, int64_t utime,
+                       const std::shared_ptr<const std::string>& json) = 0;
   virtual void Abort() = 0;
 };
 
@@ -91,9 +93,9 @@ struct Gateway::Impl {
 
   // Network thread only.
   std::set<std::shared_ptr<Session>> sessions;  // from TCP accept to close
-  int open_clients = 0;                          // of those, past the WebSocket upgrade
-  std::vector<CachedMessage> latest;                           // per topic
-  std::map<std::string, CachedMessage> tiles;                  // newest revision per tile
+  int open_clients = 0;                         // of those, past the WebSocket upgrade
+  std::vector<CachedMessage> latest;            // per topic
+  std::map<std::string, CachedMessage> tiles;   // newest revision per tile
   size_t tile_bytes = 0;
   RefusalLimiter refusals;
   RefusalLimiter command_audit;
@@ -157,10 +159,12 @@ class SessionT : public Session {
       : hub_(hub), ws_(std::move(stream)), remote_(std::move(remote)), queue_(hub.options.queue) {}
 
   void Begin() override {
-    beast::get_lowest_layer(ws_).expires_after(std::chrono::seconds(hub_.options.handshake_timeout_s));
+    beast::get_lowest_layer(ws_).expires_after(
+        std::chrono::seconds(hub_.options.handshake_timeout_s));
     if constexpr (std::is_same_v<Stream, beast::ssl_stream<beast::tcp_stream>>) {
-      ws_.next_layer().async_handshake(ssl::stream_base::server,
-                                       [self = Self()](beast::error_code ec) { self->OnHandshake(ec); });
+      ws_.next_layer().async_handshake(
+          ssl::stream_base::server,
+          [self = Self()](beast::error_code ec) { self->OnHandshake(ec); });
     } else {
       OnHandshake({});
     }
@@ -172,7 +176,8 @@ class SessionT : public Session {
     OutMessage m;
     m.drop = queue_.Classify(Topics()[static_cast<size_t>(topic)].drop_class, utime);
     m.binary = true;
-    m.header = MessageDataHeader(it->second, static_cast<uint64_t>(std::max<int64_t>(utime, 0)) * 1000);
+    m.header =
+        MessageDataHeader(it->second, static_cast<uint64_t>(std::max<int64_t>(utime, 0)) * 1000);
     m.payload = json;
     if (!queue_.Push(std::move(m))) {
       hub_.Count(&GatewayStats::slow_clients_closed);
@@ -192,8 +197,13 @@ class SessionT : public Session {
   }
 
  private:
-  std::shared_ptr<SessionT> Self() { return std::static_pointer_cast<SessionT>(shared_from_this()); }
-  std::string Who() const { return (user_ ? user_->name + " (" + RoleName(user_->role) + ")" : "client") + " from " + remote_; }
+  std::shared_ptr<SessionT> Self() {
+    return std::static_pointer_cast<SessionT>(shared_from_this());
+  }
+  std::string Who() const {
+    return (user_ ? user_->name + " (" + RoleName(user_->role) + ")" : "client") + " from " +
+           remote_;
+  }
 
   void End() {
     open_ = false;
@@ -230,22 +240,28 @@ class SessionT : public Session {
       const char* why = token.empty() ? "no token" : "unknown token";
       hub_.Count(&GatewayStats::refused);
       hub_.Refuse(std::string("refused a connection from ") + remote_ + ": " + why);
-      return Reply(http::status::unauthorized,
-                   std::string(why) + ": connect with wss://HOST:PORT/?token=TOKEN or an Authorization: Bearer header");
+      return Reply(
+          http::status::unauthorized,
+          std::string(why) +
+              ": connect with wss://HOST:PORT/?token=TOKEN or an Authorization: Bearer header");
     }
     if (!websocket::is_upgrade(request_)) {
       hub_.Count(&GatewayStats::refused);
       return Reply(http::status::upgrade_required,
-                   "a Foxglove WebSocket gateway: open it in Foxglove or Lichtblick (subprotocol foxglove.websocket.v1)");
+                   "a Foxglove WebSocket gateway: open it in Foxglove or Lichtblick (subprotocol "
+                   "foxglove.websocket.v1)");
     }
     const auto protocols = request_[http::field::sec_websocket_protocol];
-    if (std::string_view(protocols.data(), protocols.size()).find(kSubprotocol) == std::string_view::npos) {
+    if (std::string_view(protocols.data(), protocols.size()).find(kSubprotocol) ==
+        std::string_view::npos) {
       hub_.Count(&GatewayStats::refused);
-      return Reply(http::status::bad_request, std::string("subprotocol ") + kSubprotocol + " required");
+      return Reply(http::status::bad_request,
+                   std::string("subprotocol ") + kSubprotocol + " required");
     }
     if (hub_.open_clients >= hub_.options.max_clients) {
       hub_.Count(&GatewayStats::refused);
-      hub_.Refuse("refused " + Who() + ": " + std::to_string(hub_.options.max_clients) + " clients already");
+      hub_.Refuse("refused " + Who() + ": " + std::to_string(hub_.options.max_clients) +
+                  " clients already");
       return Reply(http::status::service_unavailable, "too many clients");
     }
     beast::get_lowest_layer(ws_).expires_never();
@@ -262,7 +278,8 @@ class SessionT : public Session {
     response_.emplace(status, request_.version());
     response_->set(http::field::server, "plantscale-gateway");
     response_->set(http::field::content_type, "text/plain");
-    if (status == http::status::unauthorized) response_->set(http::field::www_authenticate, "Bearer");
+    if (status == http::status::unauthorized)
+      response_->set(http::field::www_authenticate, "Bearer");
     response_->keep_alive(false);
     response_->body() = body + "\n";
     response_->prepare_payload();
@@ -283,7 +300,8 @@ class SessionT : public Session {
       hub_.stats.clients = hub_.open_clients;
     }
     const bool op = user_->role == Role::kOperator;
-    SendText(ServerInfo({hub_.options.name, hub_.session_id, op, user_->name, RoleName(user_->role)}));
+    SendText(
+        ServerInfo({hub_.options.name, hub_.session_id, op, user_->name, RoleName(user_->role)}));
     SendText(AdvertiseAll());
     Read();
   }
@@ -320,7 +338,8 @@ class SessionT : public Session {
   }
 
   void Read() {
-    ws_.async_read(read_buffer_, [self = Self()](beast::error_code ec, size_t) { self->OnRead(ec); });
+    ws_.async_read(read_buffer_,
+                   [self = Self()](beast::error_code ec, size_t) { self->OnRead(ec); });
   }
 
   void OnRead(beast::error_code ec) {
@@ -328,7 +347,8 @@ class SessionT : public Session {
       // Closed, reset, or a message over read_message_max.
       if (ec == websocket::error::message_too_big) {
         hub_.Count(&GatewayStats::protocol_errors);
-        hub_.Refuse("closed " + Who() + ": a message over " + std::to_string(hub_.options.limits.max_message_bytes) + " bytes");
+        hub_.Refuse("closed " + Who() + ": a message over " +
+                    std::to_string(hub_.options.limits.max_message_bytes) + " bytes");
       }
       Abort();
       return End();
@@ -371,7 +391,8 @@ class SessionT : public Session {
       OutMessage m;
       m.drop = DropClass::kEssential;
       m.binary = true;
-      m.header = MessageDataHeader(subscription, static_cast<uint64_t>(std::max<int64_t>(c.utime, 0)) * 1000);
+      m.header = MessageDataHeader(subscription,
+                                   static_cast<uint64_t>(std::max<int64_t>(c.utime, 0)) * 1000);
       m.payload = c.json;
       return m;
     };
@@ -403,7 +424,8 @@ class SessionT : public Session {
       if (user_->role != Role::kOperator) {
         RefuseCommand("role viewer may not publish (topic " + c.topic.substr(0, 64) + ")");
       } else if (c.topic != channels::kCommand || c.encoding != "json") {
-        RefuseCommand(std::string("only ") + channels::kCommand + " with encoding json may be published");
+        RefuseCommand(std::string("only ") + channels::kCommand +
+                      " with encoding json may be published");
       } else {
         client_channels_.insert(c.id);
       }
@@ -417,7 +439,8 @@ class SessionT : public Session {
   void Handle(const ClientMessageData& d) {
     if (user_->role != Role::kOperator) return RefuseCommand("role viewer may not publish");
     if (!client_channels_.count(d.channel_id)) {
-      return RefuseCommand("client channel " + std::to_string(d.channel_id) + " was not advertised");
+      return RefuseCommand("client channel " + std::to_string(d.channel_id) +
+                           " was not advertised");
     }
     const nlohmann::json j = nlohmann::json::parse(d.payload, nullptr, false);
     plantscale_command_t command;
@@ -428,8 +451,9 @@ class SessionT : public Session {
     }
     hub_.Publish(channels::kCommand, Encode(command));
     hub_.Count(&GatewayStats::commands_forwarded);
-    hub_.Audit("forwarded command " + std::to_string(command.command) + " seq " + std::to_string(command.seq) +
-               " from " + Who() + (command.mac_size ? " (signed)" : " (unsigned)"));
+    hub_.Audit("forwarded command " + std::to_string(command.command) + " seq " +
+               std::to_string(command.seq) + " from " + Who() +
+               (command.mac_size ? " (signed)" : " (unsigned)"));
   }
 
   Gateway::Impl& hub_;
@@ -467,18 +491,20 @@ void Gateway::Impl::Accept() {
     // A flood of connections that never finish their handshake: shed at
     // once, counted, no event (the flood would be the log's).
     if (static_cast<int>(sessions.size()) - open_clients >= options.max_pending) {
+      Count(&GatewayStats::shed);  // before the close the client sees
       socket.close(ignored);
-      Count(&GatewayStats::shed);
       return Accept();
     }
     const auto endpoint = socket.remote_endpoint(ignored);
-    const std::string remote = endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
+    const std::string remote =
+        endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
     std::shared_ptr<Session> session;
     if (tls) {
       session = std::make_shared<SessionT<beast::ssl_stream<beast::tcp_stream>>>(
           *this, beast::ssl_stream<beast::tcp_stream>(std::move(socket), *tls), remote);
     } else {
-      session = std::make_shared<SessionT<beast::tcp_stream>>(*this, beast::tcp_stream(std::move(socket)), remote);
+      session = std::make_shared<SessionT<beast::tcp_stream>>(
+          *this, beast::tcp_stream(std::move(socket)), remote);
     }
     sessions.insert(session);
     session->Begin();
@@ -537,8 +563,8 @@ Gateway::Gateway(const GatewayOptions& options, Users users, Transport& transpor
   d.latest.resize(Topics().size());
   if (!options.insecure_loopback) {
     d.tls.emplace(ssl::context::tls_server);
-    d.tls->set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 | ssl::context::no_sslv3 |
-                       ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1);
+    d.tls->set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 |
+                       ssl::context::no_sslv3 | ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1);
     boost::system::error_code ec;
     d.tls->use_certificate_chain_file(options.cert_file.string(), ec);
     if (ec) throw GatewayError("certificate " + options.cert_file.string() + ": " + ec.message());
@@ -556,14 +582,16 @@ Gateway::Gateway(const GatewayOptions& options, Users users, Transport& transpor
                          options.cert_file.string());
     }
   }
-  const tcp::endpoint endpoint(asio::ip::make_address(options.host), static_cast<uint16_t>(options.port));
+  const tcp::endpoint endpoint(asio::ip::make_address(options.host),
+                               static_cast<uint16_t>(options.port));
   boost::system::error_code ec;
   d.acceptor.open(endpoint.protocol(), ec);
   if (!ec) d.acceptor.set_option(asio::socket_base::reuse_address(true), ec);
   if (!ec) d.acceptor.bind(endpoint, ec);
   if (!ec) d.acceptor.listen(asio::socket_base::max_listen_connections, ec);
   if (ec) {
-    throw GatewayError("cannot listen on " + options.host + ":" + std::to_string(options.port) + ": " + ec.message());
+    throw GatewayError("cannot listen on " + options.host + ":" + std::to_string(options.port) +
+                       ": " + ec.message());
   }
   transport.Subscribe(".*", [this](const ReceivedMessage& m) { impl_->OnLcm(m); });
 }
@@ -609,7 +637,8 @@ void Gateway::FlushOutgoing() {
     std::lock_guard lock(impl_->mutex);
     out.swap(impl_->outgoing);
   }
-  for (const auto& [channel, bytes] : out) impl_->transport.Publish(channel, bytes.data(), bytes.size());
+  for (const auto& [channel, bytes] : out)
+    impl_->transport.Publish(channel, bytes.data(), bytes.size());
 }
 
 void RunTransportLoop(Transport& transport, Gateway& gateway, const std::atomic<bool>& stop) {

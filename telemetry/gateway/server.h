@@ -45,7 +45,7 @@ class GatewayError : public std::runtime_error {
 };
 
 struct GatewayOptions {
-  std::string host = "127.0.0.1";  // an IP address to listen on (0.0.0.0: every interface)
+  std::string host = "127.0.0.1";   // an IP address to listen on (0.0.0.0: every interface)
   int port = 8765;                  // 0: any free port (port() tells which)
   std::filesystem::path cert_file;  // PEM certificate chain; required unless insecure_loopback
   std::filesystem::path key_file;   // PEM private key of that certificate
@@ -54,12 +54,13 @@ struct GatewayOptions {
   int max_pending = 64;
   // Map tiles kept to send a new client (a 5 km bed's tiles as JSON are
   // ~150 MB); tiles beyond it are served live but not to later clients.
-  size_t max_cached_tile_bytes = 256 * 1024 * 1024;             // connections in TLS handshake or upgrade; more are closed at once
-  int handshake_timeout_s = 10;     // TLS handshake and HTTP upgrade
+  size_t max_cached_tile_bytes =
+      256 * 1024 * 1024;         // connections in TLS handshake or upgrade; more are closed at once
+  int handshake_timeout_s = 10;  // TLS handshake and HTTP upgrade
   std::string name = "plantscale gateway";
   ClientQueueOptions queue;
   ProtocolLimits limits;
-  int refusal_burst = 5;            // refusal events at once, then one per interval
+  int refusal_burst = 5;  // refusal events at once, then one per interval
   int64_t refusal_interval_us = 10'000'000;
 
   // Keys: the field names.
@@ -68,19 +69,19 @@ struct GatewayOptions {
 
 struct GatewayStats {
   int clients = 0;
-  int64_t connections = 0;        // accepted WebSocket sessions
-  int64_t refused = 0;            // connections refused (token, upgrade, too many)
-  int64_t shed = 0;               // closed at accept: max_pending handshakes already
-  int64_t lcm_messages = 0;       // received from the transport
-  int64_t lcm_rejected = 0;       // could not be decoded or converted
+  int64_t connections = 0;   // accepted WebSocket sessions
+  int64_t refused = 0;       // connections refused (token, upgrade, too many)
+  int64_t shed = 0;          // closed at accept: max_pending handshakes already
+  int64_t lcm_messages = 0;  // received from the transport
+  int64_t lcm_rejected = 0;  // could not be decoded or converted
   int64_t commands_forwarded = 0;
-  int64_t commands_refused = 0;   // viewer, unadvertised channel, bad JSON
-  int64_t protocol_errors = 0;    // malformed or unsupported client messages
+  int64_t commands_refused = 0;  // viewer, unadvertised channel, bad JSON
+  int64_t protocol_errors = 0;   // malformed or unsupported client messages
   int64_t dropped_thumbnails = 0;
   int64_t dropped_detail = 0;
   int64_t slow_clients_closed = 0;
-  int64_t tiles_not_cached = 0;   // beyond max_cached_tile_bytes
-  int64_t refusal_events = 0;     // events published for refusals (rate-limited)
+  int64_t tiles_not_cached = 0;  // beyond max_cached_tile_bytes
+  int64_t refusal_events = 0;    // events published for refusals (rate-limited)
 };
 
 class Gateway {

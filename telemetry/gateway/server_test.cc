@@ -4,7 +4,6 @@
 #include "telemetry/gateway/server.h"
 
 #include <gtest/gtest.h>
-#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 
 #include <atomic>
 #include <boost/asio.hpp>
@@ -13,7 +12,10 @@
 #include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <mutex>
+#include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <thread>
+
+#include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
@@ -34,12 +36,14 @@ using namespace std::chrono_literals;
 class Client {
  public:
   // The HTTP status of the upgrade: 101 when accepted.
-  int Connect(uint16_t port, const std::string& target, bool subprotocol = true, const std::string& bearer = "") {
+  int Connect(uint16_t port, const std::string& target, bool subprotocol = true,
+              const std::string& bearer = "") {
     beast::get_lowest_layer(ws_).connect({asio::ip::make_address("127.0.0.1"), port});
-    ws_.set_option(websocket::stream_base::decorator([subprotocol, bearer](websocket::request_type& req) {
-      if (subprotocol) req.set(http::field::sec_websocket_protocol, kSubprotocol);
-      if (!bearer.empty()) req.set(http::field::authorization, "Bearer " + bearer);
-    }));
+    ws_.set_option(
+        websocket::stream_base::decorator([subprotocol, bearer](websocket::request_type& req) {
+          if (subprotocol) req.set(http::field::sec_websocket_protocol, kSubprotocol);
+          if (!bearer.empty()) req.set(http::field::authorization, "Bearer " + bearer);
+        }));
     websocket::response_type res;
     beast::error_code ec;
     ws_.handshake(res, "127.0.0.1", target, ec);
@@ -86,8 +90,8 @@ class Client {
 };
 
 // A WebSocket upgrade request by hand: the refusal's status and body.
-std::pair<int, std::string> Upgrade(uint16_t port, const std::string& target, bool subprotocol = true,
-                                    const std::string& bearer = "") {
+std::pair<int, std::string> Upgrade(uint16_t port, const std::string& target,
+                                    bool subprotocol = true, const std::string& bearer = "") {
   asio::io_context ioc;
   beast::tcp_stream stream(ioc);
   stream.connect({asio::ip::make_address("127.0.0.1"), port});
@@ -112,7 +116,8 @@ std::pair<int, std::string> Upgrade(uint16_t port, const std::string& target, bo
 std::string PublishFrame(uint32_t channel, const std::string& payload) {
   std::string f(5, '\0');
   f[0] = 1;
-  for (int i = 0; i < 4; ++i) f[1 + static_cast<size_t>(i)] = static_cast<char>((channel >> (8 * i)) & 0xff);
+  for (int i = 0; i < 4; ++i)
+    f[1 + static_cast<size_t>(i)] = static_cast<char>((channel >> (8 * i)) & 0xff);
   return f + payload;
 }
 
@@ -122,7 +127,8 @@ class GatewayServer : public ::testing::Test {
     viewer_token_ = NewToken();
     operator_token_ = NewToken();
     Users users;
-    users.users = {MakeUser("vera", Role::kViewer, viewer_token_), MakeUser("otto", Role::kOperator, operator_token_)};
+    users.users = {MakeUser("vera", Role::kViewer, viewer_token_),
+                   MakeUser("otto", Role::kOperator, operator_token_)};
     GatewayOptions o;
     o.insecure_loopback = true;
     o.port = 0;
@@ -131,7 +137,8 @@ class GatewayServer : public ::testing::Test {
     gateway_ = std::make_unique<Gateway>(o, std::move(users), transport_);
     transport_.Subscribe(channels::kCommand, [this](const ReceivedMessage& m) {
       std::lock_guard lock(mutex_);
-      commands_.emplace_back(static_cast<const uint8_t*>(m.data), static_cast<const uint8_t*>(m.data) + m.size);
+      commands_.emplace_back(static_cast<const uint8_t*>(m.data),
+                             static_cast<const uint8_t*>(m.data) + m.size);
     });
     transport_.Subscribe(channels::kGatewayEvents, [this](const ReceivedMessage& m) {
       const auto e = Decode<plantscale_event_t>(m.channel, m.data, m.size);
@@ -245,7 +252,8 @@ TEST_F(GatewayServer, TheBearerHeaderWorksToo) {
 TEST_F(GatewayServer, AViewerSubscribesAndReceivesTheGridAsMessageData) {
   auto c = Connected(viewer_token_);
   const int channel = TopicIndex(channels::kGrid) + 1;
-  c->Text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 42}, {"channelId", channel}}}}}.dump());
+  c->Text(
+      json{{"op", "subscribe"}, {"subscriptions", {{{"id", 42}, {"channelId", channel}}}}}.dump());
   PublishGrid(0.0375, 1'765'000'000'250'000);
   const auto m = c->Read();
   ASSERT_TRUE(m);
@@ -268,7 +276,9 @@ TEST_F(GatewayServer, ALateSubscriberGetsTheLatestMessageAtOnce) {
   PublishGrid(0.02, 2'000'000);
   std::this_thread::sleep_for(300ms);
   auto c = Connected(viewer_token_);
-  c->Text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 1}, {"channelId", TopicIndex(channels::kGrid) + 1}}}}}.dump());
+  c->Text(json{{"op", "subscribe"},
+               {"subscriptions", {{{"id", 1}, {"channelId", TopicIndex(channels::kGrid) + 1}}}}}
+              .dump());
   const auto m = c->Read();
   ASSERT_TRUE(m);
   EXPECT_DOUBLE_EQ(json::parse(m->second.substr(13)).at("offset_m").get<double>(), 0.02);
@@ -297,9 +307,61 @@ TEST_F(GatewayServer, AnOversizeMessageClosesTheConnection) {
   EXPECT_NE(events_.back().text.find("over 65536 bytes"), std::string::npos) << events_.back().text;
 }
 
+TEST_F(GatewayServer, ASlowClientLosesThumbnailsButNoEvent) {
+  // The client reads nothing while 1,000 thumbnails of 40 kB (53 MB as
+  // base64 JSON, beyond any socket buffer) and 50 events go out, then reads
+  // what is left.
+  auto c = Connected(viewer_token_);
+  const int thumbnails = TopicIndex(channels::kThumbnail) + 1;
+  const int events = TopicIndex(channels::kEvents) + 1;
+  c->Text(json{{"op", "subscribe"},
+               {"subscriptions",
+                {{{"id", 1}, {"channelId", thumbnails}}, {{"id", 2}, {"channelId", events}}}}}
+              .dump());
+  std::this_thread::sleep_for(200ms);
+  plantscale_thumbnail_t t{};
+  t.jpeg.assign(40'000, 0xab);
+  t.jpeg_size = 40'000;
+  for (int i = 0; i < 1000; ++i) {
+    t.utime = 1'000'000 + i;
+    t.seq = i;
+    const Bytes b = Encode(t);
+    transport_.Publish(channels::kThumbnail, b.data(), b.size());
+    if (i % 20 == 0) {
+      plantscale_event_t e{};
+      e.utime = t.utime;
+      e.seq = i / 20;
+      e.kind = "k";
+      e.text = std::to_string(i / 20);
+      const Bytes eb = Encode(e);
+      transport_.Publish(channels::kEvents, eb.data(), eb.size());
+    }
+    if (i % 100 == 99) std::this_thread::sleep_for(20ms);  // let the loop thread keep up
+  }
+  std::this_thread::sleep_for(1000ms);
+  int got_thumbnails = 0;
+  std::vector<int> got_events;
+  while (const auto m = c->Read(1000ms)) {
+    if (m->first) continue;
+    if (static_cast<uint8_t>(m->second[1]) == 1) ++got_thumbnails;
+    if (static_cast<uint8_t>(m->second[1]) == 2) {
+      got_events.push_back(std::stoi(json::parse(m->second.substr(13)).at("message").get<std::string>()));
+    }
+  }
+  ASSERT_EQ(got_events.size(), 50u);  // every event, in order
+  for (int i = 0; i < 50; ++i) EXPECT_EQ(got_events[static_cast<size_t>(i)], i);
+  EXPECT_GT(got_thumbnails, 0);
+  EXPECT_LT(got_thumbnails, 1000);
+  c.reset();
+  EXPECT_TRUE(WaitFor([&] { return gateway_->stats().dropped_thumbnails > 0; }));
+  EXPECT_EQ(gateway_->stats().dropped_thumbnails + got_thumbnails, 1000);
+  EXPECT_EQ(gateway_->stats().dropped_detail, 0);
+}
+
 TEST_F(GatewayServer, AViewersCommandIsRefusedAndNeverReachesLcm) {
   auto c = Connected(viewer_token_);
-  c->Text(R"({"op":"advertise","channels":[{"id":1,"topic":"PLANTSCALE_COMMAND","encoding":"json","schemaName":"plantscale.Command"}]})");
+  c->Text(
+      R"({"op":"advertise","channels":[{"id":1,"topic":"PLANTSCALE_COMMAND","encoding":"json","schemaName":"plantscale.Command"}]})");
   const json s = c->ReadJson();
   EXPECT_EQ(s.value("op", ""), "status");
   EXPECT_NE(s.value("message", "").find("role viewer may not publish"), std::string::npos) << s;
@@ -322,12 +384,14 @@ TEST_F(GatewayServer, AnOperatorsSignedCommandReachesLcmByteForByteAndStillVerif
   Sign(command, key);
 
   auto c = Connected(operator_token_);
-  c->Text(R"({"op":"advertise","channels":[{"id":9,"topic":"PLANTSCALE_COMMAND","encoding":"json","schemaName":"plantscale.Command"}]})");
+  c->Text(
+      R"({"op":"advertise","channels":[{"id":9,"topic":"PLANTSCALE_COMMAND","encoding":"json","schemaName":"plantscale.Command"}]})");
   c->Binary(PublishFrame(9, CommandJson(command).dump()));
   ASSERT_TRUE(WaitFor([&] { return !commands_.empty(); }));
   std::lock_guard lock(mutex_);
   EXPECT_EQ(commands_[0], Encode(command));
-  const auto received = Decode<plantscale_command_t>(channels::kCommand, commands_[0].data(), commands_[0].size());
+  const auto received =
+      Decode<plantscale_command_t>(channels::kCommand, commands_[0].data(), commands_[0].size());
   ASSERT_TRUE(received);
   CommandReplayState replay;
   EXPECT_TRUE(Verify(*received, key, command.utime, replay).accepted());
@@ -341,7 +405,8 @@ TEST_F(GatewayServer, AnOperatorsSignedCommandReachesLcmByteForByteAndStillVerif
 
 TEST_F(GatewayServer, AnOperatorMayPublishOnlyTheCommandChannel) {
   auto c = Connected(operator_token_);
-  c->Text(R"({"op":"advertise","channels":[{"id":1,"topic":"PLANTSCALE_GRID","encoding":"json"}]})");
+  c->Text(
+      R"({"op":"advertise","channels":[{"id":1,"topic":"PLANTSCALE_GRID","encoding":"json"}]})");
   EXPECT_NE(c->ReadJson().value("message", "").find("only PLANTSCALE_COMMAND"), std::string::npos);
   c->Binary(PublishFrame(1, "{}"));
   EXPECT_NE(c->ReadJson().value("message", "").find("was not advertised"), std::string::npos);
@@ -364,7 +429,8 @@ TEST(GatewayOptionsTest, PlainWebSocketOnlyOnLoopbackAndTlsNeedsItsFiles) {
     Gateway g(o, Users{}, t);
     ADD_FAILURE() << "started without a certificate";
   } catch (const GatewayError& err) {
-    EXPECT_NE(std::string(err.what()).find("/nonexistent/cert.pem"), std::string::npos) << err.what();
+    EXPECT_NE(std::string(err.what()).find("/nonexistent/cert.pem"), std::string::npos)
+        << err.what();
   }
 }
 

@@ -2,8 +2,8 @@
 
 #include <fcntl.h>
 #include <openssl/crypto.h>
-#include <openssl/rand.h>
 #include <openssl/evp.h>
+#include <openssl/rand.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -51,7 +51,8 @@ bool FromHex(const std::string& s, std::array<uint8_t, N>& out) {
   return true;
 }
 
-std::array<uint8_t, 32> SaltedHash(const std::array<uint8_t, kSaltBytes>& salt, std::string_view token) {
+std::array<uint8_t, 32> SaltedHash(const std::array<uint8_t, kSaltBytes>& salt,
+                                   std::string_view token) {
   std::array<uint8_t, 32> out{};
   EVP_MD_CTX* ctx = EVP_MD_CTX_new();
   unsigned int size = 0;
@@ -77,13 +78,15 @@ void RandomBytes(uint8_t* out, size_t n) {
 
 void CheckMode(const fs::path& file) {
   struct stat st {};
-  if (::stat(file.c_str(), &st) != 0) Fail(file, std::string("cannot read: ") + std::strerror(errno));
+  if (::stat(file.c_str(), &st) != 0)
+    Fail(file, std::string("cannot read: ") + std::strerror(errno));
   if (!S_ISREG(st.st_mode)) Fail(file, "not a regular file");
   if ((st.st_mode & 077) != 0) {
     char mode[8];
     std::snprintf(mode, sizeof mode, "%04o", st.st_mode & 07777);
     Fail(file, std::string("has mode ") + mode +
-                   ": group and others must have no access (mode 0600: chmod 600 " + file.string() + ")");
+                   ": group and others must have no access (mode 0600: chmod 600 " + file.string() +
+                   ")");
   }
 }
 
@@ -139,7 +142,8 @@ Users ReadUsers(const fs::path& file) {
     Fail(file, std::string("not valid YAML: ") + e.what());
   }
   const YAML::Node list = root.IsMap() ? root["users"] : YAML::Node();
-  if (!list || !list.IsSequence()) Fail(file, "no 'users:' list (make one with plantscale users add)");
+  if (!list || !list.IsSequence())
+    Fail(file, "no 'users:' list (make one with plantscale users add)");
   Users users;
   users.file = file;
   std::set<std::string> names;
@@ -149,12 +153,15 @@ Users ReadUsers(const fs::path& file) {
       if (!n.IsMap()) Fail(file, "users[" + std::to_string(i) + "]: not a mapping");
       User u;
       u.name = Field(n, "name", file, i);
-      if (!ValidUserName(u.name)) Fail(file, "users[" + std::to_string(i) + "].name: '" + u.name + "' is not 1-64 of A-Z a-z 0-9 . _ @ -");
+      if (!ValidUserName(u.name))
+        Fail(file, "users[" + std::to_string(i) + "].name: '" + u.name +
+                       "' is not 1-64 of A-Z a-z 0-9 . _ @ -");
       const auto role = ParseRole(Field(n, "role", file, i));
       if (!role) Fail(file, "users[" + std::to_string(i) + "].role: must be viewer or operator");
       u.role = *role;
       if (!FromHex(Field(n, "salt", file, i), u.salt)) {
-        Fail(file, "users[" + std::to_string(i) + "].salt: must be " + std::to_string(2 * kSaltBytes) + " hex digits");
+        Fail(file, "users[" + std::to_string(i) + "].salt: must be " +
+                       std::to_string(2 * kSaltBytes) + " hex digits");
       }
       if (!FromHex(Field(n, "sha256", file, i), u.sha256)) {
         Fail(file, "users[" + std::to_string(i) + "].sha256: must be 64 hex digits");
@@ -183,7 +190,8 @@ void WriteUsers(const Users& users, const fs::path& file) {
   const fs::path tmp = file.string() + ".tmp";
   ::unlink(tmp.c_str());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) FailWrite(file, std::string("cannot write ") + tmp.string() + ": " + std::strerror(errno));
+  if (fd < 0)
+    FailWrite(file, std::string("cannot write ") + tmp.string() + ": " + std::strerror(errno));
   const ssize_t written = ::write(fd, text.data(), text.size());
   const bool ok = written == static_cast<ssize_t>(text.size()) && ::fsync(fd) == 0;
   ::close(fd);
@@ -238,7 +246,8 @@ std::string TokenFromRequest(std::string_view target, std::string_view authoriza
       std::string value;
       const std::string_view raw = pair.substr(6);
       for (size_t i = 0; i < raw.size(); ++i) {
-        if (raw[i] == '%' && i + 2 < raw.size() && HexDigit(raw[i + 1]) >= 0 && HexDigit(raw[i + 2]) >= 0) {
+        if (raw[i] == '%' && i + 2 < raw.size() && HexDigit(raw[i + 1]) >= 0 &&
+            HexDigit(raw[i + 2]) >= 0) {
           value += static_cast<char>(HexDigit(raw[i + 1]) * 16 + HexDigit(raw[i + 2]));
           i += 2;
         } else {

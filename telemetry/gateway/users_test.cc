@@ -13,14 +13,16 @@ namespace fs = std::filesystem;
 class GatewayUsers : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("plantscale_users_test_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("plantscale_users_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     file_ = dir_ / "users.yaml";
   }
   void TearDown() override { fs::remove_all(dir_); }
-  void Write(const std::string& text, fs::perms mode = fs::perms::owner_read | fs::perms::owner_write) {
+  void Write(const std::string& text,
+             fs::perms mode = fs::perms::owner_read | fs::perms::owner_write) {
     std::ofstream(file_) << text;
     fs::permissions(file_, mode);
   }

@@ -33,16 +33,20 @@ void Check(bool ok) {
 }
 
 void CheckParsed(const gw::ClientMessage& m, const gw::ProtocolLimits& limits, size_t input_size) {
-  if (const auto* s = std::get_if<gw::Subscribe>(&m)) Check(s->subscriptions.size() <= limits.max_items);
-  if (const auto* u = std::get_if<gw::Unsubscribe>(&m)) Check(u->subscription_ids.size() <= limits.max_items);
+  if (const auto* s = std::get_if<gw::Subscribe>(&m))
+    Check(s->subscriptions.size() <= limits.max_items);
+  if (const auto* u = std::get_if<gw::Unsubscribe>(&m))
+    Check(u->subscription_ids.size() <= limits.max_items);
   if (const auto* a = std::get_if<gw::ClientAdvertise>(&m)) {
     Check(a->channels.size() <= limits.max_items);
     for (const auto& c : a->channels) {
-      Check(c.topic.size() <= limits.max_string_bytes && c.encoding.size() <= limits.max_string_bytes &&
+      Check(c.topic.size() <= limits.max_string_bytes &&
+            c.encoding.size() <= limits.max_string_bytes &&
             c.schema_name.size() <= limits.max_string_bytes);
     }
   }
-  if (const auto* d = std::get_if<gw::ClientMessageData>(&m)) Check(d->payload.size() + 5 == input_size);
+  if (const auto* d = std::get_if<gw::ClientMessageData>(&m))
+    Check(d->payload.size() + 5 == input_size);
   if (const auto* e = std::get_if<gw::ProtocolError>(&m)) Check(!e->reason.empty());
 }
 
@@ -76,16 +80,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 3: {
       const size_t nl = input.find('\n');
       const std::string_view target = input.substr(0, nl);
-      const std::string_view header = nl == std::string_view::npos ? std::string_view() : input.substr(nl + 1);
+      const std::string_view header =
+          nl == std::string_view::npos ? std::string_view() : input.substr(nl + 1);
       const std::string token = gw::TokenFromRequest(target, header);
       Check(token.size() <= input.size());
       break;
     }
     default: {
       if (input.empty()) return 0;
-      static const char* const kChannels[] = {ch::kGrid,   ch::kPlants,   ch::kMapTiles, ch::kThumbnail,
-                                              ch::kEvents, ch::kHealth,   ch::kNozzles,  ch::kOdometry,
-                                              ch::kPose,   ch::kSimTruth, ch::kCommand,  ch::kGatewayEvents};
+      static const char* const kChannels[] = {ch::kGrid,      ch::kPlants,   ch::kMapTiles,
+                                              ch::kThumbnail, ch::kEvents,   ch::kHealth,
+                                              ch::kNozzles,   ch::kOdometry, ch::kPose,
+                                              ch::kSimTruth,  ch::kCommand,  ch::kGatewayEvents};
       const std::string channel = kChannels[static_cast<uint8_t>(input[0]) % std::size(kChannels)];
       std::string error;
       const auto out = gw::ConvertLcm(channel, input.data() + 1, input.size() - 1, &error);
