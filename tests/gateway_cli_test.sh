@@ -6,7 +6,8 @@
 #     loopback), `plantscale gateway` over wss:// (a certificate made here
 #     with openssl req) serves a `simulate --publish` run to npm's
 #     @foxglove/ws-protocol client (tests/gateway/client_test.mjs): a wrong
-#     token is refused with 401; a viewer and an operator subscribe to every
+#     token is refused with 401, a client trusting another certificate
+#     fails the TLS handshake; a viewer and an operator subscribe to every
 #     channel and get each topic, every message valid against its JSON
 #     Schema; the viewer's command is refused, the operator's reaches the
 #     vehicle (its `command` event comes back through the gateway).
@@ -79,6 +80,8 @@ wss="wss://127.0.0.1:18765/"
 client=(node "$node_dir/client_test.mjs")
 status=0
 "${client[@]}" refused "$wss" "0123wrong" "$work/cert.pem" >"$work/refused.json" 2>&1 || { echo "FAIL: wrong token"; status=1; }
+"${client[@]}" untrusted "$wss" "$viewer_token" "$work/other_cert.pem" >"$work/untrusted.json" 2>&1 \
+  || { echo "FAIL: a client that does not trust the certificate connected"; status=1; }
 topics="PLANTSCALE_GRID,PLANTSCALE_GRID/scene,PLANTSCALE_PLANTS,PLANTSCALE_MAP_TILES,PLANTSCALE_THUMBNAIL"
 topics+=",PLANTSCALE_EVENTS,PLANTSCALE_HEALTH,PLANTSCALE_NOZZLES,PLANTSCALE_ODOMETRY,PLANTSCALE_SIM_TRUTH"
 topics+=",PLANTSCALE_SIM_TRUTH_POSE,PLANTSCALE_GATEWAY_EVENTS"
@@ -98,11 +101,13 @@ exit $status
 INNER
 inner=$?
 [[ $inner -eq 77 ]] && { echo "skip: no multicast route in the namespace"; finish gateway; }
-for f in refused viewer operator; do echo "$f: $(cat "$work/$f.json" 2>/dev/null)" | cut -c1-600; done
+for f in refused untrusted viewer operator; do echo "$f: $(cat "$work/$f.json" 2>/dev/null)" | cut -c1-600; done
 cat "$work/gateway.txt"
 ((inner == 0)) || fail "the namespace run (gateway, clients, simulate) failed"
 grep -q '"httpStatus":401' "$work/refused.json" || fail "a wrong token was not refused with 401"
 grep -q 'unknown token' "$work/refused.json" || fail "the refusal does not say why"
+grep -qE '"errors":\["[A-Z_]*(CERT|SIGNATURE|SELF_SIGNED|UNABLE_TO)' "$work/untrusted.json" \
+  || fail "an untrusted certificate did not fail the TLS handshake"
 grep -q '"commandRefused":true' "$work/viewer.json" || fail "the viewer's command was not refused"
 grep -q '"role":"viewer"' "$work/viewer.json" || fail "the viewer's serverInfo lacks its role"
 grep -q '"commandEvent":"mode: spray the crop by foxglove-test@operator' "$work/operator.json" \

@@ -3,6 +3,9 @@
 //
 //   node client_test.mjs refused URL TOKEN CA
 //     expects the upgrade refused with HTTP 401 and no serverInfo.
+//   node client_test.mjs untrusted URL TOKEN CA
+//     with a CA that did not sign the gateway's certificate: expects the
+//     TLS handshake to fail (the client refuses the server).
 //   node client_test.mjs watch URL TOKEN CA READY_FILE TOPICS [command]
 //     subscribes to every advertised channel, touches READY_FILE, checks
 //     every message against its channel's JSON Schema (Ajv) and waits until
@@ -31,7 +34,14 @@ setTimeout(() => finish(false, "timed out"), 90_000).unref();
 
 const ws = new WebSocket(target, [FoxgloveClient.SUPPORTED_SUBPROTOCOL], { ca });
 
-if (mode === "refused") {
+if (mode === "untrusted") {
+  ws.on("open", () => finish(false, "connected through a certificate it does not trust"));
+  ws.on("unexpected-response", () => finish(false, "reached HTTP through a certificate it does not trust"));
+  ws.on("error", (e) => {
+    result.errors.push(String(e.code ?? e.message));
+    finish(/CERT|SIGNATURE|SELF_SIGNED|UNABLE_TO/.test(String(e.code)), undefined);
+  });
+} else if (mode === "refused") {
   ws.on("unexpected-response", (_req, res) => {
     result.httpStatus = res.statusCode;
     let body = "";
