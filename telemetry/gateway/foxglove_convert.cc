@@ -52,6 +52,11 @@ std::vector<Topic> MakeTopics() {
 }
 
 json Vec3(double x, double y, double z = 0.0) { return {{"x", x}, {"y", y}, {"z", z}}; }
+// Scene geometry to 0.1 mm: nlohmann writes the shortest digits that read
+// back, so 0.0123 instead of 0.012345678901234567 (a plant list's JSON is
+// a third the size; no drawing shows 0.1 mm).
+double Mm10(double v) { return std::round(v * 1e4) / 1e4; }
+json Point(double x, double y, double z = 0.0) { return Vec3(Mm10(x), Mm10(y), Mm10(z)); }
 json IdentityPose(double x = 0.0, double y = 0.0) {
   return {{"position", Vec3(x, y)},
           {"orientation", {{"x", 0.0}, {"y", 0.0}, {"z", 0.0}, {"w", 1.0}}}};
@@ -82,7 +87,8 @@ json LinePrimitive(int type, json points, const json& color, double thickness_m)
 }
 
 json Sphere(double x, double y, double diameter_m, const json& color) {
-  return {{"pose", IdentityPose(x, y)},
+  diameter_m = Mm10(diameter_m);
+  return {{"pose", IdentityPose(Mm10(x), Mm10(y))},
           {"size", Vec3(diameter_m, diameter_m, 0.005)},
           {"color", color}};
 }
@@ -228,7 +234,7 @@ json GridSceneJson(const plantscale_grid_state_t& m, int rows_each_side) {
     const Eigen::Vector2d along = geometry::PlantInVehicle(e.state, m_lo + 1, n) - a;
     const Eigen::Vector2d u = along.normalized() * half_line;
     json points =
-        json::array({Vec3(a.x() - u.x(), a.y() - u.y()), Vec3(b.x() + u.x(), b.y() + u.y())});
+        json::array({Point(a.x() - u.x(), a.y() - u.y()), Point(b.x() + u.x(), b.y() + u.y())});
     entity["lines"].push_back(LinePrimitive(0, std::move(points), row_colour, 0.01));
     for (int line = m_lo; line <= m_hi; ++line) {
       const Eigen::Vector2d p = geometry::PlantInVehicle(e.state, line, n);
@@ -264,11 +270,11 @@ json PlantsSceneJson(const plantscale_plant_list_t& m) {
     const Eigen::Matrix2d axes =
         eig.eigenvectors() * (kChi2_95_2d * lambda).cwiseSqrt().asDiagonal();
     json points = json::array();
-    constexpr int kPoints = 32;
+    constexpr int kPoints = 24;
     for (int i = 0; i < kPoints; ++i) {
       const double t = 2.0 * std::numbers::pi * i / kPoints;
       const Eigen::Vector2d q = p.position_m + axes * Eigen::Vector2d(std::cos(t), std::sin(t));
-      points.push_back(Vec3(q.x(), q.y(), 0.002));
+      points.push_back(Point(q.x(), q.y(), 0.002));
     }
     const json ellipse_colour = p.sprayed ? Rgba(0.1, 0.4, 1.0, 1.0) : Rgba(1.0, 1.0, 1.0, 0.9);
     entity["lines"].push_back(LinePrimitive(1, std::move(points), ellipse_colour, 0.003));

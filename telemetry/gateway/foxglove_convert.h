@@ -64,7 +64,8 @@ nlohmann::json GridStateJson(const plantscale_grid_state_t& m);
 nlohmann::json GridSceneJson(const plantscale_grid_state_t& m, int rows_each_side = 1);
 // One entity per plant ("plant/ID"): a disc of its ground area coloured by
 // class (crop green, weed red, unknown grey; sprayed: blue outline) and its
-// 95 % position ellipse as a line loop of 32 points.
+// 95 % position ellipse as a line loop of 24 points; scene geometry is
+// rounded to 0.1 mm.
 nlohmann::json PlantsSceneJson(const plantscale_plant_list_t& m);
 // Cells decoded (RLE) into one UINT8 field "cell" (CELL_* values).
 nlohmann::json MapTileGridJson(const plantscale_map_tile_t& m);

@@ -62,7 +62,17 @@ if (mode === "untrusted") {
   let commandSent = false;
   let commandDone = !command;
 
+  // WATCH_FOR_S (tests/gateway/load.sh): stay connected that long, then
+  // report (ok when every topic arrived and all were valid).
+  const watchFor = Number(process.env.WATCH_FOR_S || 0);
+  if (watchFor > 0) {
+    setTimeout(() => {
+      const missing = [...wanted].filter((t) => !result.counts[t]);
+      finish(missing.length === 0 && result.invalid.length === 0, missing.length ? `missing ${missing}` : undefined);
+    }, watchFor * 1000);
+  }
   const maybeDone = () => {
+    if (watchFor > 0) return;
     const missing = [...wanted].filter((t) => !result.counts[t]);
     if (missing.length === 0 && commandDone) finish(result.invalid.length === 0, result.invalid.length ? "schema failures" : undefined);
   };
@@ -88,6 +98,7 @@ if (mode === "untrusted") {
   });
   client.on("error", (e) => result.errors.push(String(e?.message ?? e)));
   client.on("close", () => finish(false, "closed by the server"));
+  client.on("message", ({ data }) => (result.bytes = (result.bytes || 0) + data.byteLength));
   client.on("advertise", (advertised) => {
     for (const c of advertised) {
       const schema = JSON.parse(c.schema);
@@ -111,6 +122,8 @@ if (mode === "untrusted") {
       else result.invalid.push({ topic: c.topic });
     }
     result.counts[c.topic] = (result.counts[c.topic] || 0) + 1;
+    result.topicBytes = result.topicBytes || {};
+    result.topicBytes[c.topic] = (result.topicBytes[c.topic] || 0) + data.byteLength;
     // The vehicle is running once its heartbeat arrives: the command goes now.
     if (c.topic === "PLANTSCALE_HEALTH" && command && !commandSent) sendCommand();
     if (c.topic === "PLANTSCALE_EVENTS" && msg.name === "command" && /foxglove-test@operator/.test(msg.message)) {
