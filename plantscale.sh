@@ -23,6 +23,7 @@ PACKAGES=(
   libgdal-dev gdal-bin
   libvtk9-dev
   libssl-dev
+  libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )
@@ -32,7 +33,9 @@ FUZZ_PACKAGES=(clang libclang-rt-dev)
 # The archive tests (tests/pg_server.sh) start PostgreSQL with PostGIS.
 # The learned segmenter's test trains a model (train-segmenter: Debian's
 # PyTorch and ONNX for /usr/bin/python3; training only, never on the vehicle).
-TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3 python3-numpy python3-torch python3-onnx)
+# The gateway's test (cli.gateway) runs npm's Foxglove client under Node.js over TLS.
+TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3 python3-numpy python3-torch python3-onnx
+  nodejs npm openssl)
 
 ensure_packages() {
   local missing=()

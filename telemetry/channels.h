@@ -13,6 +13,8 @@ inline constexpr char kThumbnail[] = "PLANTSCALE_THUMBNAIL";  // thumbnail_t, 2 
 inline constexpr char kEvents[] = "PLANTSCALE_EVENTS";        // event_t, when they happen
 inline constexpr char kOdometry[] = "PLANTSCALE_ODOMETRY";    // odometry_t, 12.5 Hz
 inline constexpr char kPose[] = "PLANTSCALE_POSE";            // pose_t, dead reckoning
+// The gateway's own events (event_t): refused connections and commands.
+inline constexpr char kGatewayEvents[] = "PLANTSCALE_GATEWAY_EVENTS";
 // Simulator ground truth: never on the tracker's channels.
 inline constexpr char kSimTruth[] = "PLANTSCALE_SIM_TRUTH";           // grid_state_t, MODE_TRUTH
 inline constexpr char kSimTruthPose[] = "PLANTSCALE_SIM_TRUTH_POSE";  // pose_t

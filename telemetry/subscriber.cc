@@ -150,7 +150,7 @@ bool Subscriber::Dispatch(const std::string& channel, const void* data, size_t s
     Take<plantscale_odometry_t>(channel, data, size, recv, [&](const auto& m) { st.odometry = m; });
   } else if (channel == kCommand) {
     Take<plantscale_command_t>(channel, data, size, recv, [&](const auto& m) { st.command = m; });
-  } else if (channel == kEvents) {
+  } else if (channel == kEvents || channel == kGatewayEvents) {
     Take<plantscale_event_t>(channel, data, size, recv, [&](const auto& m) {
       PushBounded(st.events, m, options_.event_history);
     });

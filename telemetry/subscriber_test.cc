@@ -127,3 +127,32 @@ TEST(Subscriber, SnapshotsAreConsistentWhileAnotherThreadFeeds) {
 
 }  // namespace
 }  // namespace plantscale::telemetry
+
+namespace plantscale::telemetry {
+namespace {
+
+TEST(Subscriber, GatewayEventsJoinTheEventsWithTheirOwnSequence) {
+  Subscriber s;
+  const auto feed = [&](const char* channel, int64_t seq, const std::string& kind) {
+    plantscale_event_t e{};
+    e.utime = seq;
+    e.seq = seq;
+    e.kind = kind;
+    const Bytes b = Encode(e);
+    s.Feed(channel, b.data(), b.size(), seq);
+  };
+  feed(channels::kEvents, 0, "run_started");
+  feed(channels::kGatewayEvents, 0, "gateway_refused");
+  feed(channels::kEvents, 1, "frame_dropped");
+  const TelemetrySnapshot snap = s.Snapshot();
+  ASSERT_EQ(snap.events.size(), 3u);
+  EXPECT_EQ(snap.events[1].kind, "gateway_refused");
+  EXPECT_EQ(snap.unknown_channel_messages, 0);
+  // Two senders, two sequences: neither looks like a restart or a loss.
+  EXPECT_EQ(snap.channels.at(channels::kEvents).restarts, 0);
+  EXPECT_EQ(snap.channels.at(channels::kEvents).lost, 0);
+  EXPECT_EQ(snap.channels.at(channels::kGatewayEvents).received, 1);
+}
+
+}  // namespace
+}  // namespace plantscale::telemetry

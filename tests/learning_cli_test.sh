@@ -3,7 +3,7 @@
 # and bad input (one line naming the file and the reason, exit 2, nothing
 # half-written). The training itself is tested in app/learned_model_test.cc.
 # usage: learning_cli_test.sh PLANTSCALE WORKDIR SOURCE_DIR
-set -euo pipefail
+set -uo pipefail
 # shellcheck source=cli_lib.sh
 source "$(dirname "$0")/cli_lib.sh"
 bin="$1"; work="$2"; src="$3"
