@@ -35,7 +35,10 @@ FUZZ_PACKAGES=(clang libclang-rt-dev)
 # PyTorch and ONNX for /usr/bin/python3; training only, never on the vehicle).
 # The gateway's test (cli.gateway) runs npm's Foxglove client under Node.js over TLS.
 TEST_PACKAGES=(chromium postgresql postgresql-15-postgis-3 python3-numpy python3-torch python3-onnx
-  nodejs npm openssl)
+  nodejs openssl)
+# Debian's npm conflicts with a nodejs that bundles its own (NodeSource's, as
+# these machines have): it is asked for only where no npm is found.
+command -v npm >/dev/null 2>&1 || TEST_PACKAGES+=(npm)
 
 ensure_packages() {
   local missing=()
