@@ -271,6 +271,25 @@ TEST_F(GatewayServer, AViewerSubscribesAndReceivesTheGridAsMessageData) {
   EXPECT_EQ(gateway_->stats().connections, 1);
 }
 
+TEST_F(GatewayServer, TheGridSceneGoesAtMostEveryZeroPointFourSeconds) {
+  auto c = Connected(viewer_token_);
+  c->Text(json{{"op", "subscribe"},
+               {"subscriptions",
+                {{{"id", 1}, {"channelId", TopicIndex(channels::kGrid) + 1}},
+                 {{"id", 2}, {"channelId", TopicIndex(std::string(channels::kGrid) + "/scene") + 1}}}}}
+              .dump());
+  std::this_thread::sleep_for(200ms);
+  for (int i = 0; i < 10; ++i) PublishGrid(0.001 * i, 1'000'000 + int64_t{i} * 80'000);  // 12.5 Hz
+  int grid = 0;
+  int scene = 0;
+  while (const auto m = c->Read(500ms)) {
+    if (m->first) continue;
+    (static_cast<uint8_t>(m->second[1]) == 1 ? grid : scene) += 1;
+  }
+  EXPECT_EQ(grid, 10);
+  EXPECT_EQ(scene, 2);  // at 0 and 0.4 s
+}
+
 TEST_F(GatewayServer, ALateSubscriberGetsTheLatestMessageAtOnce) {
   PublishGrid(0.01, 1'000'000);
   PublishGrid(0.02, 2'000'000);
