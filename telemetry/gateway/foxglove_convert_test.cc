@@ -115,7 +115,7 @@ TEST(GatewayConvert, PlantEllipseIsTheNinetyFivePercentContour) {
   }
   EXPECT_NEAR(max_dx, std::sqrt(kChi2_95_2d * 4e-4), 0.5e-4 + 1e-12);  // 4.90 cm
   EXPECT_NEAR(max_dy, std::sqrt(kChi2_95_2d * 1e-4), 0.5e-4 + 1e-12);  // 2.45 cm
-  EXPECT_DOUBLE_EQ(loop.at("color").at("b").get<double>(), 1.0);  // sprayed: blue
+  EXPECT_DOUBLE_EQ(loop.at("color").at("b").get<double>(), 1.0);       // sprayed: blue
 }
 
 TEST(GatewayConvert, MapTileBecomesAGridOfDecodedCells) {

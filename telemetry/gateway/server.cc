@@ -55,6 +55,7 @@ OptionErrors GatewayOptions::Validate() const {
   if (limits.max_message_bytes < 64) e.push_back({"limits.max_message_bytes", "must be >= 64"});
   if (refusal_burst < 1) e.push_back({"refusal_burst", "must be >= 1"});
   if (refusal_interval_us < 1) e.push_back({"refusal_interval_us", "must be >= 1"});
+  if (grid_scene_interval_us < 0) e.push_back({"grid_scene_interval_us", "must be >= 0"});
   for (auto& x : Prefixed("queue", queue.Validate())) e.push_back(std::move(x));
   return e;
 }
@@ -99,6 +100,8 @@ struct Gateway::Impl {
   size_t tile_bytes = 0;
   RefusalLimiter refusals;
   RefusalLimiter command_audit;
+
+  int64_t last_scene_utime = INT64_MIN;  // transport thread only
 
   mutable std::mutex mutex;  // guards stats and outgoing
   GatewayStats stats;
@@ -530,6 +533,16 @@ void Gateway::Impl::OnLcm(const ReceivedMessage& m) {
   std::string error;
   std::vector<Converted> converted = ConvertLcm(m.channel, m.data, m.size, &error);
   if (!error.empty()) Count(&GatewayStats::lcm_rejected);
+  static const int scene = TopicIndex(std::string(channels::kGrid) + "/scene");
+  std::erase_if(converted, [&](const Converted& c) {
+    if (c.topic != scene) return false;
+    if (last_scene_utime != INT64_MIN && c.utime >= last_scene_utime &&
+        c.utime - last_scene_utime < options.grid_scene_interval_us) {
+      return true;
+    }
+    last_scene_utime = c.utime;
+    return false;
+  });
   if (converted.empty()) return;
   asio::post(ioc, [this, c = std::move(converted)] { Dispatch(c); });
 }

@@ -60,6 +60,10 @@ struct GatewayOptions {
   std::string name = "plantscale gateway";
   ClientQueueOptions queue;
   ProtocolLimits limits;
+  // PLANTSCALE_GRID/scene at most this often in message time (0: every
+  // grid message): a 3-D view needs no more than 2.5 Hz, and at 12.5 Hz the
+  // scene was a third of every client's bytes (results/2026-12-07-gateway.md).
+  int64_t grid_scene_interval_us = 400'000;
   int refusal_burst = 5;  // refusal events at once, then one per interval
   int64_t refusal_interval_us = 10'000'000;
 

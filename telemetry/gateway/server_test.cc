@@ -13,9 +13,8 @@
 #include <chrono>
 #include <mutex>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
-#include <thread>
-
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
+#include <thread>
 
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
@@ -271,6 +270,26 @@ TEST_F(GatewayServer, AViewerSubscribesAndReceivesTheGridAsMessageData) {
   EXPECT_EQ(gateway_->stats().connections, 1);
 }
 
+TEST_F(GatewayServer, TheGridSceneGoesAtMostEveryZeroPointFourSeconds) {
+  auto c = Connected(viewer_token_);
+  c->Text(
+      json{{"op", "subscribe"},
+           {"subscriptions",
+            {{{"id", 1}, {"channelId", TopicIndex(channels::kGrid) + 1}},
+             {{"id", 2}, {"channelId", TopicIndex(std::string(channels::kGrid) + "/scene") + 1}}}}}
+          .dump());
+  std::this_thread::sleep_for(200ms);
+  for (int i = 0; i < 10; ++i) PublishGrid(0.001 * i, 1'000'000 + int64_t{i} * 80'000);  // 12.5 Hz
+  int grid = 0;
+  int scene = 0;
+  while (const auto m = c->Read(500ms)) {
+    if (m->first) continue;
+    (static_cast<uint8_t>(m->second[1]) == 1 ? grid : scene) += 1;
+  }
+  EXPECT_EQ(grid, 10);
+  EXPECT_EQ(scene, 2);  // at 0 and 0.4 s
+}
+
 TEST_F(GatewayServer, ALateSubscriberGetsTheLatestMessageAtOnce) {
   PublishGrid(0.01, 1'000'000);
   PublishGrid(0.02, 2'000'000);
@@ -345,7 +364,8 @@ TEST_F(GatewayServer, ASlowClientLosesThumbnailsButNoEvent) {
     if (m->first) continue;
     if (static_cast<uint8_t>(m->second[1]) == 1) ++got_thumbnails;
     if (static_cast<uint8_t>(m->second[1]) == 2) {
-      got_events.push_back(std::stoi(json::parse(m->second.substr(13)).at("message").get<std::string>()));
+      got_events.push_back(
+          std::stoi(json::parse(m->second.substr(13)).at("message").get<std::string>()));
     }
   }
   ASSERT_EQ(got_events.size(), 50u);  // every event, in order
