@@ -169,11 +169,12 @@ int SegmentCommand(const SegmentPhotosRequest& request, bool json) {
     return 2;
   }
   for (const std::string& e : r.errors) std::cerr << "plantscale segment: error: " << e << '\n';
-  std::cout << "plantscale segment: " << r.images << " image(s) segmented into "
-            << request.out.string() << "/";
-  if (r.failed > 0) std::cout << ", " << r.failed << " failed";
-  std::cout << '\n';
-  if (json && !request.model.empty()) {
+  const bool print_json = json && !request.model.empty();
+  std::ostream& said = print_json ? std::cerr : std::cout;  // with --json, standard output is the JSON alone
+  said << "plantscale segment: " << r.images << " image(s) segmented into " << request.out.string() << "/";
+  if (r.failed > 0) said << ", " << r.failed << " failed";
+  said << '\n';
+  if (print_json) {
     nlohmann::json photos = nlohmann::json::array();
     for (const PhotoClassFractions& f : r.fractions) {
       photos.push_back({{"name", f.name}, {"width_px", f.width_px}, {"height_px", f.height_px},

@@ -50,6 +50,7 @@ for f in "$work"/colour/frames/*.png; do
   [[ -s "$work/seg/${n}_classes.png" && -s "$work/seg/${n}_overlay.png" ]] || fail "no classes/overlay for $n"
 done
 grep -q '"crop_fraction"' "$work/seg.json" || fail "segment --json has no crop_fraction"
+[[ "$(head -c 1 "$work/seg.json")" == "{" ]] || fail "segment --json: standard output is not the JSON alone"
 grep -q '"weed_fraction"' "$work/seg.json" || fail "segment --json has no weed_fraction"
 # A colour model on grey frames: each frame refused by name, exit 1.
 expect 1 '000000.png: the model takes colour photographs and this one is grey' -- \
