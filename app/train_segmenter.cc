@@ -6,7 +6,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -175,7 +174,7 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
                              std::ostream& log) {
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error("cannot make a pipe for the optimiser");
-  struct sigaction ignore {}, old_int{}, old_term{};
+  struct sigaction ignore {}, old_int{};
   ignore.sa_handler = SIG_IGN;
   ::sigaction(SIGINT, &ignore, &old_int);
   const pid_t pid = ::fork();
@@ -217,7 +216,6 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   ::sigaction(SIGINT, &old_int, nullptr);
-  (void)old_term;
   if (drawn && tty) log << '\n';
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   std::ifstream err(err_file);
