@@ -178,6 +178,12 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
   ignore.sa_handler = SIG_IGN;
   ::sigaction(SIGINT, &ignore, &old_int);
   const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::sigaction(SIGINT, &old_int, nullptr);
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw std::runtime_error("cannot start the optimiser (fork failed)");
+  }
   if (pid == 0) {
     ::signal(SIGINT, SIG_DFL);
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);  // this process killed: the optimiser stops too
