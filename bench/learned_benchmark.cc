@@ -81,6 +81,31 @@ void BM_LearnedNetwork(benchmark::State& state) {
 }
 BENCHMARK(BM_LearnedNetwork)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// The steps around the network: the frame resized to the model's input, and
+// the logits upsampled to the frame with classes and confidence.
+void BM_ResizeForModel(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const cv::Mat& frame = Frame(static_cast<int>(state.range(0)));
+  const LearnedModelSpec& spec = Model().spec();
+  for (auto _ : state) {
+    cv::Mat input = ResizeForModel(frame, spec);
+    benchmark::DoNotOptimize(input.data);
+  }
+}
+BENCHMARK(BM_ResizeForModel)->Arg(640)->Arg(1280)->Unit(benchmark::kMillisecond);
+
+void BM_ClassesFromLogits(benchmark::State& state) {
+  cv::setNumThreads(1);
+  const cv::Mat& frame = Frame(static_cast<int>(state.range(0)));
+  LearnedSegmenter& model = Model();
+  const cv::Mat logits = model.Logits(ResizeForModel(frame, model.spec()));
+  for (auto _ : state) {
+    ClassMaps maps = LearnedSegmenter::FromLogits(logits, frame.size());
+    benchmark::DoNotOptimize(maps.classes.data);
+  }
+}
+BENCHMARK(BM_ClassesFromLogits)->Arg(640)->Arg(1280)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace plantscale::vision
 
