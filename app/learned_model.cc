@@ -95,11 +95,8 @@ vision::LearnedSegmenter LoadSegmenter(const LearnedModel& model) {
 
 cv::Mat ReadLabelImage(const fs::path& path, cv::Size size) {
   cv::Mat label = ReadImage(path);
-  if (label.channels() == 3) {  // a grey label saved as colour: its ids in every channel
-    cv::Mat ch[3];
-    cv::split(label, ch);
-    if (cv::countNonZero(ch[0] != ch[1]) == 0 && cv::countNonZero(ch[1] != ch[2]) == 0) label = ch[0];
-  }
+  // A label saved as colour: its ids in every channel.
+  if (label.channels() == 3 && IsGreyInColour(label)) cv::extractChannel(label, label, 0);
   if (label.channels() != 1) {
     throw DataError("a label must be single-channel (ids 0 soil, 1 crop, 2 weed); this one has " +
                     std::to_string(label.channels()) + " channels");

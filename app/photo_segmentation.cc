@@ -79,7 +79,6 @@ cv::Mat ReadImage(const fs::path& p) {
   }
 }
 
-// A colour file whose three channels are equal is a grey (NIR) image.
 bool IsGreyInColour(const cv::Mat& bgr) {
   cv::Mat ch[3];
   cv::split(bgr, ch);

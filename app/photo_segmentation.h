@@ -61,6 +61,10 @@ void ForEachImage(const std::vector<std::filesystem::path>& inputs, const std::f
 // unsupported depth or channels).
 cv::Mat ReadImage(const std::filesystem::path& path);
 
+// A colour image whose three channels are equal is a grey (NIR) image
+// (or a label of ids) saved as colour.
+bool IsGreyInColour(const cv::Mat& bgr);
+
 // The segmenter options `plantscale segment` uses on this photograph, and in
 // `input` the image to give it (a colour file with equal channels becomes
 // grey). Throws DataError when the method does not suit the image.

@@ -79,12 +79,7 @@ Dataset LoadDataset(const TrainSegmenterRequest& r, std::ostream& log) {
     cv::Mat image, label;
     ReadLabelledPhoto(photo, image, label);
     for (int c = 0; c < vision::kPixelClassCount; ++c) d.pixels[c] += cv::countNonZero(label == c);
-    if (image.channels() == 3) {
-      cv::Mat ch[3];
-      cv::split(image, ch);
-      const bool grey = cv::countNonZero(ch[0] != ch[1]) == 0 && cv::countNonZero(ch[1] != ch[2]) == 0;
-      if (grey) image = ch[0];
-    }
+    if (image.channels() == 3 && IsGreyInColour(image)) cv::extractChannel(image, image, 0);
     d.colour = d.colour || image.channels() == 3;
     d.names.push_back(photo.image.filename().string());
     spec.channels = image.channels();  // resized as it is; grey made colour below in a colour set
