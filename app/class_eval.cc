@@ -134,6 +134,18 @@ nlohmann::json ClassEvaluationJson(const ClassEvaluation& e) {
   return j;
 }
 
+nlohmann::json ClassEvaluationJsonShape() {
+  ClassEvaluation e;
+  for (const char* method : {"model", "size_rule"}) {
+    ClassFigures f;
+    f.method = method;
+    f.confusion.assign(9, 0);
+    f.iou.assign(3, 0.0);
+    e.methods.push_back(f);
+  }
+  return ClassEvaluationJson(e);
+}
+
 void PrintClassEvaluation(const ClassEvaluation& e, std::ostream& out) {
   out << std::fixed << std::setprecision(3) << "classes on " << e.photographs << " photograph(s), "
       << std::setprecision(1) << static_cast<double>(e.pixels) / 1e6 << " Mpx\n"

@@ -47,6 +47,9 @@ struct ClassEvaluation {
 ClassEvaluation EvaluateClasses(const ClassEvalRequest& request, std::ostream& log);
 
 nlohmann::json ClassEvaluationJson(const ClassEvaluation& e);
+// The same for an empty evaluation of a model beside the size rule: the keys
+// `plantscale figures` may quote.
+nlohmann::json ClassEvaluationJsonShape();
 void PrintClassEvaluation(const ClassEvaluation& e, std::ostream& out);
 
 }  // namespace plantscale::app

@@ -51,9 +51,11 @@ void AddProfileOptions(CLI::App* cmd, ProfileArgs& a, bool calibration_error) {
                   "file; default: the preset's vehicle, by name)");
   if (calibration_error) {
     cmd->add_option("--calibration-error", a.calibration_error,
-                    "the engine's camera is off from the simulator's by these amounts, each "
-                    "sign drawn per seed: height_m=H,tilt_deg=T,roll_deg=R,focal=F (focal: a "
-                    "fraction); e.g. height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01");
+                    "the engine's camera is off from the simulator's by an error drawn per seed "
+                    "from a normal distribution with these standard deviations: "
+                    "height_m=H,tilt_deg=T,roll_deg=R,focal=F (focal: a fraction); e.g. "
+                    "height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01 (the JSON lists each "
+                    "seed's draw)");
   }
 }
 

@@ -3,6 +3,7 @@
 #include "app/archive_commands.h"
 #include "app/command_auth_commands.h"
 #include "app/export_commands.h"
+#include "app/figures_commands.h"
 #include "app/gateway_commands.h"
 #include "app/learning_commands.h"
 #include "app/log_eval_commands.h"
@@ -34,6 +35,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddCommandAuthCommands(registry_);
   AddLearningCommands(registry_);
   AddGatewayCommands(registry_);
+  AddFiguresCommands(registry_);
 }
 
 }  // namespace plantscale::app

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "app/config_loader.h"
+#include "engine/common/rng.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;
@@ -125,9 +126,10 @@ CropProfile LoadCropProfile(const std::string& name_or_path, const fs::path& con
   c.row_spacing_m = k.Number("row_spacing_m", 0.1, 2.0, "m");
   c.plant_spacing_m = k.Number("plant_spacing_m", 0.02, 2.0, "m");
   c.leaf_radius_m = k.Number("leaf_radius_m", 0.005, 0.5, "m");
-  c.leaf_radius_sd_fraction = k.Number("leaf_radius_sd_fraction", 0.0, 0.5, "");
+  c.leaf_radius_sd_fraction =
+      k.Number("leaf_radius_sd_fraction", 0.0, 0.5, "", kGrowerLeafRadiusSdFraction);
   c.leaf_height_m = k.Number("leaf_height_m", 0.0, 1.0, "m");
-  c.planter_sd_m = k.Number("planter_sd_m", 0.0, 0.1, "m");
+  c.planter_sd_m = k.Number("planter_sd_m", 0.0, 0.1, "m", kGrowerPlanterSdM);
   c.virtual_plane_height_m =
       k.Number("virtual_plane_height_m", 0.0, 1.0, "m", 0.9 * c.leaf_height_m);
   k.Finish();
@@ -327,7 +329,7 @@ CalibrationError ParseCalibrationError(const std::string& text, const std::strin
       if (!std::isfinite(v) || v < 0.0 || v > high) {
         throw ConfigError(where, key,
                           "is " + value + ", expected 0 to " + Number(high) + " " + unit +
-                              " (an amount: its sign is drawn per seed)");
+                              " (a standard deviation: the error is drawn per seed)");
       }
       return v;
     };
@@ -346,14 +348,14 @@ CalibrationError ParseCalibrationError(const std::string& text, const std::strin
   return e;
 }
 
-CalibrationError SignedCalibrationError(const CalibrationError& a, uint64_t seed) {
-  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ULL + 0x33);
-  const auto sign = [&rng] { return (rng() & 1U) ? 1.0 : -1.0; };
+CalibrationError DrawnCalibrationError(const CalibrationError& sds, uint64_t seed) {
+  // The stream label spells "calib" so no other seeded draw shares it.
+  Rng rng = Rng::Derived(seed, 0x63616C6962ULL);
   CalibrationError e;
-  e.height_m = sign() * a.height_m;
-  e.tilt_deg = sign() * a.tilt_deg;
-  e.roll_deg = sign() * a.roll_deg;
-  e.focal = sign() * a.focal;
+  e.height_m = rng.Normal(0.0, sds.height_m);
+  e.tilt_deg = rng.Normal(0.0, sds.tilt_deg);
+  e.roll_deg = rng.Normal(0.0, sds.roll_deg);
+  e.focal = rng.Normal(0.0, sds.focal);
   return e;
 }
 

@@ -37,6 +37,13 @@ struct CropProfile {
   double virtual_plane_height_m = 0.0;  // the camera's virtual ground plane (thesis §2.3.8)
 };
 
+// The spreads a grower seldom measures, when the crop profile leaves them
+// out: a transplanter's plants within 2 cm of their place (lean included),
+// sizes within 20 % of the mean. Generous on purpose: a filter that
+// believes a tighter spread than the field has is overconfident.
+inline constexpr double kGrowerPlanterSdM = 0.02;
+inline constexpr double kGrowerLeafRadiusSdFraction = 0.2;
+
 // A vehicle: its wheels, camera, bar and suspension.
 struct VehicleProfile {
   std::string name;
@@ -46,10 +53,12 @@ struct VehicleProfile {
   geometry::CameraOptions camera;      // as calibrated (virtual plane from the crop)
   double valve_latency_s = 0.0;
   treatment::SprayBarOptions bar;      // nozzle layout and latency
-  // Camera bounce (suspension); an unknown vehicle's defaults when absent.
-  double pitch_sd_rad = 0.3 * 3.14159265358979323846 / 180.0;
-  double roll_sd_rad = 0.2 * 3.14159265358979323846 / 180.0;
-  double height_sd_m = 0.004;
+  // Camera bounce (suspension); an unknown vehicle's defaults when absent:
+  // a slow vehicle on a tilled bed, generous rather than tight (a grower
+  // seldom measures them).
+  double pitch_sd_rad = 0.5 * 3.14159265358979323846 / 180.0;
+  double roll_sd_rad = 0.3 * 3.14159265358979323846 / 180.0;
+  double height_sd_m = 0.005;
   double bounce_correlation_s = 0.25;
   bool suspension_given = false;       // false: the defaults above
   // How far the camera's calibration may be off (sd): what a field
@@ -95,7 +104,9 @@ std::vector<std::string> ProfileWarnings(const Profiles& profiles);
 void PrintProfileWarnings(const Profiles& profiles, std::ostream& err);
 
 // A calibration a field calibration leaves: the engine's camera is off from
-// the true one by these amounts, each with a sign drawn per seed.
+// the true one. Given as standard deviations (`--calibration-error`), drawn
+// per seed from a normal distribution (DrawnCalibrationError); the drawn
+// values use the same type.
 struct CalibrationError {
   double height_m = 0.0;
   double tilt_deg = 0.0;
@@ -103,12 +114,14 @@ struct CalibrationError {
   double focal = 0.0;  // fraction of the focal length
   bool any() const { return height_m != 0.0 || tilt_deg != 0.0 || roll_deg != 0.0 || focal != 0.0; }
 };
-// "height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01" (any subset; values
+// "height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01" (any subset; sds
 // >= 0). Throws ConfigError naming `where` (the option) and the key.
 CalibrationError ParseCalibrationError(const std::string& text, const std::string& where);
-// The signed error of run `seed`: each amount with its own sign, drawn from
-// the seed (the same seed, the same signs).
-CalibrationError SignedCalibrationError(const CalibrationError& amounts, uint64_t seed);
+// The error of run `seed`: each parameter drawn from N(0, sd²) with a stream
+// of its own derived from the seed (the same seed, the same error, on every
+// platform). A fixed ±1 sd would flatter the consistency figures: a field
+// calibration is sometimes off by two sd.
+CalibrationError DrawnCalibrationError(const CalibrationError& sds, uint64_t seed);
 geometry::CameraOptions ApplyCalibrationError(geometry::CameraOptions camera,
                                               const CalibrationError& signed_error);
 

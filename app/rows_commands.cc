@@ -182,6 +182,29 @@ struct RowsEvalArgs {
   bool json = false;
 };
 
+}  // namespace
+
+nlohmann::json PhotoRowsJson(const PhotoRowsEvaluation& e, bool model) {
+  nlohmann::json per_image = nlohmann::json::array();
+  for (const PhotoRowScore& s : e.per_image) {
+    per_image.push_back({{"image", s.image},
+                         {"crda", s.crda},
+                         {"image_rows_scored", s.image_rows_scored},
+                         {"rows_found", s.rows_found}});
+  }
+  return {{"images", e.images},
+          {"images_with_rows", e.images_with_rows},
+          {"image_rows_scored", e.image_rows_scored},
+          {"crda_mean", e.crda_mean},
+          {"per_image", per_image},
+          {"mask", model ? "model crop class" : "excess green"},
+          {"source", "labelled photographs"}};
+}
+
+nlohmann::json PhotoRowsJsonShape() { return PhotoRowsJson(PhotoRowsEvaluation{}, true); }
+
+namespace {
+
 int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
   if (!a.images.empty()) {
     const fs::path images = a.images;
@@ -201,22 +224,7 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
       std::cerr << "plantscale evaluate rows: error: " << err << '\n';
     }
     if (a.json) {
-      nlohmann::json per_image = nlohmann::json::array();
-      for (const PhotoRowScore& s : e.per_image) {
-        per_image.push_back({{"image", s.image},
-                             {"crda", s.crda},
-                             {"image_rows_scored", s.image_rows_scored},
-                             {"rows_found", s.rows_found}});
-      }
-      std::cout << nlohmann::json{{"images", e.images},
-                                  {"images_with_rows", e.images_with_rows},
-                                  {"image_rows_scored", e.image_rows_scored},
-                                  {"crda_mean", e.crda_mean},
-                                  {"per_image", per_image},
-                                  {"mask", a.model.empty() ? "excess green" : "model crop class"},
-                                  {"source", "labelled photographs"}}
-                       .dump(2)
-                << '\n';
+      std::cout << PhotoRowsJson(e, !a.model.empty()).dump(2) << '\n';
     } else {
       std::cout << "labelled photographs: " << e.images << " images (" << e.images_with_rows
                 << " with rows), " << e.image_rows_scored << " image rows scored\n"

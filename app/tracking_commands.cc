@@ -1,5 +1,6 @@
 #include "app/tracking_commands.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -46,6 +47,23 @@ nlohmann::json CalibrationErrorJson(const CalibrationError& c) {
           {"focal", c.focal}};
 }
 
+nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const TrackingRun& r : runs) {
+    out.push_back({{"seed", r.seed},
+                   {"calibration_error", CalibrationErrorJson(r.calibration_error)},
+                   {"started", r.started},
+                   {"frames_scored", r.frames},
+                   {"frames_lost", r.frames_lost},
+                   {"losses", r.losses},
+                   {"lateral_rmse_m", std::isfinite(r.lateral_rmse_m)
+                                          ? nlohmann::json(r.lateral_rmse_m)
+                                          : nlohmann::json(nullptr)},
+                   {"nees_in_bounds_fraction", r.nees_in_bounds_fraction}});
+  }
+  return out;
+}
+
 nlohmann::json MetricsJson(const TrackingMetrics& m) {
   return {
       {"lateral_rmse_m", m.lateral_rmse_m},
@@ -67,6 +85,9 @@ nlohmann::json MetricsJson(const TrackingMetrics& m) {
       {"init_frames_p95", m.init_frames_p95},
       {"init_trials", m.init_trials},
       {"frames_scored", m.frames},
+      {"frames_lost", m.frames_lost},
+      {"runs_not_started", m.runs_not_started},
+      {"per_seed", RunsJson(m.runs)},
       {"frames_tracking", m.frames_tracking},
       {"updates", m.updates},
       {"losses", m.losses},
@@ -246,6 +267,17 @@ int EvaluateTrackingCommand(const TrackingArgs& a, const GlobalOptions& global) 
 }
 
 }  // namespace
+
+nlohmann::json TrackingJsonShape() {
+  TrackingArgs a;
+  a.reference = "plant-lines";
+  TrackingEvalOptions o;
+  o.profiles = Profiles{};
+  o.odometry_fault.kind = OdometryFaultKind::kStop;
+  TrackingEvaluation e;
+  e.thesis = TrackingMetrics{};
+  return TrackingJson(a, o, e, GridLateral{});
+}
 
 void AddTrackingCommands(CommandRegistry& registry) {
   const GlobalOptions& global = registry.global();

@@ -52,6 +52,7 @@ struct Scorer {
   const TrackingEvalOptions& options;
   std::ostream* trace = nullptr;  // ours only
   uint64_t seed = 0;
+  CalibrationError calibration_error;  // the seed's draw
   std::span<const tracking::Feature> features;  // the last frame's, as the tracker measured them
   bool ever_tracked = false;
   double init_distance_m = 0.0;
@@ -60,6 +61,7 @@ struct Scorer {
   double lat2 = 0.0, lat = 0.0, bear2 = 0.0, sd = 0.0, nees = 0.0;
   Eigen::Vector3d normalised2 = Eigen::Vector3d::Zero();
   int scored = 0, nees_in = 0;
+  int lost_scored = 0;  // of `scored`, frames on which the grid was lost
   double row2 = 0.0, plant2 = 0.0, row1 = 0.0, plant1 = 0.0, fwd = 0.0;
   int spacing_scored = 0;
   int tracking_frames = 0, updates = 0, losses = 0;
@@ -128,11 +130,14 @@ struct Scorer {
     }
     if (was_tracking && tracker.mode() == tracking::TrackerMode::kLost) ++losses;
     ScoreFault(frame, was_tracking, est);
-    if (tracker.mode() != tracking::TrackerMode::kTracking) return;
+    const double past = frame.truth.distance_m - init_distance_m;
+    if (tracker.mode() != tracking::TrackerMode::kTracking) {
+      if (ever_tracked && past >= options.settle_m) ScoreLost(est, truth);
+      return;
+    }
     ++tracking_frames;
     if (r.updated) ++updates;
     matched += r.matched;
-    const double past = frame.truth.distance_m - init_distance_m;
     if (past < options.settle_m) return;
     if (lines != nullptr) ScoreLines(frame, f.state);
     const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
@@ -162,6 +167,23 @@ struct Scorer {
       plant2 += std::pow(est.plant_spacing_m - truth.plant_spacing_m, 2);
       ++spacing_scored;
     }
+  }
+
+  // A frame after the first start on which the grid is lost (or starting
+  // again): every run counts, so the estimate the tracker holds (dead
+  // reckoned from its last update) is scored until it recovers, and the
+  // frame is outside the NEES bounds (the filter no longer vouches for it).
+  // Its σ and NEES stay out of the means of the filter's own figures.
+  void ScoreLost(const geometry::GridState& est, const geometry::GridState& truth) {
+    const double e_lat = est.offset_m - truth.offset_m;
+    const double e_fwd = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
+    const double e_bear = est.bearing_rad - truth.bearing_rad;
+    lat += e_lat;
+    fwd += e_fwd;
+    lat2 += e_lat * e_lat;
+    bear2 += e_bear * e_bear;
+    ++scored;
+    ++lost_scored;
   }
 
   // Lines the vehicle's ground point passed since the last frame scored:
@@ -202,9 +224,14 @@ struct InitProbe {
       : camera(c), tracker(camera, o) {}
 };
 
+double run_lateral_rmse_or_nan(const Scorer& s) {
+  return s.scored > 0 ? std::sqrt(s.lat2 / s.scored) : std::nan("");
+}
+
 void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMetrics& m,
                 std::vector<double>& init_frames, int& init_trials, int& init_successes) {
   m.frames += s.scored;
+  m.frames_lost += s.lost_scored;
   m.frames_tracking += s.tracking_frames;
   m.updates += s.updates;
   m.losses += s.losses;
@@ -222,6 +249,17 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   m.plant_spacing_error_m += s.plant2;
   m.mean_matched += s.matched;
   m.run_lateral_rmse_m.push_back(s.scored > 0 ? std::sqrt(s.lat2 / s.scored) : std::nan(""));
+  TrackingRun run;
+  run.seed = s.seed;
+  run.calibration_error = s.calibration_error;
+  run.started = s.ever_tracked;
+  run.frames = s.scored;
+  run.frames_lost = s.lost_scored;
+  run.losses = s.losses;
+  run.lateral_rmse_m = run_lateral_rmse_or_nan(s);
+  run.nees_in_bounds_fraction = s.scored > 0 ? static_cast<double>(s.nees_in) / s.scored : 0.0;
+  m.runs.push_back(run);
+  m.runs_not_started += s.ever_tracked ? 0 : 1;
   m.plant_lines_scored += s.lines_scored;
   m.plant_line_lateral_rmse_m += s.line_lat2;  // sums until Finish
   m.plant_line_lateral_mean_m += s.line_lat;
@@ -246,6 +284,8 @@ void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
                            const std::vector<double>& init_frames, int init_trials,
                            int init_successes) {
   const double n = std::max(1, m.frames);
+  // The filter's own figures (σ, NEES) over the frames it vouched for.
+  const double vouched = std::max(1, m.frames - m.frames_lost);
   m.lateral_rmse_m = std::sqrt(m.lateral_rmse_m / n);
   const double lines = std::max(1, m.plant_lines_scored);
   m.plant_line_lateral_rmse_m = std::sqrt(m.plant_line_lateral_rmse_m / lines);
@@ -255,9 +295,9 @@ void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
   m.row_spacing_mean_error_m /= std::max(1, spacing_frames);
   m.plant_spacing_mean_error_m /= std::max(1, spacing_frames);
   m.bearing_rmse_deg = std::sqrt(m.bearing_rmse_deg / n) * kDeg;
-  m.lateral_sd_mean_m /= n;
-  m.nees_mean /= n;
-  m.normalised_error2 /= n;
+  m.lateral_sd_mean_m /= vouched;
+  m.nees_mean /= vouched;
+  m.normalised_error2 /= vouched;
   m.nees_in_bounds_fraction /= n;
   m.row_spacing_error_m = std::sqrt(m.row_spacing_error_m / std::max(1, spacing_frames));
   m.plant_spacing_error_m = std::sqrt(m.plant_spacing_error_m / std::max(1, spacing_frames));
@@ -316,8 +356,8 @@ TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t see
   if (!options.profiles) throw InvalidOptionsError("evaluate tracking", {{"profiles", "required"}});
   const Profiles& p = *options.profiles;
   TrackingEngine e;
-  e.camera = ApplyCalibrationError(EngineCamera(p),
-                                   SignedCalibrationError(options.calibration_error, seed));
+  e.calibration_error = DrawnCalibrationError(options.calibration_error, seed);
+  e.camera = ApplyCalibrationError(EngineCamera(p), e.calibration_error);
   e.ours = ProductTrackerOptions(p);
   e.ours.row_spacing_m += options.spacing_offset_m;
   e.ours.plant_spacing_m += options.spacing_offset_m;
@@ -431,12 +471,15 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
     ours.lines = &plant_lines;
     ours.trace = options.trace;
     ours.seed = so.seed;
+    ours.calibration_error = engine.calibration_error;
     if (options.trace && k == 0) *options.trace << kTraceHeader;
     std::optional<Scorer> thesis;
     if (options.baseline_thesis) {
       thesis.emplace(engine.camera, engine.thesis, vision::ThesisSegmenterOptions(), options,
                      false);
       thesis->lines = &plant_lines;
+      thesis->seed = so.seed;
+      thesis->calibration_error = engine.calibration_error;
     }
     InitProbe probe(engine.camera, engine.ours);
     probe.next_at_m = options.init_probe_interval_m;

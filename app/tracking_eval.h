@@ -53,13 +53,30 @@ struct TrackingEvalOptions {
 // Built from options.profiles and calibration_error only, never from
 // options.sim.
 struct TrackingEngine {
+  CalibrationError calibration_error;  // the seed's draw
   geometry::CameraOptions camera;
   tracking::TrackerOptions ours, thesis;
 };
 TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t seed);
 
+// One run (seed) of one tracker: every run counts, a run that never
+// started or lost the grid included.
+struct TrackingRun {
+  uint64_t seed = 0;
+  CalibrationError calibration_error;  // drawn for this seed
+  bool started = false;                // the grid was ever tracked
+  int frames = 0, frames_lost = 0, losses = 0;
+  double lateral_rmse_m = 0.0;  // NaN when no frame was scored
+  double nees_in_bounds_fraction = 0.0;
+};
+
 struct TrackingMetrics {
-  int frames = 0;           // frames scored (tracking, past settle_m)
+  // Frames scored: every frame past settle_m after the run's first start,
+  // those on which the grid was lost (until it recovers) included with the
+  // error of the estimate held, outside the NEES bounds.
+  int frames = 0;
+  int frames_lost = 0;      // of `frames`
+  int runs_not_started = 0; // runs in which the grid was never tracked
   int frames_tracking = 0;  // frames in which the filter was tracking
   int updates = 0;
   int losses = 0;
@@ -82,6 +99,7 @@ struct TrackingMetrics {
   int init_trials = 0;
   double mean_matched = 0.0;
   std::vector<double> run_lateral_rmse_m;
+  std::vector<TrackingRun> runs;  // per seed, in seed order
   std::vector<double> run_forward_drift_cm_per_m;
   // The thesis's field protocol (§8.1, fig. 8.1; `--reference plant-lines`):
   // the offset scored once at each line of plants the vehicle passes, against

@@ -286,6 +286,14 @@ nlohmann::json TreatmentJson(const TreatmentEvaluation& e, const TreatmentEvalOp
   j["crop"] = o.profiles->crop.name;
   j["vehicle"] = o.profiles->vehicle.name;
   j["calibration_error"] = CalibrationErrorJson(o.calibration_error);
+  nlohmann::json drawn = nlohmann::json::array();
+  for (int k = 0; k < e.seeds; ++k) {
+    const uint64_t seed = o.sim.seed + static_cast<uint64_t>(k);
+    drawn.push_back({{"seed", seed},
+                     {"calibration_error",
+                      CalibrationErrorJson(DrawnCalibrationError(o.calibration_error, seed))}});
+  }
+  j["per_seed"] = drawn;
   j["seeds"] = e.seeds;
   j["mode"] = e.mode;
   j["distance_m"] = e.distance_m;
@@ -319,6 +327,21 @@ nlohmann::json TreatmentJson(const TreatmentEvaluation& e, const TreatmentEvalOp
   }
   return j;
 }
+
+}  // namespace
+
+nlohmann::json TreatmentJsonShape() {
+  TreatmentEvalOptions o;
+  o.profiles = Profiles{};
+  o.odometry_fault.kind = OdometryFaultKind::kStop;
+  TreatmentEvaluation e;
+  e.thesis = TreatmentMetrics{};
+  e.fault_stretch = TreatmentMetrics{};
+  e.mrroc = classify::Mrroc{};
+  return TreatmentJson(e, o);
+}
+
+namespace {
 
 int EvaluateTreatmentCommand(const TreatmentArgs& a, const GlobalOptions& global) {
   const TreatmentEvalOptions o = TreatmentEvalOptionsFrom(a, global);

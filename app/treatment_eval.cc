@@ -324,7 +324,7 @@ treatment::TreatmentOptions ThesisTreatmentOptions(const std::string& preset,
 geometry::CameraOptions TreatmentEngineCamera(const TreatmentEvalOptions& options, uint64_t seed) {
   if (!options.profiles) throw InvalidOptionsError("evaluate treatment", {{"profiles", "required"}});
   return ApplyCalibrationError(EngineCamera(*options.profiles),
-                               SignedCalibrationError(options.calibration_error, seed));
+                               DrawnCalibrationError(options.calibration_error, seed));
 }
 
 namespace {

@@ -1,0 +1,11 @@
+#pragma once
+// `plantscale figures`: every quoted figure from docs/results/figures.yaml
+// (app/figures.h, docs/cli/figures.md).
+
+#include "app/command_registry.h"
+
+namespace plantscale::app {
+
+void AddFiguresCommands(CommandRegistry& registry);
+
+}  // namespace plantscale::app
