@@ -766,13 +766,22 @@ std::string CellText(const nlohmann::json& fj, const Manifest& m, const std::str
   return text;
 }
 
+// A table cell's text with its pipes escaped ("|x| ≤ 3 mm" would end the cell).
+std::string Cell(const std::string& text) {
+  std::string out;
+  for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+  return out;
+}
+
 std::string TableText(const nlohmann::json& fj, const Manifest& m, const ManifestTable& t) {
-  std::string out = "| " + Join(t.header, " | ") + " |\n|";
+  std::string out = "|";
+  for (const std::string& h : t.header) out += " " + Cell(h) + " |";
+  out += "\n|";
   for (size_t i = 0; i < t.header.size(); ++i) out += "---|";
   out += "\n";
   for (const ManifestTable::Row& row : t.rows) {
-    out += "| " + row.label;
-    for (const std::string& c : row.cells) out += " | " + CellText(fj, m, c);
+    out += "| " + Cell(row.label);
+    for (const std::string& c : row.cells) out += " | " + Cell(CellText(fj, m, c));
     out += " |\n";
   }
   return out;
