@@ -517,7 +517,7 @@ std::map<std::string, RunOutcome> RunFigures(const Manifest& m,
     const auto it = running.find(pid);
     if (it == running.end()) continue;
     RunOutcome o = Finish(it->second, status);
-    log << (r.progress ? "\n" : "") << "figures: " << it->second.run->name << ": "
+    log << (r.progress && ::isatty(STDERR_FILENO) ? "\n" : "") << "figures: " << it->second.run->name << ": "
         << (o.ok ? "done" : "FAILED, " + o.error) << " in " << std::fixed << std::setprecision(0)
         << o.seconds << " s\n";
     outcomes[it->second.run->name] = std::move(o);

@@ -125,8 +125,11 @@ int FiguresCommand(const FiguresArgs& a, const GlobalOptions& global) {
   std::cerr << "plantscale figures: " << runs.size() << " run(s) on seeds " << m.first_seed << "–"
             << m.first_seed + static_cast<uint64_t>(m.seeds) - 1 << ", " << r.jobs
             << " at a time; outputs kept in " << r.work_dir.string() << '\n';
+  // The commit the runs are made from: read before they start, so that
+  // editing the tree while they run does not change what is recorded.
+  const Provenance provenance = CurrentProvenance(repository);
   const std::map<std::string, RunOutcome> outcomes = RunFigures(m, runs, r, std::cerr);
-  const nlohmann::json fj = FiguresJson(m, outcomes, previous, CurrentProvenance(repository));
+  const nlohmann::json fj = FiguresJson(m, outcomes, previous, provenance);
   WriteText(json_path, fj.dump(2) + "\n");
   RenderDocuments(repository, m, fj);
   int failed = 0, missed = 0;

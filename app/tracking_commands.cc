@@ -47,6 +47,8 @@ nlohmann::json CalibrationErrorJson(const CalibrationError& c) {
           {"focal", c.focal}};
 }
 
+nlohmann::json Finite(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
 nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
   nlohmann::json out = nlohmann::json::array();
   for (const TrackingRun& r : runs) {
@@ -56,9 +58,7 @@ nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
                    {"frames_scored", r.frames},
                    {"frames_lost", r.frames_lost},
                    {"losses", r.losses},
-                   {"lateral_rmse_m", std::isfinite(r.lateral_rmse_m)
-                                          ? nlohmann::json(r.lateral_rmse_m)
-                                          : nlohmann::json(nullptr)},
+                   {"lateral_rmse_m", Finite(r.lateral_rmse_m)},
                    {"nees_in_bounds_fraction", r.nees_in_bounds_fraction}});
   }
   return out;
@@ -88,6 +88,11 @@ nlohmann::json MetricsJson(const TrackingMetrics& m) {
       {"frames_lost", m.frames_lost},
       {"runs_not_started", m.runs_not_started},
       {"per_seed", RunsJson(m.runs)},
+      {"planter_spread",
+       {{"measured_across_m", Finite(m.plant_spread.across_sd_m())},
+        {"measured_along_m", Finite(m.plant_spread.along_sd_m())},
+        {"plants_across", m.plant_spread.across},
+        {"plants_along", m.plant_spread.along}}},
       {"frames_tracking", m.frames_tracking},
       {"updates", m.updates},
       {"losses", m.losses},
@@ -199,6 +204,8 @@ nlohmann::json TrackingJson(const TrackingArgs& a, const TrackingEvalOptions& o,
   j["seeds"] = e.seeds;
   j["distance_m"] = e.distance_m;
   j["spacing_offset_m"] = o.spacing_offset_m;
+  j["planter_spread"]["profile_m"] = e.planter_sd_profile_m;
+  j["planter_spread"]["generator_m"] = e.planter_sd_generator_m;
   j["crop"] = o.profiles->crop.name;
   j["vehicle"] = o.profiles->vehicle.name;
   j["calibration_error"] = CalibrationErrorJson(o.calibration_error);

@@ -276,6 +276,11 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   m.fault_lateral_rmse_m += s.fault_lat2;  // sums until Finish
   m.fault_forward_rmse_m += s.fault_fwd2;
   m.camera_substitutions += s.pipe.camera_substitutions();
+  const tracking::GridTracker::PlantSpread& spread = s.tracker.measured_plant_spread();
+  m.plant_spread.across_sum2 += spread.across_sum2;
+  m.plant_spread.along_sum2 += spread.along_sum2;
+  m.plant_spread.across += spread.across;
+  m.plant_spread.along += spread.along;
 }
 
 }  // namespace
@@ -457,6 +462,9 @@ TrackingEvaluation EvaluateTracking(const TrackingEvalOptions& options) {
   TrackingEvaluation result;
   result.preset = options.sim.preset;
   result.seeds = options.seeds;
+  result.planter_sd_profile_m = options.profiles->crop.planter_sd_m;
+  result.planter_sd_generator_m =
+      std::hypot(options.sim.field.planting_jitter_m, options.sim.field.crop_lean_sd_m);
   const vision::SegmenterOptions ours_seg;
   ChainTally ours_tally, thesis_tally;
   for (int k = 0; k < options.seeds; ++k) {

@@ -100,6 +100,9 @@ struct TrackingMetrics {
   double mean_matched = 0.0;
   std::vector<double> run_lateral_rmse_m;
   std::vector<TrackingRun> runs;  // per seed, in seed order
+  // The planter's spread the tracker measured over every run
+  // (GridTracker::measured_plant_spread, pooled).
+  tracking::GridTracker::PlantSpread plant_spread;
   std::vector<double> run_forward_drift_cm_per_m;
   // The thesis's field protocol (§8.1, fig. 8.1; `--reference plant-lines`):
   // the offset scored once at each line of plants the vehicle passes, against
@@ -124,6 +127,10 @@ struct TrackingEvaluation {
   std::string preset;
   int seeds = 0;
   double distance_m = 0.0;  // driven per run
+  // The planter's spread: what the crop profile told the engine, and the
+  // simulator's own (placement jitter and lean; scoring only).
+  double planter_sd_profile_m = 0.0;
+  double planter_sd_generator_m = 0.0;
   TrackingMetrics ours;
   std::optional<TrackingMetrics> thesis;
 };

@@ -574,6 +574,28 @@ int GridTracker::AddOffset(int m, int n) {
   return old;
 }
 
+double GridTracker::PlantSpread::across_sd_m() const {
+  return across > 0 ? std::sqrt(across_sum2 / across) : std::nan("");
+}
+
+double GridTracker::PlantSpread::along_sd_m() const {
+  return along > 0 ? std::sqrt(along_sum2 / along) : std::nan("");
+}
+
+void GridTracker::AddToSpread(const PlantOffset& o) {
+  const double prior = options_.plant_offset_sd_m * options_.plant_offset_sd_m;
+  const int i = o.index;
+  if (!std::isfinite(x_(i)) || !std::isfinite(x_(i + 1))) return;
+  if (p_(i, i) < 0.5 * prior) {
+    spread_.across_sum2 += x_(i) * x_(i) + p_(i, i);
+    ++spread_.across;
+  }
+  if (p_(i + 1, i + 1) < 0.5 * prior) {
+    spread_.along_sum2 += x_(i + 1) * x_(i + 1) + p_(i + 1, i + 1);
+    ++spread_.along;
+  }
+}
+
 void GridTracker::DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& in_view) {
   std::vector<int> keep;
   for (int i = 0; i < head(); ++i) keep.push_back(i);
@@ -582,7 +604,10 @@ void GridTracker::DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& i
     const bool visible = std::any_of(in_view.begin(), in_view.end(), [&](const auto& g) {
       return g.m == o.m && g.n == o.n;
     });
-    if (!visible) continue;  // marginalised: its rows and columns go
+    if (!visible) {  // marginalised: its rows and columns go
+      AddToSpread(o);
+      continue;
+    }
     kept.push_back({o.m, o.n, static_cast<int>(keep.size())});
     for (int i = 0; i < PlantStates(); ++i) keep.push_back(o.index + i);
   }

@@ -337,6 +337,19 @@ class GridTracker {
   // frame, taken out). The filter is not changed.
   GridAhead PredictAhead(double distance_m, double step_m) const;
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
+  // The planter's spread as the plants show it (the crop profile's
+  // planter_sd_m is a grower's guess): when a plant leaves the view, its
+  // offset's estimate δ̂ and variance P add δ̂² + P, the expected square of
+  // its true offset (EM's estimate of the prior it was drawn from), on each
+  // axis the frames pinned (P below half the prior). Over the tracker's
+  // life, starts and losses included.
+  struct PlantSpread {
+    double across_sum2 = 0.0, along_sum2 = 0.0;
+    int across = 0, along = 0;
+    double across_sd_m() const;  // NaN before any plant
+    double along_sd_m() const;
+  };
+  const PlantSpread& measured_plant_spread() const { return spread_; }
   // The calibration states (pitch, roll, height, focal) and their
   // covariance; zero when not modelled (TrackerOptions::CalibrationStates).
   Eigen::Vector4d calibration_estimate() const;
@@ -484,6 +497,7 @@ class GridTracker {
   void ObserveHeightsFromSize(std::span<const Feature> features,
                               std::span<const SizeMatch> matches);
   void DropOffsetsOutOfView(const std::vector<geometry::GridPlant>& in_view);
+  void AddToSpread(const PlantOffset& o);  // a plant leaving the view (measured_plant_spread)
   int OffsetIndex(int m, int n) const;
   int AddOffset(int m, int n);
   void CheckLost(int64_t utime, FrameReport& report);
@@ -497,6 +511,7 @@ class GridTracker {
   Eigen::VectorXd x_;  // core state, then (δx, δy) per plant offset
   Eigen::MatrixXd p_;
   std::vector<PlantOffset> offsets_;
+  PlantSpread spread_;
   std::vector<bool> skipped_;  // Update scratch: feature j is not associated
   std::vector<bool> merged_;   // ... and j's box holds two or more predictions
   // Per band of image rows: running mean equivalent radius √(A/π) of
