@@ -338,11 +338,11 @@ class GridTracker {
   GridAhead PredictAhead(double distance_m, double step_m) const;
   int plant_offset_states() const { return static_cast<int>(offsets_.size()); }
   // The planter's spread as the plants show it (the crop profile's
-  // planter_sd_m is a grower's guess): when a plant leaves the view, its
-  // offset's estimate δ̂ and variance P add δ̂² + P, the expected square of
-  // its true offset (EM's estimate of the prior it was drawn from), on each
-  // axis the frames pinned (P below half the prior). Over the tracker's
-  // life, starts and losses included.
+  // planter_sd_m is a grower's guess): when a plant leaves the view, the
+  // square of its offset's estimate on each axis the frames pinned (its
+  // variance below half the prior's); the root mean square over the
+  // tracker's life, starts and losses included (grid_tracker.cc says why
+  // this estimator).
   struct PlantSpread {
     double across_sum2 = 0.0, along_sum2 = 0.0;
     int across = 0, along = 0;
