@@ -86,6 +86,7 @@ int FiguresCommand(const FiguresArgs& a, const GlobalOptions& global) {
   const Manifest m = ReadManifest(manifest_path);
   const fs::path config_dir = global.ConfigDir();
   ValidateManifest(m, config_dir);
+  const std::vector<const ManifestRun*> runs = SelectRuns(m, a.only);  // --only's names, checked
   const fs::path repository = RepositoryOf(manifest_path);
   const fs::path json_path = FiguresJsonPath(manifest_path);
   if (a.list) {
@@ -121,7 +122,6 @@ int FiguresCommand(const FiguresArgs& a, const GlobalOptions& global) {
   const long cpus = ::sysconf(_SC_NPROCESSORS_ONLN);
   r.jobs = a.jobs > 0 ? a.jobs : static_cast<int>(cpus > 0 ? cpus : 1);
   r.progress = !a.quiet;
-  const std::vector<const ManifestRun*> runs = SelectRuns(m, a.only);
   std::cerr << "plantscale figures: " << runs.size() << " run(s) on seeds " << m.first_seed << "–"
             << m.first_seed + static_cast<uint64_t>(m.seeds) - 1 << ", " << r.jobs
             << " at a time; outputs kept in " << r.work_dir.string() << '\n';
