@@ -5,6 +5,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "app/config_loader.h"
@@ -57,9 +58,15 @@ void ParseListen(const std::string& listen, gw::GatewayOptions& o) {
   if (o.port < 1 || o.port > 65535) bad("the port must be a number 1-65535");
 }
 
-int RunGateway(const GatewayArgs& a) {
+gw::GatewayOptions ServeOptions(const GatewayServeArgs& a, const char* listen_flag) {
   gw::GatewayOptions o;
-  ParseListen(a.listen, o);
+  try {
+    ParseListen(a.listen, o);
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    if (std::string(listen_flag) == "--listen") throw;
+    throw ConfigError("command line", listen_flag, what.substr(what.find("'")));
+  }
   o.insecure_loopback = a.insecure_loopback;
   o.cert_file = a.cert;
   o.key_file = a.key;
@@ -70,8 +77,8 @@ int RunGateway(const GatewayArgs& a) {
   }
   const OptionErrors errors = o.Validate();
   if (!errors.empty()) {
-    std::map<std::string, std::string> flag = {{"host", "--listen"},
-                                               {"port", "--listen"},
+    std::map<std::string, std::string> flag = {{"host", listen_flag},
+                                               {"port", listen_flag},
                                                {"cert_file", "--cert"},
                                                {"key_file", "--key"},
                                                {"insecure_loopback", "--insecure-loopback"},
@@ -80,16 +87,21 @@ int RunGateway(const GatewayArgs& a) {
     throw ConfigError("command line", it != flag.end() ? it->second : errors[0].key,
                       errors[0].reason);
   }
-  gw::Users users;
+  return o;
+}
+
+gw::Users ServeUsers(const GatewayServeArgs& a) {
   try {
-    users = gw::ReadUsers(a.users);
+    return gw::ReadUsers(a.users);
   } catch (const gw::UsersError& e) {
     throw ConfigError("command line", "--users", e.what());
   }
-  tm::LcmTransport lcm(a.lcm_url);  // TransportError: exit 1 naming the URL
-  std::unique_ptr<gw::Gateway> gateway;
+}
+
+std::unique_ptr<gw::Gateway> MakeGateway(const gw::GatewayOptions& o, const gw::Users& users,
+                                         tm::Transport& transport) {
   try {
-    gateway = std::make_unique<gw::Gateway>(o, users, lcm);
+    return std::make_unique<gw::Gateway>(o, users, transport);
   } catch (const gw::GatewayError& e) {
     // A certificate or key that cannot be used is bad input; an address
     // that cannot be bound is not.
@@ -97,6 +109,14 @@ int RunGateway(const GatewayArgs& a) {
     if (what.rfind("cannot listen", 0) == 0) throw;
     throw ConfigError("command line", what.rfind("key", 0) == 0 ? "--key" : "--cert", what);
   }
+}
+
+int RunGateway(const GatewayArgs& a) {
+  const GatewayServeArgs serve{a.listen, a.cert, a.key, a.users, a.insecure_loopback, a.max_clients};
+  const gw::GatewayOptions o = ServeOptions(serve, "--listen");
+  const gw::Users users = ServeUsers(serve);
+  tm::LcmTransport lcm(a.lcm_url);  // TransportError: exit 1 naming the URL
+  std::unique_ptr<gw::Gateway> gateway = MakeGateway(o, users, lcm);
   gateway->Start();
   const std::string scheme = a.insecure_loopback ? "ws" : "wss";
   std::cout << "gateway: " << scheme << "://" << o.host << ":" << gateway->port() << "/ for "
@@ -114,14 +134,7 @@ int RunGateway(const GatewayArgs& a) {
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   gateway->Stop();
-  const gw::GatewayStats s = gateway->stats();
-  std::cout << "gateway: stopped; " << s.connections << " connections, " << s.refused
-            << " refused (" << s.refusal_events << " refusal events), " << s.lcm_messages
-            << " LCM messages (" << s.lcm_rejected << " rejected), " << s.commands_forwarded
-            << " commands forwarded, " << s.commands_refused << " refused, " << s.protocol_errors
-            << " protocol errors, dropped " << s.dropped_thumbnails << " thumbnails and "
-            << s.dropped_detail << " detail messages, " << s.slow_clients_closed
-            << " slow clients closed\n";
+  std::cout << "gateway: stopped; " << GatewayStatsText(gateway->stats()) << '\n';
   return 0;
 }
 
@@ -148,6 +161,68 @@ int RunUsersAdd(const UsersAddArgs& a) {
 }
 
 }  // namespace
+
+std::string GatewayStatsText(const gw::GatewayStats& s) {
+  std::ostringstream out;
+  out << s.connections << " connections, " << s.refused << " refused (" << s.refusal_events
+      << " refusal events), " << s.lcm_messages << " LCM messages (" << s.lcm_rejected
+      << " rejected), " << s.commands_forwarded << " commands forwarded, " << s.commands_refused
+      << " refused, " << s.protocol_errors << " protocol errors, dropped "
+      << s.dropped_thumbnails << " thumbnails and " << s.dropped_detail << " detail messages, "
+      << s.slow_clients_closed << " slow clients closed";
+  return out.str();
+}
+
+BackgroundGateway::BackgroundGateway(const GatewayServeArgs& args, const std::string& lcm_url) {
+  if (lcm_url.rfind("memq://", 0) == 0) {
+    throw ConfigError("command line", "--gateway",
+                      "needs a udpm:// LCM URL: memq:// stays inside one LCM instance");
+  }
+  if (args.users.empty()) throw ConfigError("command line", "--users", "required with --gateway");
+  const gw::GatewayOptions o = ServeOptions(args, "--gateway");
+  const gw::Users users = ServeUsers(args);
+  lcm_ = std::make_unique<tm::LcmTransport>(lcm_url);
+  gateway_ = MakeGateway(o, users, *lcm_);
+  scheme_ = args.insecure_loopback ? "ws" : "wss";
+  host_ = o.host;
+  gateway_->Start();
+  loop_ = std::thread([this] {
+    try {
+      gw::RunTransportLoop(*lcm_, *gateway_, stop_);
+    } catch (const std::exception& e) {
+      std::cerr << "plantscale: gateway: " << e.what() << '\n';
+    }
+  });
+}
+
+BackgroundGateway::~BackgroundGateway() {
+  if (!stopped_) Stop();
+}
+
+std::string BackgroundGateway::address() const {
+  return scheme_ + "://" + host_ + ":" + std::to_string(gateway_->port()) + "/";
+}
+
+gw::GatewayStats BackgroundGateway::Stop() {
+  if (!stopped_) {
+    stopped_ = true;
+    stop_ = true;
+    if (loop_.joinable()) loop_.join();
+    gateway_->Stop();
+  }
+  return gateway_->stats();
+}
+
+void AddVehicleGatewayOptions(CLI::App* cmd, GatewayServeArgs& a) {
+  cmd->option_defaults()->group("Remote gateway");
+  cmd->add_option("--gateway", a.listen,
+                  "also serve the run over wss:// on HOST:PORT from this process (Foxglove, "
+                  "Lichtblick, the station; docs/remote.md); needs a udpm:// LCM URL");
+  cmd->add_option("--cert", a.cert, "with --gateway: TLS certificate chain, PEM");
+  cmd->add_option("--key", a.key, "with --gateway: the certificate's private key, PEM");
+  cmd->add_option("--users", a.users, "with --gateway: users file (plantscale users add)");
+  cmd->option_defaults()->group("Options");
+}
 
 void AddGatewayCommands(CommandRegistry& registry) {
   GatewayArgs& g = registry.Keep(GatewayArgs{});

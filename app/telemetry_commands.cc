@@ -59,6 +59,7 @@ void AddPublishOptions(CLI::App* cmd, PublishArgs& a) {
   cmd->add_option("--log", a.log, "with --publish: also write an LCM log of what is published");
   AddCanOption(cmd, a);
   AddVehicleCommandKeyOptions(cmd, a.command_key);
+  AddVehicleGatewayOptions(cmd, a.gateway);
 }
 
 void AddCanOption(CLI::App* cmd, PublishArgs& a) {
@@ -120,6 +121,16 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   options.run_config = run_config;
   options.sim_truth = sim_truth;
   vehicle::VehicleProcess process(lcm, options, boot);
+  // The gateway in this process (one process on a small vehicle computer):
+  // an LCM instance of its own on the same URL, served on its own thread.
+  std::optional<BackgroundGateway> gateway;
+  if (!args.gateway.listen.empty()) {
+    gateway.emplace(args.gateway, UrlOrDefault(args.lcm_url));
+    std::cout << "gateway: " << gateway->address() << " (connect with "
+              << gateway->address() << "?token=TOKEN)" << std::endl;
+  } else if (!args.gateway.cert.empty() || !args.gateway.key.empty() || !args.gateway.users.empty()) {
+    throw ConfigError("command line", "--cert/--key/--users", "only with --gateway HOST:PORT");
+  }
   std::unique_ptr<vehicle::FrameSource> source = make_source(process.transport(), boot);
   process.ListenForCommands(std::move(command_auth));  // start, pause and mode from the station
   process.AddStages(endpoint, tracker, std::move(hooks));
@@ -132,6 +143,7 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   const vehicle::RunSummary s = process.Run(*source, &g_stop);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  if (gateway) std::cout << "gateway: stopped; " << GatewayStatsText(gateway->Stop()) << '\n';
   std::cout << title << ", " << s.frames << " frames (" << s.dropped_frames << " dropped) over "
             << std::fixed << std::setprecision(1) << s.seconds << " s on "
             << UrlOrDefault(args.lcm_url) << (g_stop ? " (interrupted)" : "") << '\n';
@@ -342,6 +354,7 @@ void AddTelemetryCommands(CommandRegistry& registry) {
   rc->add_option("--log", run.publish.log, "also write an LCM log of what is published");
   AddCanOption(rc, run.publish);
   AddVehicleCommandKeyOptions(rc, run.publish.command_key);
+  AddVehicleGatewayOptions(rc, run.publish.gateway);
 
   ReplayArgs& replay = registry.Keep(ReplayArgs{});
   CLI::App* r = registry.Add("replay", "republish an LCM log with its original timing",

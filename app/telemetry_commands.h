@@ -14,6 +14,7 @@
 
 #include "app/command_auth_commands.h"
 #include "app/command_registry.h"
+#include "app/gateway_commands.h"
 #include "app/profiles.h"
 #include "app/run_config.h"
 #include "app/vehicle/vehicle_process.h"
@@ -30,6 +31,7 @@ struct PublishArgs {
   std::string log;      // empty: no log
   std::string can;      // SocketCAN interface of the spray bar; empty: no bar
   CommandKeyArgs command_key;  // --command-key, --accept-unsigned-commands
+  GatewayServeArgs gateway;    // --gateway HOST:PORT --cert --key --users: served from this process
 };
 
 void AddPublishOptions(CLI::App* command, PublishArgs& args);

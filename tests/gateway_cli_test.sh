@@ -97,6 +97,18 @@ for _ in $(seq 200); do [[ -f "$work/viewer.ready" && -f "$work/operator.ready" 
 wait $viewer || { echo "FAIL: viewer"; status=1; }
 wait $operator || { echo "FAIL: operator"; status=1; }
 kill -TERM $gateway; wait $gateway || { echo "FAIL: gateway exit"; status=1; }
+# One process on a small vehicle computer: simulate --publish --gateway
+# serves its own run; a viewer connects once it listens.
+"$plantscale" simulate --preset testbed --length-m 6 --seed 3 --publish --lcm-url "$url" \
+  --gateway 127.0.0.1:18766 --cert "$work/cert.pem" --key "$work/key.pem" --users "$work/users.yaml" \
+  --accept-unsigned-commands >"$work/inproc.txt" 2>&1 &
+inproc=$!
+for _ in $(seq 100); do grep -q "^gateway: wss://" "$work/inproc.txt" && break; sleep 0.1; done
+grep -q "^gateway: wss://127.0.0.1:18766/" "$work/inproc.txt" || { echo "FAIL: no in-process gateway"; status=1; }
+"${client[@]}" watch "wss://127.0.0.1:18766/" "$viewer_token" "$work/cert.pem" "$work/inproc.ready" \
+  "PLANTSCALE_GRID,PLANTSCALE_HEALTH,PLANTSCALE_THUMBNAIL,PLANTSCALE_GRID/scene" >"$work/inproc.json" 2>&1 \
+  || { echo "FAIL: viewer of the in-process gateway"; status=1; }
+wait $inproc || { echo "FAIL: simulate --gateway"; cat "$work/inproc.txt"; status=1; }
 exit $status
 INNER
 inner=$?
@@ -116,4 +128,12 @@ grep -q '"invalid":\[\]' "$work/viewer.json" || fail "viewer: messages not valid
 grep -q '"invalid":\[\]' "$work/operator.json" || fail "operator: messages not valid against their schemas"
 grep -qE "gateway: stopped; 2 connections, [1-9][0-9]* refused" "$work/gateway.txt" || fail "gateway summary: connections/refused"
 grep -q "1 commands forwarded, 2 refused" "$work/gateway.txt" || fail "gateway summary: commands"
+grep -q '"invalid":\[\]' "$work/inproc.json" || fail "in-process gateway: messages missing or invalid"
+grep -qE "^gateway: stopped; 1 connections, 0 refused .* [1-9][0-9]* LCM messages" "$work/inproc.txt" \
+  || fail "in-process gateway summary"
+expect 2 "--gateway: needs a udpm:// LCM URL" -- "$plantscale" simulate --preset testbed --length-m 1 \
+  --publish --lcm-url memq:// --gateway 127.0.0.1:18767 --cert "$work/cert.pem" --key "$work/key.pem" \
+  --users "$users"
+expect 2 "--cert/--key/--users: only with --gateway" -- "$plantscale" simulate --preset testbed \
+  --length-m 1 --publish --lcm-url memq:// --users "$users"
 finish gateway
