@@ -367,6 +367,28 @@ geometry::CameraOptions ApplyCalibrationError(geometry::CameraOptions c, const C
   return c;
 }
 
+void RequireSameCamera(const VehicleProfile& v, const geometry::CameraOptions& c,
+                       const std::string& file) {
+  const geometry::CameraOptions& own = v.camera;
+  const auto size = [](const geometry::CameraOptions& o) {
+    return std::to_string(o.image_width_px) + "x" + std::to_string(o.image_height_px) + " px";
+  };
+  if (own.image_width_px != c.image_width_px || own.image_height_px != c.image_height_px) {
+    throw ConfigError(file, "image size",
+                      "is " + size(c) + ", the camera of " + v.file + " (" + v.calibration_file +
+                          ") takes " + size(own) + ": a calibration of another camera");
+  }
+  const double f_own = own.focal_length_m / own.pixel_width_m;
+  const double f_new = c.focal_length_m / c.pixel_width_m;
+  if (std::abs(f_new / f_own - 1.0) > 0.2) {
+    std::ostringstream why;
+    why << "focal length " << std::fixed << std::setprecision(0) << f_new << " px, the camera of "
+        << v.file << " (" << v.calibration_file << ") " << f_own
+        << " px: more than 20 % apart, a calibration of another camera";
+    throw ConfigError(file, "focal_length_m", why.str());
+  }
+}
+
 geometry::CameraOptions EngineCamera(const Profiles& p) {
   geometry::CameraOptions c = p.vehicle.camera;
   c.virtual_plane_height_m = p.crop.virtual_plane_height_m;

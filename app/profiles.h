@@ -125,6 +125,14 @@ CalibrationError DrawnCalibrationError(const CalibrationError& sds, uint64_t see
 geometry::CameraOptions ApplyCalibrationError(geometry::CameraOptions camera,
                                               const CalibrationError& signed_error);
 
+// A calibration given for this run (`run --calibration FILE`) in place of
+// the vehicle profile's own must be of the same camera: the same image
+// size and a focal length in pixels within 20 % (a recalibration moves it
+// by a few per cent; another lens or sensor by more). Throws ConfigError
+// naming both files and both values.
+void RequireSameCamera(const VehicleProfile& vehicle, const geometry::CameraOptions& calibration,
+                       const std::string& calibration_file);
+
 // The engine's camera: the vehicle's calibration with the crop's virtual
 // ground plane.
 geometry::CameraOptions EngineCamera(const Profiles& profiles);

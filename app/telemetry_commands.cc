@@ -195,9 +195,11 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
     }
     profiles = LoadProfiles(a.crop, a.vehicle, std::filesystem::path(a.preset).stem().string(), dir);
     if (!a.calibration.empty()) {
-      profiles->vehicle.camera = LoadCamera(a.calibration, dir);
-      profiles->vehicle.calibration_file =
-          ResolveConfigFile(a.calibration, dir / "cameras", "camera").string();
+      const std::string file = ResolveConfigFile(a.calibration, dir / "cameras", "camera").string();
+      const geometry::CameraOptions calibration = LoadCamera(a.calibration, dir);
+      if (!a.vehicle.empty()) RequireSameCamera(profiles->vehicle, calibration, file);
+      profiles->vehicle.camera = calibration;
+      profiles->vehicle.calibration_file = file;
     }
     PrintProfileWarnings(*profiles, std::cerr);
   }

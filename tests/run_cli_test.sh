@@ -40,6 +40,15 @@ expect 2 "typo.yaml: focal_len: unknown key \(line 2\)" -- "$plantscale" "${run[
 printf 'height_m: -1\n' >"$work/neg.yaml"
 expect 2 "neg.yaml: height_m: must be > 0" -- "$plantscale" "${run[@]}" --calibration "$work/neg.yaml"
 expect 2 "nosuchcam: unknown camera" -- "$plantscale" "${run[@]}" --calibration nosuchcam
+# A calibration of another camera than the vehicle's: refused at start, naming both.
+expect 2 "sanchiz_pla_66.yaml: image size: is 768x576 px, the camera of .*silsoe.yaml .*thesis.yaml. takes 640x480 px" -- \
+  "$plantscale" "${run[@]}" --calibration sanchiz_pla_66 --vehicle silsoe --crop cauliflower-6-week
+sed 's/^focal_length_m: .*/focal_length_m: 0.0072/' "$PLANTSCALE_CONFIG_DIR/cameras/thesis.yaml" >"$work/longlens.yaml"
+expect 2 "longlens.yaml: focal_length_m: focal length 837 px, the camera of .*silsoe.yaml .* 558 px: more than 20 % apart" -- \
+  "$plantscale" "${run[@]}" --calibration "$work/longlens.yaml" --vehicle silsoe --crop cauliflower-6-week
+sed 's/^focal_length_m: .*/focal_length_m: 0.0050/' "$PLANTSCALE_CONFIG_DIR/cameras/thesis.yaml" >"$work/recalibrated.yaml"
+expect 0 "calibration .*recalibrated.yaml, crop cauliflower-6-week, vehicle silsoe" -- \
+  "$plantscale" "${run[@]}" --calibration "$work/recalibrated.yaml" --vehicle silsoe --crop cauliflower-6-week
 expect 2 "nosuch: unknown preset" -- "$plantscale" "${run[@]}" --calibration thesis --preset nosuch
 expect 2 "preset requires --calibration" -- "$plantscale" "${run[@]}" --preset field
 
