@@ -9,8 +9,8 @@
 #include <functional>
 #include <utility>
 
-#include "app/config_loader.h"
-#include "app/treatment_eval.h"
+#include "app/config/config_loader.h"
+#include "evaluation/treatment_eval.h"
 
 namespace plantscale::app {
 namespace {
