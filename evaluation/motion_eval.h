@@ -13,9 +13,9 @@
 #include "engine/motion/features.h"
 #include "engine/motion/ground_shift.h"
 #include "engine/motion/mosaic.h"
-#include "engine/motion/row_fit.h"
 #include "engine/sim/simulator.h"
 #include "engine/vision/segmenter.h"
+#include "evaluation/row_fit.h"
 
 namespace plantscale::app {
 

@@ -1,4 +1,4 @@
-#include "engine/motion/row_fit.h"
+#include "evaluation/row_fit.h"
 
 #include <gtest/gtest.h>
 
