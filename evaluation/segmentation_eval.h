@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "engine/sim/simulator.h"
-#include "engine/vision/roc.h"
 #include "engine/vision/segmenter.h"
+#include "evaluation/roc.h"
 
 namespace plantscale::app {
 

@@ -11,8 +11,8 @@
 
 #include "engine/pipeline/pipeline.h"
 #include "engine/treatment/simulated_bar.h"
-#include "engine/vision/roc.h"
 #include "engine/vision/segmenter.h"
+#include "evaluation/roc.h"
 #include "evaluation/seeds.h"
 #include "evaluation/segmentation_eval.h"
 #include "evaluation/tracking_eval.h"

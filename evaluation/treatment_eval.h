@@ -14,13 +14,13 @@
 #include <vector>
 
 #include "app/config/profiles.h"
-#include "engine/classify/mrroc.h"
 #include "engine/pipeline/pipeline.h"
 #include "engine/sim/simulator.h"
 #include "engine/tracking/grid_tracker.h"
 #include "engine/treatment/treatment_system.h"
 #include "engine/vision/segmenter.h"
 #include "evaluation/engine_used.h"
+#include "evaluation/mrroc.h"
 #include "evaluation/odometry_fault.h"
 #include "evaluation/treatment_score.h"
 

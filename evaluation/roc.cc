@@ -1,4 +1,4 @@
-#include "engine/vision/roc.h"
+#include "evaluation/roc.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "engine/classify/mrroc.h"
+#include "evaluation/mrroc.h"
 
 #include <algorithm>
 #include <cmath>
