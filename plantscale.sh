@@ -63,11 +63,13 @@ build() {
 }
 
 # Unit test binaries run again under ASan + UBSan (build-asan/, GCC): the
-# engine's, telemetry's, maps' and the vehicle's (docs/fuzzing.md). Not
-# ui_test and app_test (they link VTK; ui_test needs Xvfb), nor system_test
-# and the CLI scripts (minutes of simulation each, and the whole program).
+# engine's, telemetry's, maps', the vehicle's, app/config's and
+# evaluation/'s (docs/fuzzing.md). Not ui_test and app_test (they link VTK;
+# ui_test needs Xvfb), nor system_test, fault_test and the CLI scripts
+# (minutes of simulation each, and the whole program).
 SANITIZED_TESTS=(common_test geometry_test sim_test vision_test rows_test tracking_test motion_test
-  classify_test treatment_test pipeline_test telemetry_test maps_test vehicle_test)
+  classify_test treatment_test pipeline_test telemetry_test maps_test vehicle_test config_test
+  evaluation_test)
 
 run_sanitized_tests() {
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPLANTSCALE_WERROR=ON \

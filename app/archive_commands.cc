@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "app/archive_run.h"
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "maps/archive.h"
 
 namespace plantscale::app {

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <numbers>
 
-#include "app/run_config.h"
+#include "app/config/run_config.h"
 #include "maps/sim_truth.h"
 #include "telemetry/log.h"
 #include "telemetry/subscriber.h"

@@ -12,7 +12,7 @@
 #include <string_view>
 #include <type_traits>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;

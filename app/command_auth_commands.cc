@@ -2,7 +2,7 @@
 
 #include <iostream>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "app/vehicle/runner.h"
 #include "telemetry/command_auth.h"
 #include "telemetry/transport.h"

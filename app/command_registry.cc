@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 
 namespace plantscale::app {
 

@@ -7,9 +7,9 @@
 #include <utility>
 
 #include "app/archive_commands.h"
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
+#include "app/config/progress.h"
 #include "app/log_map.h"
-#include "app/progress.h"
 #include "maps/export.h"
 #include "maps/map_file.h"
 #include "maps/map_merge.h"

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <iostream>
 
-#include "app/config_loader.h"
-#include "app/figures.h"
+#include "app/config/config_loader.h"
+#include "evaluation/figures.h"
 #include "maps/staged_output.h"
 
 #ifndef PLANTSCALE_SOURCE_DIR

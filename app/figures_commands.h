@@ -1,6 +1,6 @@
 #pragma once
 // `plantscale figures`: every quoted figure from docs/results/figures.yaml
-// (app/figures.h, docs/cli/figures.md).
+// (evaluation/figures.h, docs/cli/figures.md).
 
 #include "app/command_registry.h"
 

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "telemetry/gateway/server.h"
 #include "telemetry/gateway/users.h"
 #include "telemetry/transport.h"

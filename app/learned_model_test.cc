@@ -12,12 +12,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "app/class_eval.h"
-#include "app/config_loader.h"
-#include "app/learned_model.h"
-#include "app/photo_segmentation.h"
+#include "app/config/config_loader.h"
+#include "app/config/learned_model.h"
+#include "app/config/photo_segmentation.h"
 #include "app/sim_output.h"
 #include "app/train_segmenter.h"
+#include "evaluation/class_eval.h"
 
 namespace plantscale::app {
 namespace {

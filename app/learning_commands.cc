@@ -3,10 +3,11 @@
 #include <iostream>
 #include <sstream>
 
-#include "app/class_eval.h"
 #include "app/segment_commands.h"
 #include "app/train_segmenter.h"
 #include "engine/common/options.h"
+#include "evaluation/class_eval.h"
+#include "evaluation/writer.h"
 
 namespace plantscale::app {
 namespace {
@@ -71,15 +72,7 @@ int ClassesCommand(const ClassArgs& a) {
     std::cerr << "plantscale evaluate classes: error: " << x.what() << '\n';
     return 2;
   }
-  if (a.json) {
-    nlohmann::json j = ClassEvaluationJson(e);
-    j["images"] = a.images;
-    j["labels"] = a.labels;
-    if (!a.model.empty()) j["model_file"] = a.model;
-    std::cout << j.dump(2) << '\n';
-  } else {
-    PrintClassEvaluation(e, std::cout);
-  }
+  WriteEvaluation(e, a.json, std::cout);
   return 0;
 }
 

@@ -1,4 +1,4 @@
-#include "app/log_eval.h"
+#include "evaluation/log_eval.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "app/telemetry_commands.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"

@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "app/commands.h"
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "engine/common/options.h"
 
 int main(int argc, char** argv) {

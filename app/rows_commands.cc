@@ -1,6 +1,6 @@
 #include "app/rows_commands.h"
 
-#include "app/learned_model.h"
+#include "app/config/learned_model.h"
 
 #include <cmath>
 #include <fstream>
@@ -11,11 +11,13 @@
 #include <opencv2/imgproc.hpp>
 #include <optional>
 
-#include "app/config_loader.h"
-#include "app/learned_model.h"
-#include "app/photo_segmentation.h"
-#include "app/rows_eval.h"
+#include "app/config/config_loader.h"
+#include "app/config/learned_model.h"
+#include "app/config/photo_segmentation.h"
 #include "app/segment_commands.h"
+#include "evaluation/rows_eval.h"
+#include "evaluation/rows_writer.h"
+#include "evaluation/writer.h"
 #include "maps/staged_output.h"
 
 namespace plantscale::app {
@@ -182,29 +184,6 @@ struct RowsEvalArgs {
   bool json = false;
 };
 
-}  // namespace
-
-nlohmann::json PhotoRowsJson(const PhotoRowsEvaluation& e, bool model) {
-  nlohmann::json per_image = nlohmann::json::array();
-  for (const PhotoRowScore& s : e.per_image) {
-    per_image.push_back({{"image", s.image},
-                         {"crda", s.crda},
-                         {"image_rows_scored", s.image_rows_scored},
-                         {"rows_found", s.rows_found}});
-  }
-  return {{"images", e.images},
-          {"images_with_rows", e.images_with_rows},
-          {"image_rows_scored", e.image_rows_scored},
-          {"crda_mean", e.crda_mean},
-          {"per_image", per_image},
-          {"mask", model ? "model crop class" : "excess green"},
-          {"source", "labelled photographs"}};
-}
-
-nlohmann::json PhotoRowsJsonShape() { return PhotoRowsJson(PhotoRowsEvaluation{}, true); }
-
-namespace {
-
 int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
   if (!a.images.empty()) {
     const fs::path images = a.images;
@@ -223,13 +202,7 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
     for (const std::string& err : e.errors) {
       std::cerr << "plantscale evaluate rows: error: " << err << '\n';
     }
-    if (a.json) {
-      std::cout << PhotoRowsJson(e, !a.model.empty()).dump(2) << '\n';
-    } else {
-      std::cout << "labelled photographs: " << e.images << " images (" << e.images_with_rows
-                << " with rows), " << e.image_rows_scored << " image rows scored\n"
-                << "crda_mean " << std::fixed << std::setprecision(3) << e.crda_mean << '\n';
-    }
+    WriteEvaluation(e, a.json, std::cout);
     return e.images > 0 ? 0 : 1;
   }
   RowsEvalOptions o;
@@ -238,28 +211,7 @@ int EvaluateRowsCommand(const RowsEvalArgs& a, const GlobalOptions& global) {
   o.seeds = a.seeds;
   o.frames = a.frames;
   o.tilt_deg = a.tilt_deg;
-  const RowsEvaluation e = EvaluateRows(o);
-  if (a.json) {
-    std::cout << nlohmann::json{{"preset", e.preset},
-                                {"seeds", e.seeds},
-                                {"tilt_deg", o.tilt_deg},
-                                {"frames", e.frames},
-                                {"frames_with_rows", e.frames_with_rows},
-                                {"image_rows_scored", e.image_rows_scored},
-                                {"crda_mean", e.crda_mean},
-                                {"crda_frame_p10", e.crda_frame_p10},
-                                {"spacing_error_rel", e.spacing_error_rel},
-                                {"crda_per_seed", e.crda_per_seed}}
-                     .dump(2)
-              << '\n';
-  } else {
-    std::cout << std::fixed << std::setprecision(3) << "preset " << e.preset << ", " << e.seeds
-              << " seed(s), " << e.frames << " frames at tilt " << o.tilt_deg << " deg ("
-              << e.frames_with_rows << " with rows)\n"
-              << "crda_mean        " << e.crda_mean << "  (target >= 0.9)\n"
-              << "crda_frame_p10   " << e.crda_frame_p10 << '\n'
-              << "spacing_error    " << 100.0 * e.spacing_error_rel << " % at the bottom row\n";
-  }
+  WriteEvaluation(EvaluateRows(o), a.json, std::cout);
   return 0;
 }
 

@@ -10,8 +10,7 @@
 #include <vector>
 
 #include "app/command_registry.h"
-#include "app/photo_segmentation.h"
-#include "app/rows_eval.h"
+#include "app/config/photo_segmentation.h"
 
 namespace plantscale::app {
 
@@ -34,11 +33,5 @@ struct DetectRowsResult : ImageBatchResult {
 DetectRowsResult DetectRows(const DetectRowsRequest& request, std::ostream& log);
 
 void AddRowsCommands(CommandRegistry& registry);
-
-// evaluate rows --images --json: CRDA on labelled photographs (`model`: the
-// rows were found in a learned model's crop class, else excess green).
-nlohmann::json PhotoRowsJson(const PhotoRowsEvaluation& evaluation, bool model);
-// The same for an empty evaluation: the keys `plantscale figures` may quote.
-nlohmann::json PhotoRowsJsonShape();
 
 }  // namespace plantscale::app

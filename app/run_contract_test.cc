@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 #include "telemetry/log.h"

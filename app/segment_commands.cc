@@ -5,10 +5,12 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "app/config_loader.h"
-#include "app/profiles.h"
-#include "app/photo_segmentation.h"
-#include "app/segmentation_eval.h"
+#include "app/config/config_loader.h"
+#include "app/config/photo_segmentation.h"
+#include "app/config/profiles.h"
+#include "evaluation/segmentation_eval.h"
+#include "evaluation/segmentation_writer.h"
+#include "evaluation/writer.h"
 
 namespace plantscale::app {
 namespace {
@@ -37,82 +39,6 @@ struct EvaluateArgs {
   int soil_growth_reach_px = -1;
   std::string errors_dir;
 };
-
-nlohmann::json MethodJson(const MethodEvaluation& m) {
-  nlohmann::json j{{"method", m.method},
-                   {"plant_pixel_recall", m.rates.recall},
-                   {"plant_pixel_precision", m.rates.precision},
-                   {"soil_pixel_accuracy", m.rates.soil_accuracy},
-                   {"fpr", m.rates.fpr}};
-  if (!m.curve.points.empty()) j["auc"] = m.auc;
-  if (!m.parameter_name.empty()) j[m.parameter_name] = m.parameter;
-  return j;
-}
-
-nlohmann::json EvaluationJson(const SegmentationEvaluation& e) {
-  nlohmann::json j{{"preset", e.preset},
-                   {"image", e.image_kind},
-                   {"seeds", e.seeds},
-                   {"frames", e.frames},
-                   {"plant_pixel_fraction", e.plant_fraction},
-                   {"threshold_method", e.ours.method},
-                   {"auc", e.ours.auc},
-                   {"plant_pixel_recall", e.ours.rates.recall},
-                   {"plant_pixel_precision", e.ours.rates.precision},
-                   {"soil_pixel_accuracy", e.ours.rates.soil_accuracy}};
-  if (e.image_kind == "rgb") j["colour_index"] = e.colour_index;
-  j["baseline_thesis"] = {{"fixed", MethodJson(e.thesis_fixed)},
-                          {"adaptive", MethodJson(e.thesis_adaptive)}};
-  return j;
-}
-
-void PrintTable(const SegmentationEvaluation& e, std::ostream& out) {
-  out << std::fixed << std::setprecision(4) << "segmentation on preset " << e.preset << " ("
-      << e.image_kind << (e.image_kind == "rgb" ? std::string(" ") + e.colour_index : "")
-      << ", " << e.seeds << " seeds, " << e.frames << " frames, plant pixels "
-      << 100.0 * e.plant_fraction << " %)\n"
-      << "  method              AUC     recall  precision  soil acc  parameter\n";
-  for (const MethodEvaluation* m : {&e.ours, &e.thesis_fixed, &e.thesis_adaptive}) {
-    out << "  " << std::left << std::setw(18)
-        << (m == &e.ours ? "ours: " + m->method : "thesis " + m->method) << std::right
-        << std::setw(7) << m->auc << std::setw(9) << m->rates.recall << std::setw(11)
-        << m->rates.precision << std::setw(10) << m->rates.soil_accuracy << "  "
-        << m->parameter_name << (m->parameter_name.empty() ? "" : " = ") << m->parameter << '\n';
-  }
-}
-
-// Southall's published figures (tables 2.1 and 2.2) for the sequence of the
-// same name, printed beside ours with --baseline thesis.
-void PrintThesisFigures(const std::string& preset, std::ostream& out) {
-  struct Row {
-    const char* name;
-    double fixed_auc, adaptive_auc, tpr, fpr;
-  };
-  static const Row kRows[] = {{"A", 0.9958, 0.9957, 0.95623, 0.00311},
-                              {"B", 0.9749, 0.9779, 0.82434, 0.00073},
-                              {"C", 0.9816, 0.9846, 0.83421, 0.00409},
-                              {"D", 0.8835, 0.9241, 0.28627, 0.00135}};
-  for (const Row& r : kRows) {
-    if (preset != r.name) continue;
-    out << std::setprecision(4) << "  thesis, published  fixed AUC " << r.fixed_auc
-        << ", adaptive AUC " << r.adaptive_auc << ", adaptive at Φ = 3.644: recall " << r.tpr
-        << ", FPR " << r.fpr << " (tables 2.1, 2.2)\n";
-    return;
-  }
-  out << "  thesis, published  no sequence named " << preset << " (tables 2.1/2.2 have A-D)\n";
-}
-
-void WriteRocCsv(const std::string& path, const SegmentationEvaluation& e) {
-  std::ofstream out(path);
-  out << "method,threshold,tpr,fpr\n";
-  for (const MethodEvaluation* m : {&e.ours, &e.thesis_fixed, &e.thesis_adaptive}) {
-    const std::string name = m == &e.ours ? "ours_" + m->method : "thesis_" + m->method;
-    for (const vision::RocPoint& p : m->curve.points) {
-      out << name << ',' << p.threshold << ',' << p.tpr << ',' << p.fpr << '\n';
-    }
-  }
-  if (!out.flush()) throw std::runtime_error("cannot write ROC curve to " + path);
-}
 
 int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& global) {
   SegmentationEvalOptions o;
@@ -146,17 +72,12 @@ int EvaluateSegmentationCommand(const EvaluateArgs& a, const GlobalOptions& glob
   if (a.soil_growth_reach_px >= 0) o.segmenter.soil_growth.reach_px = a.soil_growth_reach_px;
   o.errors_dir = a.errors_dir;
   if (!a.index.empty()) o.segmenter.colour_index = *vision::ParseColourIndex(a.index);
+  o.crop = profiles.crop.name;
+  o.vehicle = profiles.vehicle.name;
+  o.published_thesis = a.baseline == "thesis";
   const SegmentationEvaluation e = EvaluateSegmentation(o);
   if (!a.roc_csv.empty()) WriteRocCsv(a.roc_csv, e);
-  if (a.json) {
-    nlohmann::json j = EvaluationJson(e);
-    j["crop"] = profiles.crop.name;
-    j["vehicle"] = profiles.vehicle.name;
-    std::cout << j.dump(2) << '\n';
-  } else {
-    PrintTable(e, std::cout);
-    if (a.baseline == "thesis") PrintThesisFigures(e.preset, std::cout);
-  }
+  WriteEvaluation(e, a.json, std::cout);
   return 0;
 }
 

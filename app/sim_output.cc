@@ -12,7 +12,7 @@
 #include <set>
 #include <sstream>
 
-#include "app/progress.h"
+#include "app/config/progress.h"
 #include "maps/staged_output.h"
 
 namespace plantscale::app {

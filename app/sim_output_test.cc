@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 
 namespace plantscale::app {
 namespace {

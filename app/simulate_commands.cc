@@ -6,7 +6,7 @@
 #include <numbers>
 #include <optional>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "app/sim_output.h"
 #include "app/telemetry_commands.h"
 

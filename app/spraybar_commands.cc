@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "app/telemetry_commands.h"
 #include "telemetry/transport.h"
 

@@ -10,12 +10,12 @@
 #include <optional>
 
 #include "app/camera_source.h"
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "app/vehicle/runner.h"
 #include "app/vehicle/spray_bar_stage.h"
 #include "app/vehicle/stages.h"
-#include "app/tracking_eval.h"
-#include "app/treatment_eval.h"
+#include "evaluation/tracking_eval.h"
+#include "evaluation/treatment_eval.h"
 #include "telemetry/can/spray_bar.h"
 #include "telemetry/log.h"
 #include "telemetry/log_stats.h"

@@ -14,9 +14,9 @@
 
 #include "app/command_auth_commands.h"
 #include "app/command_registry.h"
+#include "app/config/profiles.h"
+#include "app/config/run_config.h"
 #include "app/gateway_commands.h"
-#include "app/profiles.h"
-#include "app/run_config.h"
 #include "app/vehicle/vehicle_process.h"
 #include "engine/sim/simulator.h"
 #include "telemetry/can/simulated_bar.h"

@@ -18,8 +18,8 @@
 #include <random>
 #include <sstream>
 
-#include "app/learned_model.h"
-#include "app/photo_segmentation.h"
+#include "app/config/learned_model.h"
+#include "app/config/photo_segmentation.h"
 #include "engine/common/options.h"
 #include "engine/vision/learned_segmenter.h"
 

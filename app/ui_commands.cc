@@ -23,12 +23,12 @@
 
 extern char** environ;
 
-#include "app/config_loader.h"
-#include "app/run_config.h"
+#include "app/config/config_loader.h"
+#include "app/config/run_config.h"
+#include "engine/sim/simulator.h"
 #include "maps/archive.h"
 #include "maps/map_errors.h"
 #include "maps/plants_layer.h"
-#include "engine/sim/simulator.h"
 #include "telemetry/command_auth.h"
 #include "ui/canvas.h"
 #include "ui/report.h"
@@ -126,7 +126,7 @@ std::pair<int, double> RegisterOnField(const ui::StandWindow& stand, const sim::
 }
 
 // Simulator truth over the report's stand, from the log's run_config event:
-// the simulated field rebuilt (app/run_config.h), registered on the crop
+// the simulated field rebuilt (app/config/run_config.h), registered on the crop
 // records, and its plants counted in the same rows and along the same stand.
 std::optional<ui::AgronomyTruth> SimTruth(const std::string& run_config, const ui::StandWindow& stand,
                                           const std::string& config_dir_option) {

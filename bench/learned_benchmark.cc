@@ -11,7 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "app/learned_model.h"
+#include "app/config/learned_model.h"
 #include "engine/geometry/test_cameras.h"
 #include "engine/sim/simulator.h"
 #include "engine/vision/learned_segmenter.h"

@@ -248,7 +248,7 @@ sim::SimulatorOptions FieldPass(int scale) {
   return o;
 }
 
-// The product's tracker options (app/tracking_eval.cc ProductTrackerOptions:
+// The product's tracker options (app/config/profiles.cc ProductTrackerOptions:
 // the nominal spacings, the crop and the vehicle's bounce as the grower
 // knows them), mirrored here because app/ is not linked by benchmarks.
 tracking::TrackerOptions ProductTracker(const sim::SimulatorOptions& s) {
@@ -272,7 +272,7 @@ tracking::TrackerOptions ProductTracker(const sim::SimulatorOptions& s) {
   return o;
 }
 
-// app/treatment_eval.cc ProductPipelineOptions, likewise. Pixel-sized
+// app/config/profiles.cc ProductPipelineOptions, likewise. Pixel-sized
 // segmenter options (smoothing, notch closing, hull minimum area) are the
 // product's as they are, not scaled with the resolution.
 PipelineOptions ProductOptions(const sim::SimulatorOptions& s) {

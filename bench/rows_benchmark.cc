@@ -10,11 +10,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "app/rows_eval.h"
 #include "engine/geometry/test_cameras.h"
 #include "engine/rows/comb.h"
 #include "engine/rows/row_detector.h"
 #include "engine/sim/simulator.h"
+#include "evaluation/rows_eval.h"
 
 namespace plantscale::rows {
 namespace {

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <string>
 
-#include "app/config_loader.h"
-#include "app/motion_eval.h"
+#include "app/config/config_loader.h"
+#include "evaluation/motion_eval.h"
 
 namespace plantscale::app {
 namespace {

@@ -7,7 +7,7 @@
 #include <map>
 #include <opencv2/core.hpp>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "engine/geometry/grid_model.h"
 #include "engine/sim/simulator.h"
 

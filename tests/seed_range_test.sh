@@ -29,7 +29,7 @@ failures=0
 while IFS= read -r hit; do
   echo "FAIL: $hit: names a report seed (>= 5000); those belong to docs/results/figures.yaml"
   failures=$((failures + 1))
-done < <(find tests bench tools app engine telemetry maps ui .ci plantscale.sh \
+done < <(find tests bench tools app engine evaluation telemetry maps ui .ci plantscale.sh \
            -type f \( -name '*_test.cc' -o -name '*_test.sh' -o -name '*.sh' -o -name '*.py' \
                       -o -path 'tests/*' -o -path 'bench/*' -o -path 'tools/*' -o -path '.ci/*' \) \
            ! -name seed_range_test.sh ! -path '*/corpus/*' ! -path '*/node_modules/*' 2>/dev/null |

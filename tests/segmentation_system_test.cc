@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
-#include "app/config_loader.h"
-#include "app/segmentation_eval.h"
+#include "app/config/config_loader.h"
+#include "evaluation/segmentation_eval.h"
 
 namespace plantscale::app {
 namespace {

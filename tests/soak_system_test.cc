@@ -18,13 +18,13 @@
 #include <string>
 #include <vector>
 
-#include "app/config_loader.h"
-#include "app/profiles.h"
-#include "app/run_config.h"
+#include "app/config/config_loader.h"
+#include "app/config/profiles.h"
+#include "app/config/run_config.h"
 #include "app/telemetry_commands.h"
-#include "app/treatment_eval.h"
-#include "app/treatment_score.h"
 #include "engine/treatment/simulated_bar.h"
+#include "evaluation/treatment_eval.h"
+#include "evaluation/treatment_score.h"
 
 namespace plantscale::app {
 namespace {

@@ -6,9 +6,9 @@
 // (issue 33), never from the simulator's parameters.
 #include <gtest/gtest.h>
 
-#include "app/config_loader.h"
-#include "app/profiles.h"
-#include "app/tracking_eval.h"
+#include "app/config/config_loader.h"
+#include "app/config/profiles.h"
+#include "evaluation/tracking_eval.h"
 
 namespace plantscale::app {
 namespace {

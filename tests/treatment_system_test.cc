@@ -10,8 +10,8 @@
 #include <numbers>
 #include <utility>
 
-#include "app/config_loader.h"
-#include "app/treatment_eval.h"
+#include "app/config/config_loader.h"
+#include "evaluation/treatment_eval.h"
 
 namespace plantscale::app {
 namespace {

@@ -14,7 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "app/photo_segmentation.h"
+#include "app/config/photo_segmentation.h"
 #include "engine/rows/row_detector.h"
 
 namespace fs = std::filesystem;

@@ -122,7 +122,7 @@ struct CommandAuthOptions {
 struct RunnerOptions {
   bool real_time = true;  // false: as fast as possible (--fast)
   // What the run was made from (a JSON object's text: the simulator's preset
-  // and seed, app/run_config.h), sent as a "run_config" event right after
+  // and seed, app/config/run_config.h), sent as a "run_config" event right after
   // "run_started" so that the log can be scored later; empty: none. (The
   // "= {}" keeps `RunnerOptions{false}` clear of -Wmissing-field-initializers.)
   std::string run_config = {};

@@ -1,6 +1,6 @@
 #pragma once
 // The vehicle process's wiring, one for `plantscale run`, `plantscale
-// simulate --publish` and the fault-injection tests (tests/fault_injection*):
+// simulate --publish` and the fault-injection tests (evaluation/fault_injection*):
 // the LCM transport (memq:// in tests) with the log written beside it, the
 // publisher, the runner, and its stages in the product's order (spray bar,
 // odometry, pipeline or segmentation alone, records, heartbeat, thumbnails,

@@ -1,4 +1,4 @@
-// Fuzz target: the YAML config loaders (app/config_loader.h). The input is
+// Fuzz target: the YAML config loaders (app/config/config_loader.h). The input is
 // written to a .yaml file and loaded both as a simulator preset and as a
 // camera, with the source tree's config/ as the folder of named presets
 // (so `camera: thesis` resolves). Bad input may only throw ConfigError.
@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string_view>
 
-#include "app/config_loader.h"
+#include "app/config/config_loader.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,4 +1,4 @@
-// Fuzz target: the image path of `plantscale segment` (app/photo_segmentation.h).
+// Fuzz target: the image path of `plantscale segment` (app/config/photo_segmentation.h).
 // Byte 0 picks the options (method auto/exg/nir/adaptive, colour index
 // exg/exgr/cive, minimum blob area); the rest is the file. It is written
 // as .png, or .jpg when it starts with a JPEG marker, read with ReadImage
@@ -16,7 +16,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/utils/logger.hpp>
 
-#include "app/photo_segmentation.h"
+#include "app/config/photo_segmentation.h"
 #include "engine/common/options.h"
 #include "engine/vision/segmenter.h"
 #include "tests/fuzz/fuzz_util.h"
