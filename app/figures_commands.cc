@@ -117,7 +117,7 @@ int FiguresCommand(const FiguresArgs& a, const GlobalOptions& global) {
   r.config_dir = fs::absolute(config_dir);
   r.repository = repository;
   r.work_dir = fs::absolute(a.work.empty() ? fs::path(r.program).parent_path() / "figures"
-                                             : fs::path(a.work));
+                                           : fs::path(a.work));
   r.only = a.only;
   const long cpus = ::sysconf(_SC_NPROCESSORS_ONLN);
   r.jobs = a.jobs > 0 ? a.jobs : static_cast<int>(cpus > 0 ? cpus : 1);
@@ -138,8 +138,8 @@ int FiguresCommand(const FiguresArgs& a, const GlobalOptions& global) {
     if (f.value("met", true) == false) ++missed;
   }
   std::cout << "plantscale figures: wrote " << json_path.string() << " (" << fj["figures"].size()
-            << " figures, " << missed << " missing their target) and rewrote "
-            << m.documents.size() << " document(s)";
+            << " figures, " << missed << " missing their target) and rewrote " << m.documents.size()
+            << " document(s)";
   if (failed > 0) std::cout << "; " << failed << " run(s) FAILED, shown as failed";
   std::cout << '\n';
   return failed > 0 ? 1 : 0;
@@ -156,8 +156,9 @@ void AddFiguresCommands(CommandRegistry& registry) {
       "rewrite the documents' figure tables",
       [&args, &global] { return FiguresCommand(args, global); });
   cmd->add_option("--manifest", args.manifest, "the figures manifest")->capture_default_str();
-  cmd->add_option("--only", args.only, "run only these figures (names in the manifest); the others "
-                                       "keep their values in figures.json");
+  cmd->add_option("--only", args.only,
+                  "run only these figures (names in the manifest); the others "
+                  "keep their values in figures.json");
   cmd->add_option("--jobs", args.jobs,
                   "runs at a time (default: the number of CPUs; each run is one process)")
       ->check(CLI::Range(1, 64));

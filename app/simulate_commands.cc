@@ -84,9 +84,11 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
     throw ConfigError("command line", "--out", "required (or --publish to stream telemetry)");
   }
   const PublishArgs& p = args.publish;
-  if (!p.publish && (p.fast || !p.lcm_url.empty() || !p.log.empty() || !p.can.empty() ||
-                     !p.gateway.listen.empty())) {
-    throw ConfigError("command line", "--fast/--lcm-url/--log/--can/--gateway", "only with --publish");
+  if (!p.publish && (p.fast || !p.lcm_url.empty() || !p.log.empty() || !p.can.empty())) {
+    throw ConfigError("command line", "--fast/--lcm-url/--log/--can", "only with --publish");
+  }
+  if (!p.publish && !p.gateway.listen.empty()) {
+    throw ConfigError("command line", "--gateway", "only with --publish");
   }
   const SimulateRequest request = MakeRequest(args, global);
   if (args.publish.publish) {

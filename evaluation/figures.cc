@@ -190,9 +190,9 @@ std::map<std::string, RunOutcome> RunFigures(const Manifest& m,
     const auto it = running.find(pid);
     if (it == running.end()) continue;
     RunOutcome o = Finish(it->second, status);
-    log << (r.progress && ::isatty(STDERR_FILENO) ? "\n" : "") << "figures: " << it->second.run->name << ": "
-        << (o.ok ? "done" : "FAILED, " + o.error) << " in " << std::fixed << std::setprecision(0)
-        << o.seconds << " s\n";
+    log << (r.progress && ::isatty(STDERR_FILENO) ? "\n" : "")
+        << "figures: " << it->second.run->name << ": " << (o.ok ? "done" : "FAILED, " + o.error)
+        << " in " << std::fixed << std::setprecision(0) << o.seconds << " s\n";
     outcomes[it->second.run->name] = std::move(o);
     running.erase(it);
     bar.Update(++done);
@@ -306,7 +306,8 @@ nlohmann::json FiguresJson(const Manifest& m, const std::map<std::string, RunOut
     if (it == outcomes.end()) {
       // Not run this time: what an earlier figures run of the same command found.
       const nlohmann::json* before = previous.is_object() ? JsonAtPath(previous, "runs") : nullptr;
-      if (before && before->contains(run.name) && (*before)[run.name].value("command", "") == command) {
+      if (before && before->contains(run.name) &&
+          (*before)[run.name].value("command", "") == command) {
         runs[run.name] = (*before)[run.name];
         for (const ManifestFigure& f : m.figures) {
           if (f.run == run.name && previous["figures"].contains(f.name)) {
@@ -319,7 +320,8 @@ nlohmann::json FiguresJson(const Manifest& m, const std::map<std::string, RunOut
       continue;
     }
     const RunOutcome& o = it->second;
-    nlohmann::json r{{"command", command}, {"status", o.ok ? "ok" : "failed"}, {"commit", p.commit}};
+    nlohmann::json r{
+        {"command", command}, {"status", o.ok ? "ok" : "failed"}, {"commit", p.commit}};
     if (!o.ok) r["error"] = o.error;
     if (o.ok && o.output.contains("per_seed")) r["per_seed"] = o.output["per_seed"];
     if (o.ok && o.output.contains("baseline_thesis") &&
@@ -472,7 +474,8 @@ struct Marker {
 };
 
 int LineAt(const std::string& text, size_t pos) {
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(pos), '\n'));
+  return 1 +
+         static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(pos), '\n'));
 }
 
 std::vector<Marker> FindMarkers(const std::string& text, const std::string& where) {
@@ -487,7 +490,8 @@ std::vector<Marker> FindMarkers(const std::string& text, const std::string& wher
     while ((at = text.find(k.open, at)) != std::string::npos) {
       const size_t name_end = text.find(" -->", at);
       if (name_end == std::string::npos) {
-        throw ConfigError(where + ":" + std::to_string(LineAt(text, at)), "marker", "not closed by -->");
+        throw ConfigError(where + ":" + std::to_string(LineAt(text, at)), "marker",
+                          "not closed by -->");
       }
       Marker mk;
       mk.table = k.table;
@@ -504,7 +508,8 @@ std::vector<Marker> FindMarkers(const std::string& text, const std::string& wher
       at = mk.end + k.close.size();
     }
   }
-  std::sort(out.begin(), out.end(), [](const Marker& a, const Marker& b) { return a.begin < b.begin; });
+  std::sort(out.begin(), out.end(),
+            [](const Marker& a, const Marker& b) { return a.begin < b.begin; });
   return out;
 }
 
@@ -513,13 +518,15 @@ std::string Expected(const Marker& mk, const Manifest& m, const nlohmann::json& 
   if (mk.table) {
     const ManifestTable* t = TableOf(m, mk.name);
     if (!t) {
-      throw ConfigError(where + ":" + std::to_string(mk.line), mk.name, "names no table in the manifest");
+      throw ConfigError(where + ":" + std::to_string(mk.line), mk.name,
+                        "names no table in the manifest");
     }
     return "\n" + TableText(fj, m, *t);
   }
   const ManifestFigure* f = m.Figure(mk.name);
   if (!f) {
-    throw ConfigError(where + ":" + std::to_string(mk.line), mk.name, "names no figure in the manifest");
+    throw ConfigError(where + ":" + std::to_string(mk.line), mk.name,
+                      "names no figure in the manifest");
   }
   return FigureText(fj, *f);
 }
@@ -559,10 +566,10 @@ std::vector<std::string> CheckDocuments(const fs::path& repository, const Manife
         const std::string want = Expected(mk, m, fj, doc);
         const std::string have = text.substr(mk.begin, mk.end - mk.begin);
         if (want != have) {
-          problems.push_back(doc + ":" + std::to_string(mk.line) + ": " +
-                             (mk.table ? "table " : "figure ") + mk.name + " says '" +
-                             (mk.table ? "…" : have) + "', figures.json '" + (mk.table ? "…" : want) +
-                             "' (plantscale figures --render rewrites it)");
+          problems.push_back(
+              doc + ":" + std::to_string(mk.line) + ": " + (mk.table ? "table " : "figure ") +
+              mk.name + " says '" + (mk.table ? "…" : have) + "', figures.json '" +
+              (mk.table ? "…" : want) + "' (plantscale figures --render rewrites it)");
         }
       }
     } catch (const ConfigError& e) {

@@ -36,15 +36,15 @@ inline constexpr uint64_t kReportFirstSeed = 5000;
 inline constexpr int kReportSeeds = 20;
 
 struct FigureTarget {
-  std::string op;  // "<=", ">=", "<", ">"
-  double value = 0.0;  // in the figure's display unit
+  std::string op;         // "<=", ">=", "<", ">"
+  double value = 0.0;     // in the figure's display unit
   bool absolute = false;  // the target bounds |value| ("|<=|")
 };
 
 struct ManifestRun {
   std::string name;
   std::vector<std::string> command;  // e.g. evaluate tracking --preset field ...
-  bool seeded = true;  // --seed FIRST --seeds COUNT appended (the report seeds)
+  bool seeded = true;                // --seed FIRST --seeds COUNT appended (the report seeds)
   int line = 0;
 };
 
@@ -122,11 +122,11 @@ struct RunOutcome {
 };
 
 struct FiguresRequest {
-  std::filesystem::path program;    // this binary
+  std::filesystem::path program;  // this binary
   std::filesystem::path config_dir;
   std::filesystem::path repository;  // runs start here (relative paths in commands)
-  std::filesystem::path work_dir;   // the runs' outputs and logs, kept for resuming
-  std::vector<std::string> only;    // figure names (empty: all); their runs run
+  std::filesystem::path work_dir;    // the runs' outputs and logs, kept for resuming
+  std::vector<std::string> only;     // figure names (empty: all); their runs run
   int jobs = 1;
   bool progress = true;
 };

@@ -1,5 +1,3 @@
-#include "evaluation/figures.h"
-
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -10,6 +8,7 @@
 
 #include "app/config/config_loader.h"
 #include "evaluation/class_eval.h"
+#include "evaluation/figures.h"
 #include "evaluation/rows_writer.h"
 #include "evaluation/tracking_writer.h"
 #include "evaluation/treatment_writer.h"
@@ -54,8 +53,9 @@ FigureTarget ParseTarget(const std::string& text, const std::string& where,
   std::smatch m;
   if (!std::regex_match(text, m, form)) {
     throw ConfigError(where, entry,
-                      "target '" + text + "' is not '<= N', '>= N', '< N', '> N' or '|<= N' "
-                      "(N in the figure's unit)");
+                      "target '" + text +
+                          "' is not '<= N', '>= N', '< N', '> N' or '|<= N' "
+                          "(N in the figure's unit)");
   }
   FigureTarget t;
   t.absolute = !m[1].str().empty();
@@ -113,9 +113,11 @@ void ReadFigures(const YAML::Node& root, Manifest& m) {
     if (fig.digits < 0 || fig.digits > 6) {
       throw ConfigError(Where(m, fig.line), entry, "digits must be 0 to 6");
     }
-    if (f["target"]) fig.target = ParseTarget(f["target"].as<std::string>(), Where(m, fig.line), entry);
+    if (f["target"])
+      fig.target = ParseTarget(f["target"].as<std::string>(), Where(m, fig.line), entry);
     if (!m.Run(fig.run)) {
-      throw ConfigError(Where(m, fig.line), entry, "names run '" + fig.run + "', which is not in runs");
+      throw ConfigError(Where(m, fig.line), entry,
+                        "names run '" + fig.run + "', which is not in runs");
     }
     if (m.Figure(fig.name)) throw ConfigError(Where(m, fig.line), entry, "is named twice");
     m.figures.push_back(fig);
@@ -264,10 +266,11 @@ void ValidateRun(const Manifest& m, const ManifestRun& run, const fs::path& conf
   const EvaluationShape* shape = ShapeOf(run);
   if (!shape) {
     std::string known;
-    for (const EvaluationShape& s : EvaluationShapes()) known += (known.empty() ? "" : ", ") + s.command;
-    throw ConfigError(Where(m, run.line), entry,
-                      "command '" + Join(run.command) + "' is not an evaluation figures runs (" +
-                          known + ")");
+    for (const EvaluationShape& s : EvaluationShapes())
+      known += (known.empty() ? "" : ", ") + s.command;
+    throw ConfigError(
+        Where(m, run.line), entry,
+        "command '" + Join(run.command) + "' is not an evaluation figures runs (" + known + ")");
   }
   if (Names(run.command, "--json")) {
     throw ConfigError(Where(m, run.line), entry, "--json is added by figures; leave it out");
@@ -289,8 +292,8 @@ void ValidateRun(const Manifest& m, const ManifestRun& run, const fs::path& conf
   }
   const std::optional<std::string> preset = OptionValue(run.command, "--preset");
   if (!preset) throw ConfigError(Where(m, run.line), entry, "needs --preset");
-  const bool file = preset->find('/') != std::string::npos ||
-                    fs::path(*preset).extension() == ".yaml";
+  const bool file =
+      preset->find('/') != std::string::npos || fs::path(*preset).extension() == ".yaml";
   if (!file && !fs::exists(config_dir / "presets" / (*preset + ".yaml"))) {
     throw ConfigError(Where(m, run.line), entry,
                       "unknown preset '" + *preset + "' (presets: " +
@@ -320,13 +323,15 @@ void ValidateManifest(const Manifest& m, const fs::path& config_dir) {
 std::vector<std::string> RunArguments(const Manifest& m, const ManifestRun& run) {
   std::vector<std::string> args = run.command;
   if (run.seeded) {
-    args.insert(args.end(), {"--seed", std::to_string(m.first_seed), "--seeds", std::to_string(m.seeds)});
+    args.insert(args.end(),
+                {"--seed", std::to_string(m.first_seed), "--seeds", std::to_string(m.seeds)});
   }
   args.push_back("--json");
   return args;
 }
 
-std::vector<const ManifestRun*> SelectRuns(const Manifest& m, const std::vector<std::string>& only) {
+std::vector<const ManifestRun*> SelectRuns(const Manifest& m,
+                                           const std::vector<std::string>& only) {
   std::vector<const ManifestRun*> runs;
   if (only.empty()) {
     for (const ManifestRun& r : m.runs) runs.push_back(&r);

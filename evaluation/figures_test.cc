@@ -41,27 +41,28 @@ class Figures : public ::testing::Test {
 
   // A manifest of two runs: a tracking run on `field` and a classes run.
   fs::path Manifest(const std::string& runs_extra = "", const std::string& figures_extra = "") {
-    return Write("docs/results/figures.yaml",
-                 "report_seeds: {first: 700, count: 3}\n"
-                 "documents: [README.md]\n"
-                 "runs:\n"
-                 "  - name: track\n"
-                 "    command: evaluate tracking --preset field --baseline thesis\n" +
-                     runs_extra +
-                     "figures:\n"
-                     "  - {name: lateral, run: track, key: lateral_rmse_m, unit: mm, digits: 2, "
-                     "target: \"<= 5\"}\n"
-                     "  - {name: thesis, run: track, key: baseline_thesis.lateral_rmse_m, unit: mm, "
-                     "digits: 1}\n"
-                     "  - {name: nees, run: track, key: nees_in_bounds_fraction, digits: 2, target: "
-                     "\">= 0.85\"}\n" +
-                     figures_extra +
-                     "tables:\n"
-                     "  - name: t\n"
-                     "    header: ['', target, ours]\n"
-                     "    rows:\n"
-                     "      - [lateral RMSE, target:lateral, lateral]\n"
-                     "      - [NEES, target:nees, nees]\n");
+    return Write(
+        "docs/results/figures.yaml",
+        "report_seeds: {first: 700, count: 3}\n"
+        "documents: [README.md]\n"
+        "runs:\n"
+        "  - name: track\n"
+        "    command: evaluate tracking --preset field --baseline thesis\n" +
+            runs_extra +
+            "figures:\n"
+            "  - {name: lateral, run: track, key: lateral_rmse_m, unit: mm, digits: 2, "
+            "target: \"<= 5\"}\n"
+            "  - {name: thesis, run: track, key: baseline_thesis.lateral_rmse_m, unit: mm, "
+            "digits: 1}\n"
+            "  - {name: nees, run: track, key: nees_in_bounds_fraction, digits: 2, target: "
+            "\">= 0.85\"}\n" +
+            figures_extra +
+            "tables:\n"
+            "  - name: t\n"
+            "    header: ['', target, ours]\n"
+            "    rows:\n"
+            "      - [lateral RMSE, target:lateral, lateral]\n"
+            "      - [NEES, target:nees, nees]\n");
   }
 
   std::string ErrorOf(const fs::path& manifest) {
@@ -118,8 +119,8 @@ TEST_F(Figures, RefusesABadEntryBeforeRunningNamingIt) {
   const std::string own_seed =
       ErrorOf(Manifest("  - name: bad\n    command: evaluate tracking --preset field --seed 3\n"));
   EXPECT_NE(own_seed.find("run bad: names --seed or --seeds"), std::string::npos) << own_seed;
-  const std::string unknown_key = ErrorOf(
-      Manifest("", "  - {name: bad, run: track, key: lateral_rmse_mm, unit: mm}\n"));
+  const std::string unknown_key =
+      ErrorOf(Manifest("", "  - {name: bad, run: track, key: lateral_rmse_mm, unit: mm}\n"));
   EXPECT_NE(unknown_key.find("figure bad: key 'lateral_rmse_mm' is not in what evaluate tracking "
                              "--json prints"),
             std::string::npos)
@@ -176,7 +177,8 @@ TEST_F(Figures, DocumentsAreRenderedBetweenTheirMarkersAndChecked) {
       "<!-- figures-table: t -->\nold table\n<!-- /figures-table -->\n"
       "<!-- /figures: quoted -->\nOutside: 42 mm.\n";
   const std::string rendered = RenderDocument(doc, "README.md", m, fj);
-  EXPECT_NE(rendered.find("Ours <!-- figure: lateral -->4.00 mm<!-- /figure -->"), std::string::npos)
+  EXPECT_NE(rendered.find("Ours <!-- figure: lateral -->4.00 mm<!-- /figure -->"),
+            std::string::npos)
       << rendered;
   EXPECT_NE(rendered.find("<!-- figure: thesis -->15.1 mm<!-- /figure -->"), std::string::npos);
   EXPECT_NE(rendered.find("| lateral RMSE | ≤ 5 mm | 4.00 mm |\n| NEES | ≥ 0.85 | 0.90 |\n"),
@@ -208,12 +210,13 @@ TEST_F(Figures, DocumentsAreRenderedBetweenTheirMarkersAndChecked) {
 // outcome naming its exit and last line, and a second call resumes from
 // the kept outputs.
 TEST_F(Figures, RunsInParallelKeepsOutputsAndReportsFailures) {
-  const fs::path program = Write("fake.sh",
-                                 "#!/bin/sh\n"
-                                 "echo \"$@\" >> \"$(dirname \"$0\")/calls.txt\"\n"
-                                 "case \"$*\" in *moon*) echo 'no such preset' >&2; exit 2;; esac\n"
-                                 "echo '{\"lateral_rmse_m\": 0.004, \"nees_in_bounds_fraction\": 0.9,"
-                                 " \"baseline_thesis\": {\"lateral_rmse_m\": 0.02}}'\n");
+  const fs::path program =
+      Write("fake.sh",
+            "#!/bin/sh\n"
+            "echo \"$@\" >> \"$(dirname \"$0\")/calls.txt\"\n"
+            "case \"$*\" in *moon*) echo 'no such preset' >&2; exit 2;; esac\n"
+            "echo '{\"lateral_rmse_m\": 0.004, \"nees_in_bounds_fraction\": 0.9,"
+            " \"baseline_thesis\": {\"lateral_rmse_m\": 0.02}}'\n");
   ::chmod(program.c_str(), 0755);
   const struct Manifest m =
       ReadManifest(Manifest("  - name: other\n    command: evaluate tracking --preset moon\n"));
@@ -230,7 +233,8 @@ TEST_F(Figures, RunsInParallelKeepsOutputsAndReportsFailures) {
   EXPECT_FALSE(out["track"].cached);
   EXPECT_NEAR(out["track"].output["lateral_rmse_m"].get<double>(), 0.004, 1e-12);
   EXPECT_FALSE(out["other"].ok);
-  EXPECT_NE(out["other"].error.find("exit 2: no such preset"), std::string::npos) << out["other"].error;
+  EXPECT_NE(out["other"].error.find("exit 2: no such preset"), std::string::npos)
+      << out["other"].error;
   // Resumed: the good run is read back, the failed one runs again.
   out = RunFigures(m, SelectRuns(m, {}), r, log);
   EXPECT_TRUE(out["track"].cached);

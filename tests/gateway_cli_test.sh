@@ -134,6 +134,8 @@ grep -qE "^gateway: stopped; 1 connections, 0 refused .* [1-9][0-9]* LCM message
 expect 2 "--gateway: needs a udpm:// LCM URL" -- "$plantscale" simulate --preset testbed --length-m 1 \
   --publish --lcm-url memq:// --gateway 127.0.0.1:18767 --cert "$work/cert.pem" --key "$work/key.pem" \
   --users "$users"
+expect 2 "--gateway: only with --publish" -- "$plantscale" simulate --preset testbed --length-m 1 \
+  --out "$work/noout" --gateway 127.0.0.1:18768
 expect 2 "--cert/--key/--users: only with --gateway" -- "$plantscale" simulate --preset testbed \
   --length-m 1 --publish --lcm-url memq:// --users "$users"
 finish gateway

@@ -324,14 +324,21 @@ TEST(GridTracker, PlantPositionWithPartOfItsOwnOffset) {
 // profile: told 20 mm (a grower's guess), a scene planted within 6 mm and
 // one within 15 mm are each measured within 15 % of their own spread
 // (measured: 5.6 / 6.1 and 13.8 / 14.4 mm across / along).
+// The test scene's plants keep one offset each (their centroids do not
+// wander) and its features have 4 mm of noise: the tracker told so, with
+// a plant offset prior of `offset_sd_m`.
+TrackerOptions SceneTrackerOptions(double offset_sd_m) {
+  TrackerOptions o;
+  o.plant_offset_sd_m = offset_sd_m;
+  o.feature_sd_m = 0.004;
+  o.plant_offset_walk_across_sd_per_sqrt_m = 0.0;
+  o.plant_offset_walk_along_sd_per_sqrt_m = 0.0;
+  return o;
+}
+
 TEST(GridTracker, MeasuresThePlantersSpreadFromThePlants) {
   for (const double truth : {0.006, 0.015}) {
-    TrackerOptions o;
-    o.plant_offset_sd_m = 0.02;
-    o.feature_sd_m = 0.004;
-    o.plant_offset_walk_across_sd_per_sqrt_m = 0.0;
-    o.plant_offset_walk_along_sd_per_sqrt_m = 0.0;
-    Drive run(o);
+    Drive run(SceneTrackerOptions(0.02));
     run.scene.plant_offset_sd_m = truth;
     run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
     EXPECT_TRUE(std::isnan(run.tracker.measured_plant_spread().across_sd_m()));
@@ -346,13 +353,7 @@ TEST(GridTracker, MeasuresThePlantersSpreadFromThePlants) {
 
 TEST(GridTracker, CovarianceIsConsistentOnTheSyntheticGrid) {
   // NEES of (t_x, Y, Ψ) over many frames: mean near 3 for an honest filter.
-  TrackerOptions o;
-  o.plant_offset_sd_m = 0.01;
-  o.feature_sd_m = 0.004;
-  // The scene's plants keep one offset: their centroids do not wander.
-  o.plant_offset_walk_across_sd_per_sqrt_m = 0.0;
-  o.plant_offset_walk_along_sd_per_sqrt_m = 0.0;
-  Drive run(o);
+  Drive run(SceneTrackerOptions(0.01));
   run.tracker.Initialise(0, run.scene.truth, InitialCovariance());
   run.Frames(10);
   double sum = 0.0;
