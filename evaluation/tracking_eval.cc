@@ -144,15 +144,11 @@ struct Scorer {
     const Eigen::Matrix3d p = tracker.covariance().topLeftCorner<3, 3>();
     const GridErrors g = ScoreGrid(est, p, truth);
     const double e_lat = g.lateral_m, e_fwd = g.forward_m, e_bear = g.bearing_rad, n = g.nees;
-    lat += e_lat;
-    fwd += e_fwd;
-    lat2 += e_lat * e_lat;
-    bear2 += e_bear * e_bear;
+    AddErrors(g);
     sd += g.lateral_sd_m;
     nees += n;
     normalised2 += g.normalised2;
     nees_in += g.nees_in_bounds;
-    ++scored;
     if (trace) {
       *trace << seed << ',' << index << ',' << frame.truth.distance_m << ',' << e_lat << ','
              << e_fwd << ',' << e_bear << ',' << std::sqrt(p(0, 0)) << ',' << std::sqrt(p(1, 1))
@@ -176,15 +172,17 @@ struct Scorer {
   // frame is outside the NEES bounds (the filter no longer vouches for it).
   // Its σ and NEES stay out of the means of the filter's own figures.
   void ScoreLost(const geometry::GridState& est, const geometry::GridState& truth) {
-    const double e_lat = est.offset_m - truth.offset_m;
-    const double e_fwd = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
-    const double e_bear = est.bearing_rad - truth.bearing_rad;
-    lat += e_lat;
-    fwd += e_fwd;
-    lat2 += e_lat * e_lat;
-    bear2 += e_bear * e_bear;
-    ++scored;
+    AddErrors(GridErrorsOf(est, truth));
     ++lost_scored;
+  }
+
+  // A scored frame's errors into the sums of every frame (tracking or lost).
+  void AddErrors(const GridErrors& g) {
+    lat += g.lateral_m;
+    fwd += g.forward_m;
+    lat2 += g.lateral_m * g.lateral_m;
+    bear2 += g.bearing_rad * g.bearing_rad;
+    ++scored;
   }
 
   // Lines the vehicle's ground point passed since the last frame scored:
@@ -325,12 +323,17 @@ void FinishTrackingMetrics(TrackingMetrics& m, int spacing_frames,
   m.fault_forward_rmse_m = std::sqrt(m.fault_forward_rmse_m / std::max(1, m.fault_frames_tracking));
 }
 
-GridErrors ScoreGrid(const geometry::GridState& est, const Eigen::Matrix3d& p,
-                     const geometry::GridState& truth) {
+GridErrors GridErrorsOf(const geometry::GridState& est, const geometry::GridState& truth) {
   GridErrors g;
   g.lateral_m = est.offset_m - truth.offset_m;
   g.bearing_rad = est.bearing_rad - truth.bearing_rad;
   g.forward_m = std::remainder(est.forward_m - truth.forward_m, truth.plant_spacing_m);
+  return g;
+}
+
+GridErrors ScoreGrid(const geometry::GridState& est, const Eigen::Matrix3d& p,
+                     const geometry::GridState& truth) {
+  GridErrors g = GridErrorsOf(est, truth);
   g.lateral_sd_m = std::sqrt(p(0, 0));
   const Eigen::Vector3d e(g.lateral_m, g.forward_m, g.bearing_rad);
   g.nees = e.dot(p.ldlt().solve(e));

@@ -171,6 +171,9 @@ struct GridErrors {
 };
 GridErrors ScoreGrid(const geometry::GridState& estimate, const Eigen::Matrix3d& covariance,
                      const geometry::GridState& truth);
+// The errors alone (t_x, Y modulo the true plant spacing, Ψ), for an estimate
+// the filter no longer vouches for (a lost grid): ScoreGrid without NEES.
+GridErrors GridErrorsOf(const geometry::GridState& estimate, const geometry::GridState& truth);
 // An initialisation found the right grid: within a quarter of a spacing
 // across and along, and 2° in bearing.
 bool InitialisedOnTruth(const geometry::GridState& estimate, const geometry::GridState& truth);
