@@ -113,16 +113,10 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
                const std::optional<PipelineSetup>& tracker = {},
                const std::string& run_config = {}, VehicleHooks hooks = {}) {
   vehicle::CommandAuthOptions command_auth = VehicleCommandAuth(args.command_key);  // refuses a bad key file
-  const int64_t boot = tm::WallUtime();
-  tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
-  vehicle::VehicleProcessOptions options;
-  options.real_time = !args.fast;
-  options.log = args.log;
-  options.run_config = run_config;
-  options.sim_truth = sim_truth;
-  vehicle::VehicleProcess process(lcm, options, boot);
   // The gateway in this process (one process on a small vehicle computer):
   // an LCM instance of its own on the same URL, served on its own thread.
+  // Started before the vehicle, so that a bad certificate or users file is
+  // refused before a log is opened.
   std::optional<BackgroundGateway> gateway;
   if (!args.gateway.listen.empty()) {
     gateway.emplace(args.gateway, UrlOrDefault(args.lcm_url));
@@ -131,6 +125,14 @@ int RunVehicle(const PublishArgs& args, const SourceFactory& make_source, bool s
   } else if (!args.gateway.cert.empty() || !args.gateway.key.empty() || !args.gateway.users.empty()) {
     throw ConfigError("command line", "--cert/--key/--users", "only with --gateway HOST:PORT");
   }
+  const int64_t boot = tm::WallUtime();
+  tm::LcmTransport lcm(UrlOrDefault(args.lcm_url));
+  vehicle::VehicleProcessOptions options;
+  options.real_time = !args.fast;
+  options.log = args.log;
+  options.run_config = run_config;
+  options.sim_truth = sim_truth;
+  vehicle::VehicleProcess process(lcm, options, boot);
   std::unique_ptr<vehicle::FrameSource> source = make_source(process.transport(), boot);
   process.ListenForCommands(std::move(command_auth));  // start, pause and mode from the station
   process.AddStages(endpoint, tracker, std::move(hooks));
