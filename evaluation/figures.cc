@@ -248,7 +248,7 @@ std::string OpText(const FigureTarget& t) {
   return t.absolute ? "|x| " + op : op;
 }
 
-nlohmann::json FigureEntry(const Manifest& m, const ManifestFigure& f, const RunOutcome& o) {
+nlohmann::json FigureEntry(const ManifestFigure& f, const RunOutcome& o) {
   nlohmann::json e{{"run", f.run}, {"key", f.key}, {"unit", f.unit}};
   if (f.target) e["target"] = TargetText(f);
   if (!o.ok) {
@@ -277,7 +277,6 @@ nlohmann::json FigureEntry(const Manifest& m, const ManifestFigure& f, const Run
       e["missed_by"] = Significant(std::abs(x - f.target->value));
     }
   }
-  (void)m;
   return e;
 }
 
@@ -330,7 +329,7 @@ nlohmann::json FiguresJson(const Manifest& m, const std::map<std::string, RunOut
     }
     runs[run.name] = r;
     for (const ManifestFigure& f : m.figures) {
-      if (f.run == run.name) figures[f.name] = FigureEntry(m, f, o);
+      if (f.run == run.name) figures[f.name] = FigureEntry(f, o);
     }
   }
   for (const ManifestFigure& f : m.figures) {
