@@ -91,11 +91,7 @@ int FiguresCommand(const FiguresArgs& a, const GlobalOptions& global) {
   const fs::path json_path = FiguresJsonPath(manifest_path);
   if (a.list) {
     for (const ManifestRun& run : m.runs) {
-      std::cout << run.name << ": plantscale " << [&] {
-        std::string s;
-        for (const std::string& w : RunArguments(m, run)) s += (s.empty() ? "" : " ") + w;
-        return s;
-      }() << '\n';
+      std::cout << run.name << ": " << RunCommandLine(m, run) << '\n';
       for (const ManifestFigure& f : m.figures) {
         if (f.run == run.name) std::cout << "  " << f.name << " = " << f.key << '\n';
       }
