@@ -40,11 +40,11 @@ struct UsersAddArgs {
   bool replace = false;
 };
 
-// "HOST:PORT" (an IPv4 address); ConfigError naming --listen otherwise.
-void ParseListen(const std::string& listen, gw::GatewayOptions& o) {
+// "HOST:PORT" (an IPv4 address); ConfigError naming `flag` (--listen, --gateway) otherwise.
+void ParseListen(const std::string& listen, const char* flag, gw::GatewayOptions& o) {
   const size_t colon = listen.rfind(':');
   const auto bad = [&](const std::string& why) {
-    throw ConfigError("command line", "--listen",
+    throw ConfigError("command line", flag,
                       "'" + listen + "': " + why + " (e.g. 0.0.0.0:8765)");
   };
   if (colon == std::string::npos || colon == 0) bad("must be HOST:PORT");
@@ -60,13 +60,7 @@ void ParseListen(const std::string& listen, gw::GatewayOptions& o) {
 
 gw::GatewayOptions ServeOptions(const GatewayServeArgs& a, const char* listen_flag) {
   gw::GatewayOptions o;
-  try {
-    ParseListen(a.listen, o);
-  } catch (const ConfigError& e) {
-    const std::string what = e.what();
-    if (std::string(listen_flag) == "--listen") throw;
-    throw ConfigError("command line", listen_flag, what.substr(what.find("'")));
-  }
+  ParseListen(a.listen, listen_flag, o);
   o.insecure_loopback = a.insecure_loopback;
   o.cert_file = a.cert;
   o.key_file = a.key;
