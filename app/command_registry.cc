@@ -49,6 +49,10 @@ void AddProfileOptions(CLI::App* cmd, ProfileArgs& a, bool calibration_error) {
   cmd->add_option("--vehicle", a.vehicle,
                   "vehicle profile the engine is configured from (config/vehicles name or YAML "
                   "file; default: the preset's vehicle, by name)");
+  cmd->add_option("--segmenter-model", a.segmenter_model,
+                  "the grower's learned crop/weed model (config/models name or .onnx file, "
+                  "docs/learned-segmentation.md) instead of the crop profile's segmenter.model; "
+                  "\"none\": the grid's rule alone");
   if (calibration_error) {
     cmd->add_option("--calibration-error", a.calibration_error,
                     "the engine's camera is off from the simulator's by an error drawn per seed "
@@ -57,6 +61,17 @@ void AddProfileOptions(CLI::App* cmd, ProfileArgs& a, bool calibration_error) {
                     "height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01 (the JSON lists each "
                     "seed's draw)");
   }
+}
+
+void ApplySegmenterModelArg(const ProfileArgs& a, const std::filesystem::path& config_dir,
+                            Profiles& profiles) {
+  if (a.segmenter_model.empty()) return;
+  if (a.segmenter_model == "none") {
+    profiles.crop.segmenter_model.clear();
+    return;
+  }
+  profiles.crop.segmenter_model = ResolveModelPath(a.segmenter_model, std::filesystem::current_path(),
+                                                   config_dir, "--segmenter-model", a.segmenter_model);
 }
 
 std::string HelpNumber(double value) {

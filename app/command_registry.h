@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "app/config/profiles.h"
+
 namespace plantscale::app {
 
 // Options that every subcommand may read (set before the subcommand).
@@ -68,8 +70,14 @@ struct ProfileArgs {
   std::string crop;
   std::string vehicle;
   std::string calibration_error;
+  std::string segmenter_model;  // overrides the crop profile's `segmenter: {model}`
 };
 void AddProfileOptions(CLI::App* cmd, ProfileArgs& args, bool calibration_error);
+// The crop profile's learned model replaced by --segmenter-model (when
+// given: a name in config/models or a .onnx path). Throws ConfigError when
+// it names no model.
+void ApplySegmenterModelArg(const ProfileArgs& args, const std::filesystem::path& config_dir,
+                            Profiles& profiles);
 
 // A default for a --help text, printed from the code's own value ("%g").
 std::string HelpNumber(double value);

@@ -22,6 +22,7 @@ struct SimulateArgs {
   std::string image;
   bool quiet = false;
   std::string crop, vehicle;  // profiles of the vehicle pipeline (--publish)
+  std::string segmenter_model;  // --segmenter-model (overrides the crop profile's)
   PublishArgs publish;  // simulate only: --publish, --fast, --lcm-url, --log
 };
 
@@ -92,8 +93,11 @@ int Simulate(const SimulateArgs& args, const GlobalOptions& global, const char* 
   }
   const SimulateRequest request = MakeRequest(args, global);
   if (args.publish.publish) {
-    const Profiles profiles =
+    Profiles profiles =
         LoadProfiles(args.crop, args.vehicle, request.options.preset, global.ConfigDir());
+    ProfileArgs model;
+    model.segmenter_model = args.segmenter_model;
+    ApplySegmenterModelArg(model, global.ConfigDir(), profiles);
     PrintProfileWarnings(profiles, std::cerr);
     SimRunConfig run = SimRunConfigOf(args.preset, global.ConfigDir(), request.options);
     run.crop = std::filesystem::absolute(profiles.crop.file).lexically_normal().string();
@@ -136,6 +140,9 @@ void AddSimulateCommands(CommandRegistry& registry) {
   simulate->add_option("--vehicle", sim.vehicle,
                        "with --publish: the vehicle pipeline's vehicle profile (config/vehicles "
                        "name or YAML file; default: the preset's vehicle by name)");
+  simulate->add_option("--segmenter-model", sim.segmenter_model,
+                       "with --publish: the grower's learned crop/weed model (config/models name "
+                       "or .onnx file) instead of the crop profile's; \"none\": the grid's rule alone");
 
   registry.Add("presets", "list the simulator presets, cameras, crop profiles and vehicle profiles",
                [&global] { return Presets(global); });

@@ -181,6 +181,7 @@ struct RunArgs {
   std::string calibration;       // the vehicle's camera instead of its own calibration
   std::string preset = "field";  // the crop and vehicle profiles of this preset, by name
   std::string crop;              // crop profile (config/crops or a file)
+  std::string segmenter_model;   // --segmenter-model (overrides the crop profile's)
   std::string vehicle;           // vehicle profile (config/vehicles or a file)
 };
 
@@ -190,12 +191,19 @@ int Run(const RunArgs& a, const GlobalOptions& global) {
   // for --preset's nominal crop and vehicle) and, when given, the
   // calibration in place of the vehicle's own.
   std::optional<Profiles> profiles;
+  if (!a.segmenter_model.empty() && a.calibration.empty() && a.vehicle.empty() && a.crop.empty()) {
+    throw ConfigError("command line", "--segmenter-model",
+                      "only with the whole pipeline (--crop, --vehicle or --calibration)");
+  }
   if (!a.calibration.empty() || !a.vehicle.empty() || !a.crop.empty()) {
     const std::filesystem::path dir = global.ConfigDir();
     if (a.crop.empty() || a.vehicle.empty()) {
       ResolveConfigFile(a.preset, dir / "presets", "preset");  // names an unknown preset
     }
     profiles = LoadProfiles(a.crop, a.vehicle, std::filesystem::path(a.preset).stem().string(), dir);
+    ProfileArgs model;
+    model.segmenter_model = a.segmenter_model;
+    ApplySegmenterModelArg(model, dir, *profiles);
     if (!a.calibration.empty()) {
       const std::string file = ResolveConfigFile(a.calibration, dir / "cameras", "camera").string();
       const geometry::CameraOptions calibration = LoadCamera(a.calibration, dir);
@@ -330,6 +338,9 @@ void AddTelemetryCommands(CommandRegistry& registry) {
                  "vehicle profile (config/vehicles name or YAML file: track width, calibration, "
                  "valve latency, nozzles, suspension); runs tracking, treatment and the bar "
                  "(default: --preset's vehicle)");
+  rc->add_option("--segmenter-model", run.segmenter_model,
+                 "the grower's learned crop/weed model (config/models name or .onnx file) instead "
+                 "of the crop profile's; \"none\": the grid's rule alone");
   CLI::Option* calibration =
       rc->add_option("--calibration", run.calibration,
                      "the camera's calibration: a YAML file as config/cameras/*.yaml (or a "

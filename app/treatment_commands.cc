@@ -144,10 +144,12 @@ TreatmentEvalOptions TreatmentEvalOptionsFrom(const TreatmentArgs& a, const Glob
   if (a.length_m) o.sim.length_m = *a.length_m;
   o.seeds = a.seeds;
   o.profiles = LoadProfiles(a.profiles.crop, a.profiles.vehicle, o.sim.preset, global.ConfigDir());
+  ApplySegmenterModelArg(a.profiles, global.ConfigDir(), *o.profiles);
   PrintProfileWarnings(*o.profiles, std::cerr);
   o.calibration_error = ParseCalibrationError(a.profiles.calibration_error, "--calibration-error");
   o.calibration_error_text = a.profiles.calibration_error;
   o.treatment = ProductTreatmentOptions(*o.profiles);
+  o.learned = LearnedPipelineOptions(o.profiles->crop);
   ApplyTreatmentArgs(a, o.treatment);
   ApplyClassifierArgs(a, o.treatment.classifier);
   ApplySegmenterArgs(a, o.segmenter);

@@ -14,10 +14,11 @@ struct EngineUsed {
   std::string crop, vehicle;           // the profiles' names
   CalibrationError calibration_error;  // the sds (each seed draws its own signs)
   std::string calibration_error_text;  // as given; empty: none
+  std::string segmenter_model;         // the learned model's file; empty: the grid's rule alone
 
   static EngineUsed Of(const Profiles& profiles, const CalibrationError& error,
                        const std::string& text) {
-    return {profiles.crop.name, profiles.vehicle.name, error, text};
+    return {profiles.crop.name, profiles.vehicle.name, error, text, profiles.crop.segmenter_model};
   }
 };
 

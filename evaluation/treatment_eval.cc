@@ -52,10 +52,11 @@ struct Chain {
 
   Chain(const geometry::CameraOptions& engine_camera, const vision::SegmenterOptions& seg,
         const tracking::TrackerOptions& track, const treatment::TreatmentOptions& treat,
-        double true_latency_s, const pipeline::MotionFusionOptions& motion = {})
+        double true_latency_s, const pipeline::MotionFusionOptions& motion = {},
+        const pipeline::LearnedOptions& learned = {})
       : bar(treat.scheduler.bar, true_latency_s, treat.scheduler.tick_s),
         camera(engine_camera),
-        pipe(camera, Options(seg, track, treat, motion)) {
+        pipe(camera, Options(seg, track, treat, motion, learned)) {
     pipe.set_sink(bar.Sink());
   }
 
@@ -64,9 +65,11 @@ struct Chain {
   static pipeline::PipelineOptions Options(const vision::SegmenterOptions& seg,
                                            const tracking::TrackerOptions& track,
                                            const treatment::TreatmentOptions& treat,
-                                           const pipeline::MotionFusionOptions& motion) {
+                                           const pipeline::MotionFusionOptions& motion,
+                                           const pipeline::LearnedOptions& learned) {
     pipeline::PipelineOptions o;
     o.segmenter = seg;
+    o.learned = learned;
     o.tracker = track;
     o.treatment = treat;
     o.motion = motion;
@@ -245,6 +248,9 @@ TreatmentMetrics SprayMetrics(const SprayScore& p) {
   m.weed_hit_rate = Ratio(p.weed_hits, p.weeds);
   m.weeds_clear = p.weeds_clear;
   m.weed_hit_rate_clear = Ratio(p.weed_hits_clear, p.weeds_clear);
+  m.weeds_touching = p.weeds_touching;
+  m.weed_hit_rate_touching = Ratio(p.weed_hits_touching, p.weeds_touching);
+  m.weed_hit_rate_touching_crop_dry = Ratio(p.weed_hits_touching_crop_dry, p.weeds_touching);
   const double n = std::max(1, p.crop_hits);
   m.placement_bias_across_m = p.error_sum.x() / n;
   m.placement_bias_along_m = p.error_sum.y() / n;
@@ -344,8 +350,10 @@ struct SeedChains {
              treatment::SegmenterOptionsFor(options.treatment.scheduler.mode, options.segmenter),
              OurTracker(options), options.treatment, true_latency_s,
              options.visual_motion ? VisualMotionOptions(*options.profiles)
-                                   : pipeline::MotionFusionOptions{}),
+                                   : pipeline::MotionFusionOptions{},
+             options.learned),
         thesis_options(ThesisTreatmentOptions(preset, engine_camera)) {
+    if (!ours.pipe.learned_fault().empty()) throw DataError(ours.pipe.learned_fault());
     ours.collect_samples = options.mrroc;
     thesis_options.scheduler = options.treatment.scheduler;
     // The thesis's chain commands its bar at the pose rate, as it did before

@@ -36,6 +36,7 @@ struct TreatmentEvalOptions {
   std::string calibration_error_text;  // as given (the table quotes it); empty: none
   int seeds = 5;  // sim.seed, sim.seed + 1, ... (ForEachSeed)
   vision::SegmenterOptions segmenter;  // ours (the thesis's chain: ThesisSegmenterOptions)
+  pipeline::LearnedOptions learned;    // ours: the crop profile's learned model, if any
   treatment::TreatmentOptions treatment;
   double true_valve_latency_s = -1.0;  // the simulated valves' latency; < 0: as scheduled
   bool baseline_thesis = false;
@@ -71,6 +72,10 @@ struct TreatmentMetrics {
   double weed_hit_rate = 0.0;
   int weeds_clear = 0;
   double weed_hit_rate_clear = 0.0;  // weeds not under a crop's leaves
+  // Weeds touching a crop's outline (SprayScore::weeds_touching): hit, and
+  // hit with the crop's root dry.
+  int weeds_touching = 0;
+  double weed_hit_rate_touching = 0.0, weed_hit_rate_touching_crop_dry = 0.0;
   double placement_bias_along_m = 0.0, placement_bias_across_m = 0.0;  // to the root
   double placement_rms_along_m = 0.0, placement_rms_across_m = 0.0;
   double placement_rms_m = 0.0;  // the larger of the two

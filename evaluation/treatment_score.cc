@@ -49,6 +49,24 @@ bool UnderACrop(const sim::Field& field, const sim::Plant& weed) {
   return false;
 }
 
+// The crop whose outline a weed clear of every crop's leaves touches (the
+// nearest such), or null.
+const sim::Plant* TouchedCrop(const sim::Field& field, const sim::Plant& weed) {
+  const auto [b, e] = field.PlantsBetween(weed.position_m.y() - 0.5, weed.position_m.y() + 0.5);
+  const sim::Plant* touched = nullptr;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (size_t i = b; i < e; ++i) {
+    const sim::Plant& p = field.plants()[i];
+    if (p.cls != sim::PlantClass::kCrop) continue;
+    const double d = (weed.position_m - (p.position_m + p.lean_m)).norm();
+    if (d <= p.radius_m + weed.radius_m && d - p.radius_m < nearest) {
+      nearest = d - p.radius_m;
+      touched = &p;
+    }
+  }
+  return touched;
+}
+
 // Centre of the bounding box of the sprayed patch holding pixel (col, row),
 // within a window of ± half_size_m so that patches joined to a neighbour's
 // (through a weed between them) are cut at the window.
@@ -90,6 +108,9 @@ void SprayScore::Merge(const SprayScore& o) {
   weed_hits += o.weed_hits;
   weeds_clear += o.weeds_clear;
   weed_hits_clear += o.weed_hits_clear;
+  weeds_touching += o.weeds_touching;
+  weed_hits_touching += o.weed_hits_touching;
+  weed_hits_touching_crop_dry += o.weed_hits_touching_crop_dry;
   error_sum += o.error_sum;
   error2_sum += o.error2_sum;
   centre_error_sum += o.centre_error_sum;
@@ -132,6 +153,13 @@ SprayScore ScoreSpray(const sim::Field& field, std::span<const treatment::Shot> 
       if (!UnderACrop(field, p)) {
         ++score.weeds_clear;
         score.weed_hits_clear += sprayed;
+        if (const sim::Plant* crop = TouchedCrop(field, p)) {
+          int c = 0, w = 0;
+          const bool crop_sprayed = r.At(crop->position_m, c, w) && r.mask.at<uint8_t>(w, c) != 0;
+          ++score.weeds_touching;
+          score.weed_hits_touching += sprayed;
+          score.weed_hits_touching_crop_dry += sprayed && !crop_sprayed;
+        }
       }
       continue;
     }

@@ -39,6 +39,10 @@ struct SprayScore {
   int crop_plants = 0, crop_hits = 0;
   int weeds = 0, weed_hits = 0;
   int weeds_clear = 0, weed_hits_clear = 0;  // weeds not under a crop's leaves
+  // Of those, weeds whose outline touches a crop's (root beyond the crop's
+  // leaf-tip radius, within it plus the weed's own): hit, and hit with that
+  // crop's root left dry (spray-weed mode's aim).
+  int weeds_touching = 0, weed_hits_touching = 0, weed_hits_touching_crop_dry = 0;
   // Sums over hit crops, field frame (x across, y along).
   Eigen::Vector2d error_sum = Eigen::Vector2d::Zero();
   Eigen::Vector2d error2_sum = Eigen::Vector2d::Zero();

@@ -20,6 +20,9 @@ nlohmann::json MetricsJson(const TreatmentMetrics& m) {
       {"weed_hit_rate", m.weed_hit_rate},
       {"weeds_clear_of_crop", m.weeds_clear},
       {"weed_hit_rate_clear_of_crop", m.weed_hit_rate_clear},
+      {"weeds_touching_crop", m.weeds_touching},
+      {"weed_hit_rate_touching_crop", m.weed_hit_rate_touching},
+      {"weed_hit_rate_touching_crop_dry", m.weed_hit_rate_touching_crop_dry},
       {"placement_bias_along_m", m.placement_bias_along_m},
       {"placement_bias_across_m", m.placement_bias_across_m},
       {"placement_rms_along_m", m.placement_rms_along_m},
@@ -85,6 +88,8 @@ void PrintFigures(const TreatmentEvaluation& e, std::ostream& out) {
   row("crop hit rate", e.ours.crop_hit_rate, t(&M::crop_hit_rate), 100, "%", "all crops treated (§8.2.1)");
   row("weed hit rate", e.ours.weed_hit_rate, t(&M::weed_hit_rate), 100, "%", "none of the weeds (§8.2.1)");
   row("weed hit rate, clear of crop", e.ours.weed_hit_rate_clear, t(&M::weed_hit_rate_clear), 100, "%", "");
+  row("weeds touching a crop hit, crop dry", e.ours.weed_hit_rate_touching_crop_dry,
+      t(&M::weed_hit_rate_touching_crop_dry), 100, "%", "");
   row("placement bias along (y_w)", e.ours.placement_bias_along_m, t(&M::placement_bias_along_m), 1000, "mm", "-23.1 mm (table 8.3)");
   row("placement bias across (x_w)", e.ours.placement_bias_across_m, t(&M::placement_bias_across_m), 1000, "mm", "9.7 mm (table 8.3)");
   row("placement RMS along", e.ours.placement_rms_along_m, t(&M::placement_rms_along_m), 1000, "mm", "34.4 mm (table 8.3)");

@@ -15,12 +15,14 @@ void AddEngineJson(const EngineUsed& engine, nlohmann::json& j) {
   j["crop"] = engine.crop;
   j["vehicle"] = engine.vehicle;
   j["calibration_error"] = CalibrationErrorJson(engine.calibration_error);
+  if (!engine.segmenter_model.empty()) j["segmenter_model"] = engine.segmenter_model;
 }
 
 void WriteEngineLine(const EngineUsed& engine, std::ostream& out) {
   out << "  engine: crop " << engine.crop << ", vehicle " << engine.vehicle
       << ", calibration error "
-      << (engine.calibration_error_text.empty() ? "none" : engine.calibration_error_text) << '\n';
+      << (engine.calibration_error_text.empty() ? "none" : engine.calibration_error_text)
+      << (engine.segmenter_model.empty() ? "" : ", segmenter model " + engine.segmenter_model) << '\n';
 }
 
 }  // namespace plantscale::app

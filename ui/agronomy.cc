@@ -359,6 +359,10 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   a.cell_length_m = o.cell_length_m;
   a.area_treated_m2 = run.area_treated_m2;
   if (run.area_treated_m2) a.product_l = *run.area_treated_m2 * 1e-4 * o.rate_l_ha;
+  if (run.area_mapped_m2 && *run.area_mapped_m2 > 0.0) {
+    a.broadcast_product_l = *run.area_mapped_m2 * 1e-4 * o.rate_l_ha;
+    if (a.product_l) a.product_saved_fraction = 1.0 - *a.product_l / *a.broadcast_product_l;
+  }
 
   std::vector<const PlantRecord*> crops;
   for (const auto& [id, r] : model.plants()) {

@@ -128,6 +128,10 @@ struct AgronomySummary {
   SizeStats weed_size;
   std::optional<double> area_treated_m2;
   std::optional<double> product_l;
+  // A broadcast application of the bed the map covered at the same rate,
+  // and the share of it the spot sprayer saved (1 − product / broadcast).
+  std::optional<double> broadcast_product_l;
+  std::optional<double> product_saved_fraction;
   double rate_l_ha = 0.0;
   int shots = 0;
   int faults = 0;

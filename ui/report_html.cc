@@ -34,6 +34,7 @@ void SummaryTable(std::ostringstream& out, const RunSummary& s) {
   };
   Row(out, "crop treated", treated(s.crop_treated, s.crop_not_reached));
   Row(out, "weeds treated", treated(s.weeds_treated, s.weeds_not_reached));
+  Row(out, "weeds left (seen, not treated)", std::to_string(s.weeds_left));
   Row(out, "nozzle shots", std::to_string(s.shots));
   Row(out, "area treated",
       s.area_treated_m2 ? Fixed(*s.area_treated_m2, 3) + " m²" : std::string("n/a (no map tiles in log)"));
@@ -104,6 +105,11 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
   Row(out, "area treated", a.area_treated_m2 ? Fixed(*a.area_treated_m2, 2) + " m²" : std::string("n/a (no map tiles)"));
   Row(out, "product used", a.product_l ? Fixed(*a.product_l, 3) + " L at " + Fixed(a.rate_l_ha, 0) + " L/ha"
                                        : std::string("n/a"));
+  if (a.broadcast_product_l && a.product_saved_fraction) {
+    Row(out, "product saved", Fixed(100.0 * *a.product_saved_fraction, 1) + " % against " +
+                                  Fixed(*a.broadcast_product_l, 3) +
+                                  " L broadcast over the bed mapped");
+  }
   Row(out, "nozzle shots, faults", std::to_string(a.shots) + ", " + std::to_string(a.faults));
   out << "</table>\n";
   if (truth) {
@@ -246,6 +252,7 @@ std::string ReportJson(const std::string& log_name, const RunSummary& s, const A
               {"weeds_seen", s.weeds_seen},
               {"crop_treated", s.crop_treated},
               {"weeds_treated", s.weeds_treated},
+              {"weeds_left", s.weeds_left},
               {"shots", s.shots},
               {"faults", s.faults},
               {"vehicle_restarts", s.vehicle_restarts},
@@ -288,6 +295,8 @@ std::string ReportJson(const std::string& log_name, const RunSummary& s, const A
                    {"weed_radius", SizeJson(a.weed_size)},
                    {"area_treated_m2", opt(a.area_treated_m2)},
                    {"product_l", opt(a.product_l)},
+                   {"broadcast_product_l", opt(a.broadcast_product_l)},
+                   {"product_saved_fraction", opt(a.product_saved_fraction)},
                    {"rate_l_ha", a.rate_l_ha},
                    {"shots", a.shots},
                    {"faults", a.faults},

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <set>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "app/config/config_loader.h"
+#include "app/config/learned_model.h"
 #include "engine/common/rng.h"
 
 namespace plantscale::app {
@@ -132,6 +134,13 @@ CropProfile LoadCropProfile(const std::string& name_or_path, const fs::path& con
   c.planter_sd_m = k.Number("planter_sd_m", 0.0, 0.1, "m", kGrowerPlanterSdM);
   c.virtual_plane_height_m =
       k.Number("virtual_plane_height_m", 0.0, 1.0, "m", 0.9 * c.leaf_height_m);
+  if (k.Has("segmenter")) {
+    Keys m(k.Node("segmenter"), c.file, "segmenter");
+    c.segmenter_model = ResolveModelPath(m.String("model"), file.parent_path(), config_dir, c.file,
+                                         "segmenter.model");
+    c.segmenter_min_confidence = m.Number("min_confidence", 0.0, 2.0, "", c.segmenter_min_confidence);
+    m.Finish();
+  }
   k.Finish();
   return c;
 }
@@ -447,11 +456,43 @@ treatment::TreatmentOptions ProductTreatmentOptions(const Profiles& p) {
   o.registry.crop_size_sd_fraction = p.crop.leaf_radius_sd_fraction;
   // Plant sizes are measured at the leaf tips, where the outline is.
   o.outline_height_m = p.crop.leaf_height_m;
+  o.classifier.learned_min_confidence = p.crop.segmenter_min_confidence;
+  return o;
+}
+
+std::string ResolveModelPath(const std::string& model, const fs::path& base,
+                             const fs::path& config_dir, const std::string& file,
+                             const std::string& key) {
+  fs::path path(model);
+  const bool is_path = path.extension() == ".onnx" || model.find('/') != std::string::npos;
+  if (!is_path) path = config_dir / "models" / (model + ".onnx");
+  else if (path.is_relative() && !base.empty()) path = base / path;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw ConfigError(file, key,
+                      "no model " + path.string() +
+                          (is_path ? "" : " (a name is a model in config/models; a path ends in .onnx)"));
+  }
+  return path.string();
+}
+
+pipeline::LearnedOptions LearnedPipelineOptions(const CropProfile& crop) {
+  pipeline::LearnedOptions o;
+  if (crop.segmenter_model.empty()) return o;
+  o.source = crop.segmenter_model;
+  try {
+    LearnedModel m = ReadLearnedModel(crop.segmenter_model);
+    o.spec = m.spec;
+    o.onnx = std::make_shared<const std::vector<uint8_t>>(std::move(m.onnx));
+  } catch (const std::exception& e) {
+    o.unreadable = e.what();
+  }
   return o;
 }
 
 pipeline::PipelineOptions ProductPipelineOptions(const Profiles& p) {
   pipeline::PipelineOptions o;
+  o.learned = LearnedPipelineOptions(p.crop);
   o.treatment = ProductTreatmentOptions(p);
   o.segmenter = treatment::SegmenterOptionsFor(o.treatment.scheduler.mode);
   o.tracker = ProductTrackerOptions(p);

@@ -35,6 +35,12 @@ struct CropProfile {
   double leaf_height_m = 0.0;           // height of the leaf tips above the soil
   double planter_sd_m = 0.0;            // each plant's position about its grid place (sd, with lean)
   double virtual_plane_height_m = 0.0;  // the camera's virtual ground plane (thesis §2.3.8)
+  // The grower's learned crop/weed model for this crop (`segmenter: {model:
+  // FILE, min_confidence: C}`; learned_model.h): a resolved path, empty for
+  // none. FILE is a name in config/models (`field-grey`) or a path relative
+  // to the profile's folder.
+  std::string segmenter_model;
+  double segmenter_min_confidence = 0.6;  // ClassifierOptions::learned_min_confidence
 };
 
 // The spreads a grower seldom measures, when the crop profile leaves them
@@ -148,6 +154,16 @@ treatment::TreatmentOptions ProductTreatmentOptions(const Profiles& profiles);
 // enabled.
 pipeline::MotionFusionOptions VisualMotionOptions(const Profiles& p);
 pipeline::PipelineOptions ProductPipelineOptions(const Profiles& profiles);
+// The learned model the crop profile names, read from disk (none: disabled
+// options). A model that cannot be read is not an error here: the options
+// carry the reason (LearnedOptions::unreadable) and the pipeline runs on
+// the grid's rule, saying so in every frame's faults.
+pipeline::LearnedOptions LearnedPipelineOptions(const CropProfile& crop);
+// `model`: a name in config/models or a path (relative to `base`); the
+// resolved path. Throws ConfigError naming `file` and `key` when neither exists.
+std::string ResolveModelPath(const std::string& model, const std::filesystem::path& base,
+                             const std::filesystem::path& config_dir, const std::string& file,
+                             const std::string& key);
 // The thesis's tracker (§4.6, ch. 8) with its noise settings, on the same
 // profiles (rows, nominal spacings, track width).
 tracking::TrackerOptions ThesisTrackerOptions(const Profiles& profiles);

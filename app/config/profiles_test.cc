@@ -324,5 +324,45 @@ TEST(Profiles, BadInputNamesFileKeyAndRange) {
   fs::remove(Write("good.yaml", ""));
 }
 
+// `segmenter: {model, min_confidence}`: a name in config/models or a path
+// beside the profile; the pipeline's learned options carry the model's
+// bytes and card, or, for a model that cannot be read, the reason.
+TEST(Profiles, SegmenterModelKeyNamesTheGrowersModel) {
+  const fs::path dir = DefaultConfigDir();
+  const fs::path named = Write("named.yaml", std::string(kCrop) + "segmenter: {model: peanut, min_confidence: 0.75}\n");
+  const CropProfile c = LoadCropProfile(named.string(), dir);
+  EXPECT_EQ(fs::path(c.segmenter_model), dir / "models" / "peanut.onnx");
+  EXPECT_DOUBLE_EQ(c.segmenter_min_confidence, 0.75);
+  const pipeline::LearnedOptions l = LearnedPipelineOptions(c);
+  ASSERT_TRUE(l.enabled());
+  ASSERT_TRUE(l.onnx);
+  EXPECT_EQ(l.onnx->size(), fs::file_size(dir / "models" / "peanut.onnx"));
+  EXPECT_EQ(l.spec.channels, 3);
+  EXPECT_TRUE(l.unreadable.empty());
+  Profiles p{c, LoadVehicleProfile("silsoe", dir)};
+  EXPECT_DOUBLE_EQ(ProductPipelineOptions(p).treatment.classifier.learned_min_confidence, 0.75);
+  EXPECT_TRUE(ProductPipelineOptions(p).learned.enabled());
+  // None named: off.
+  EXPECT_FALSE(LearnedPipelineOptions(LoadCropProfile("cauliflower-6-week", dir)).enabled());
+  // A model that is not there: refused naming the file, the key and the path.
+  const fs::path gone = Write("gone.yaml", std::string(kCrop) + "segmenter: {model: no-such-model}\n");
+  EXPECT_NE(ErrorOf([&] { LoadCropProfile(gone.string(), dir); })
+                .find(gone.string() + ": segmenter.model: no model " + (dir / "models" / "no-such-model.onnx").string()),
+            std::string::npos);
+  const fs::path typo = Write("segtypo.yaml", std::string(kCrop) + "segmenter: {model: peanut, confidence: 0.7}\n");
+  EXPECT_NE(ErrorOf([&] { LoadCropProfile(typo.string(), dir); }).find("segmenter.confidence: unknown key"),
+            std::string::npos);
+  // A model file whose card is missing: read as unreadable, not thrown.
+  const fs::path bare = fs::temp_directory_path() / ("plantscale_profiles_" + std::to_string(::getpid()) + "_bare.onnx");
+  std::ofstream(bare) << "not a graph";
+  CropProfile b = c;
+  b.segmenter_model = bare.string();
+  const pipeline::LearnedOptions u = LearnedPipelineOptions(b);
+  EXPECT_TRUE(u.enabled());
+  EXPECT_FALSE(u.onnx);
+  EXPECT_NE(u.unreadable.find("_bare.json"), std::string::npos) << u.unreadable;
+  for (const fs::path& f : {named, gone, typo, bare}) fs::remove(f);
+}
+
 }  // namespace
 }  // namespace plantscale::app

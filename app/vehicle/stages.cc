@@ -350,6 +350,11 @@ void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
                                                           : treatment::SprayMode::kCrop;
   }
   pipeline_.SetOperator(status.commands.held(), spray);
+  if (!learned_reported_ && !pipeline_.learned_fault().empty()) {
+    // Once, as an event; every heartbeat carries it as a fault line.
+    Event(publisher, frame.utime, "segmenter_model_not_loaded", pipeline_.learned_fault());
+  }
+  learned_reported_ = true;
   ticks_.clear();
   const pipeline::FrameResult& r =
       pipeline_.Step(frame.utime, frame.frame_index, frame.image, frame.odometry, &ticks_);

@@ -158,6 +158,7 @@ class PipelineStage : public Stage, public BlobView {
   void PublishTiles(int64_t utime, Publisher& publisher, bool to_the_end = false);
   bool TileRowObserved(int tile_row) const;
   int LastObservedTileRow() const;
+  bool learned_reported_ = false;  // the model's load failure was an event
   telemetry::MapTileDelta Tile(int tx, int ty) const;
   // The plants sprayed since the last call join the changed records.
   void NoteNewlySprayed();

@@ -472,3 +472,48 @@ TEST(BeyondCropOutline, OffOrTooFewPointsFlagsNothing) {
 
 }  // namespace
 }  // namespace plantscale::classify
+
+namespace plantscale::classify {
+namespace {
+
+// The learned model's class decides where it is sure; the grid's rule
+// elsewhere; a sure weed loses its association with the crop it touches.
+TEST(FuseLearned, TheModelDecidesWhereSureAndTheRuleElsewhere) {
+  ClassifierOptions o;
+  o.learned_min_confidence = 0.6;
+  BlobDecision rule;
+  rule.crop = true;
+  rule.associated = true;
+  rule.m = 1;
+  BlobDecision d = rule;
+  FuseLearned(2, 0.9, o, d);  // sure weed inside a crop's region
+  EXPECT_FALSE(d.crop);
+  EXPECT_FALSE(d.associated);
+  EXPECT_TRUE(d.learned);
+  EXPECT_EQ(d.learned_class, 2);
+  EXPECT_DOUBLE_EQ(d.learned_confidence, 0.9);
+  d = rule;
+  FuseLearned(2, 0.59, o, d);  // unsure: the rule's crop stands
+  EXPECT_TRUE(d.crop);
+  EXPECT_TRUE(d.associated);
+  EXPECT_FALSE(d.learned);
+  EXPECT_EQ(d.learned_class, 2);
+  BlobDecision weed;  // the rule's weed (outside every region)
+  d = weed;
+  FuseLearned(1, 0.8, o, d);  // sure crop
+  EXPECT_TRUE(d.crop);
+  EXPECT_FALSE(d.associated);  // the grid did not place it
+  EXPECT_TRUE(d.learned);
+  d = weed;
+  FuseLearned(0, 0.99, o, d);  // the model calls it soil: the rule stands
+  EXPECT_FALSE(d.crop);
+  EXPECT_FALSE(d.learned);
+  o.learned_min_confidence = 1.5;  // never
+  d = rule;
+  FuseLearned(2, 1.0, o, d);
+  EXPECT_TRUE(d.crop);
+  EXPECT_FALSE(d.learned);
+}
+
+}  // namespace
+}  // namespace plantscale::classify

@@ -32,6 +32,7 @@ OptionErrors ClassifierOptions::Validate() const {
   }
   RequireInRange(e, "lone_crop_fraction", lone_crop_fraction, 0.0, 1.0);
   RequireNonNegative(e, "outline_limit_sd", outline_limit_sd);
+  RequireNonNegative(e, "learned_min_confidence", learned_min_confidence);
   return e;
 }
 
@@ -61,6 +62,24 @@ Eigen::Matrix2d AssociationCovariance(const PredictedCrop& crop, const geometry:
   return crop.jacobian * p * crop.jacobian.transpose() +
          crop.bounce_jacobian * b * crop.bounce_jacobian.transpose() +
          r * Eigen::Matrix2d::Identity();
+}
+
+void FuseLearned(int learned_class, double confidence, const ClassifierOptions& options,
+                 BlobDecision& d) {
+  d.learned_class = learned_class;
+  d.learned_confidence = confidence;
+  d.learned = false;
+  if (!(confidence >= options.learned_min_confidence)) return;
+  if (learned_class == 1) {
+    d.crop = true;
+    d.learned = true;
+  } else if (learned_class == 2) {
+    d.crop = false;
+    d.associated = false;
+    d.fragment = false;
+    d.lone = false;
+    d.learned = true;
+  }
 }
 
 bool IsCrop(double area_m2, bool clipped, double gamma2, double min_crop_area_m2,

@@ -101,6 +101,11 @@ struct ClassifierOptions {
   // weeds (docs/results/2026-11-27-report.md, session 27). 0: off (the
   // whole blob is crop).
   double outline_limit_sd = 2.2;
+  // A learned model's class of a blob (vision::Blob::learned_class, the
+  // grower's model; FuseLearned) decides crop or weed where the model's
+  // confidence in it reaches this; below it, the grid's rule above decides.
+  // > 1: the model never decides.
+  double learned_min_confidence = 0.6;
 
   OptionErrors Validate() const;
 };
@@ -138,7 +143,23 @@ struct BlobDecision {
   double distance_m = std::numeric_limits<double>::infinity();  // Euclidean, to that prediction
   int m = 0, n = 0;  // the nearest prediction's grid indices (valid when gamma2 is finite)
   Eigen::Vector2d predicted_ground_m{0.0, 0.0};  // and its position (vehicle frame)
+  // The learned model's class of the blob (vision::PixelClass; −1: no model)
+  // and its confidence; `learned` when that class decided (FuseLearned).
+  int learned_class = -1;
+  double learned_confidence = 0.0;
+  bool learned = false;
 };
+
+// The learned model's class of a blob fused with the grid's rule (`d`, as
+// Classify decided it): where the model is sure (confidence ≥
+// learned_min_confidence) of crop or weed, its class decides; elsewhere
+// (unsure, or it calls the blob soil) the rule's decision stands. A blob
+// the model is sure is a weed is no crop's, even inside a crop's
+// association region (a weed touching a crop is a blob of its own once the
+// mask is cut along the model's classes), so it loses its association.
+// The model's class and confidence are kept in `d` either way.
+void FuseLearned(int learned_class, double confidence, const ClassifierOptions& options,
+                 BlobDecision& d);
 
 // Weeds merged with a crop (the oblique view joins a weed beside a crop, or
 // one seen past the crop's leaf tips, to the crop's blob): flags the points

@@ -20,8 +20,19 @@ std::string Seconds(int64_t us) {
 
 }  // namespace
 
+OptionErrors LearnedOptions::Validate() const {
+  // The spec is checked as the model loads: a model that does not load
+  // leaves the grid's rule rather than stopping the vehicle.
+  OptionErrors e;
+  if (!(tracker_drops_weeds_at >= 0.0)) {
+    e.push_back({"tracker_drops_weeds_at", "must be >= 0 (> 1: never)"});
+  }
+  return e;
+}
+
 OptionErrors PipelineOptions::Validate() const {
   OptionErrors e = Prefixed("segmenter", segmenter.Validate());
+  for (OptionError& m : Prefixed("learned", learned.Validate())) e.push_back(std::move(m));
   const OptionErrors t = Prefixed("tracker", tracker.Validate());
   e.insert(e.end(), t.begin(), t.end());
   if (treat) {
@@ -65,6 +76,18 @@ Pipeline::Pipeline(const geometry::CameraModel& camera, const PipelineOptions& o
       wheel_guard_(options_.tracker.slip_guard) {
   if (options_.treat) {
     system_ = std::make_unique<treatment::TreatmentSystem>(camera, options_.treatment, std::move(sink));
+  }
+  if (options_.learned.enabled()) {
+    // A model that does not load leaves the thesis's rule: the vehicle runs
+    // on, and says so in every frame's faults.
+    const LearnedOptions& l = options_.learned;
+    const std::string name = l.source.empty() ? std::string("segmenter model") : "segmenter model " + l.source;
+    try {
+      if (!l.unreadable.empty()) throw DataError(l.unreadable);
+      learned_.emplace(*l.onnx, l.spec);
+    } catch (const std::exception& e) {
+      learned_fault_ = name + ": not loaded (" + e.what() + "); crop and weed by the grid's rule";
+    }
   }
   if (options_.motion.enabled) visual_.emplace(camera, options_.motion.visual);
   if (options_.motion.enabled && options_.motion.camera_pitch)
@@ -195,6 +218,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   frame_.blobs = {};
   frame_.track_blobs = {};
   frame_.mask = cv::Mat();
+  frame_.classes = {};
   frame_.track_features = {};
   frame_.features = {};
   frame_.blob_of_feature = {};
@@ -203,6 +227,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   frame_.visual = {};
   frame_.visual_substituted = false;
   frame_ticks_.clear();
+  if (!learned_fault_.empty()) frame_.faults.push_back(learned_fault_);
   if (image.empty()) {
     Refuse("camera: frame " + std::to_string(frame_index) + " has no image");
   } else if (image.cols != camera_.width() || image.rows != camera_.height()) {
@@ -213,11 +238,23 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
     Refuse("camera: frame " + std::to_string(frame_index) + " out of time order (captured " +
            Seconds(last_frame_utime_ - utime) + " before the previous frame)");
   } else {
+    if (learned_) {
+      try {
+        frame_.classes = learned_->Classify(image);
+      } catch (const std::exception& e) {  // this frame by the grid's rule
+        frame_.classes = {};
+        frame_.faults.push_back(std::string("segmenter model: ") + e.what() +
+                                "; this frame by the grid's rule");
+      }
+    }
     try {
-      const vision::Segmentation& seg = segmenter_.Process(image, camera_);
+      const vision::Segmentation& seg = frame_.classes.classes.empty()
+                                            ? segmenter_.Process(image, camera_)
+                                            : segmenter_.Process(image, camera_, frame_.classes);
       frame_.blobs = seg.blobs;
       frame_.track_blobs = seg.track_blobs;
       frame_.mask = seg.mask;
+      if (!frame_.classes.classes.empty()) KeepTrackBlobs();
     } catch (const std::exception& e) {
       Refuse(std::string("segmentation: ") + e.what());
     }
@@ -259,6 +296,17 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   CloseIfOdometryStopped();
   frame_.ticks = frame_ticks_;
   return frame_;
+}
+
+// The tracker's blobs less those the model is sure are weeds.
+void Pipeline::KeepTrackBlobs() {
+  track_kept_.clear();
+  for (const vision::Blob& b : frame_.track_blobs) {
+    const bool weed = b.learned_class == static_cast<int>(vision::PixelClass::kWeed) &&
+                      b.learned_confidence >= options_.learned.tracker_drops_weeds_at;
+    if (!weed) track_kept_.push_back(b);
+  }
+  frame_.track_blobs = track_kept_;
 }
 
 // The camera's motion since the previous frame; fed to the tracker as the

@@ -30,12 +30,32 @@
 #include "engine/pipeline/motion_fusion.h"
 #include "engine/tracking/grid_tracker.h"
 #include "engine/treatment/treatment_system.h"
+#include "engine/vision/learned_segmenter.h"
 #include "engine/vision/segmenter.h"
 
 namespace plantscale::pipeline {
 
+// The grower's learned crop/weed model (learned_segmenter.h), when the crop
+// profile names one: its classes cut the plant mask where crop meets weed
+// (a weed touching a crop is a blob of its own), and the classifier takes
+// a blob's learned class where the model is sure of it
+// (ClassifierOptions::learned_min_confidence).
+struct LearnedOptions {
+  std::shared_ptr<const std::vector<uint8_t>> onnx;  // the model's bytes; null: no model
+  vision::LearnedModelSpec spec;                     // from its card
+  std::string source;      // where the model came from (its file), for messages
+  std::string unreadable;  // why the named model could not be read (the grid's rule then)
+  // The tracker measures no blob the model is this sure is a weed (weeds
+  // beside the rows pull the grid's lines); > 1: it measures every blob.
+  double tracker_drops_weeds_at = 0.8;
+
+  bool enabled() const { return onnx != nullptr || !unreadable.empty(); }
+  OptionErrors Validate() const;
+};
+
 struct PipelineOptions {
   vision::SegmenterOptions segmenter;
+  LearnedOptions learned;
   tracking::TrackerOptions tracker;
   treatment::TreatmentOptions treatment;
   // Off: segmentation and tracking only (no classification, map or bar).
@@ -91,6 +111,9 @@ struct FrameResult {
   // tracker measured, and the plant mask.
   std::span<const vision::Blob> blobs, track_blobs;
   cv::Mat mask;
+  // The learned model's classes of the frame (empty without a model, or
+  // when it failed on this frame: `faults` says so).
+  vision::ClassMaps classes;
   // Features of `track_blobs`, as the tracker measured them.
   std::span<const tracking::Feature> track_features;
   // Features of `blobs` as classified: features[i] from blobs[blob_of_feature[i]].
@@ -139,6 +162,11 @@ class Pipeline {
   const PipelineOptions& options() const { return options_; }
   // The segmenter, for measuring it (its continuous score: Segmenter::Score).
   vision::Segmenter& segmenter() { return segmenter_; }
+  // The learned model runs (the options named one and it loaded).
+  bool learned() const { return learned_.has_value(); }
+  // Why the model named in the options does not run (it failed to load):
+  // the thesis's rule classifies. Empty when it runs or none was named.
+  const std::string& learned_fault() const { return learned_fault_; }
   const geometry::CameraModel& camera() const { return camera_; }
   // The newest tick (fail-safe state, open mask), when there was one.
   const std::optional<treatment::TickResult>& last_tick() const { return last_tick_; }
@@ -159,11 +187,15 @@ class Pipeline {
   // `ticks`: as TreatmentSystem::TicksFrom's count.
   const PoseResult& DeadReckon(const OdometrySample& s, double sd_fraction, int ticks = 0);
   void UpdateVisualMotion(const cv::Mat& image);
+  void KeepTrackBlobs();
   int FrameTicks() const;
 
   const geometry::CameraModel& camera_;
   PipelineOptions options_;
   vision::Segmenter segmenter_;
+  std::optional<vision::LearnedSegmenter> learned_;
+  std::string learned_fault_;
+  std::vector<vision::Blob> track_kept_;  // track blobs less those the model is sure are weeds
   tracking::GridTracker tracker_;
   std::unique_ptr<treatment::TreatmentSystem> system_;
   bool held_ = false;

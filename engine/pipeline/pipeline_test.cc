@@ -433,3 +433,60 @@ TEST_F(PipelineVisualMotion, FrameOfAnotherPlaceIsInvalidAndTheWheelsCarryOn) {
 
 }  // namespace
 }  // namespace plantscale::pipeline
+
+namespace plantscale::pipeline {
+namespace {
+
+// A learned model that does not load leaves the pipeline on the grid's
+// rule: every frame says so in its faults, and the nozzles open exactly
+// as they do with no model named.
+TEST(PipelineLearned, AModelThatDoesNotLoadLeavesTheGridsRule) {
+  const sim::SimulatorOptions so = Pass(6.0);
+  int frames = 0;
+  const auto run = [&](const LearnedOptions& learned, std::vector<std::string>& faults) {
+    frames = 0;
+    sim::Simulator simulator(so);
+    std::vector<uint64_t> masks;
+    PipelineOptions o = OptionsFor(so);
+    o.learned = learned;
+    Pipeline p(simulator.camera(), o, [&masks](int64_t, uint64_t mask) { masks.push_back(mask); });
+    sim::SimFrame frame;
+    std::vector<OdometrySample> odometry;
+    while (simulator.Next(frame)) {
+      odometry.clear();
+      for (const sim::OdometrySample& s : frame.odometry) odometry.push_back(Sample(s));
+      const FrameResult& r = p.Step(frame.truth.utime, frame.truth.index, frame.rendered.image, odometry);
+      ++frames;
+      EXPECT_TRUE(r.accepted);
+      EXPECT_TRUE(r.classes.classes.empty());
+      if (!r.faults.empty()) faults.push_back(r.faults.front());
+    }
+    EXPECT_FALSE(p.learned());
+    return masks;
+  };
+  std::vector<std::string> none_faults, junk_faults, missing_faults;
+  const std::vector<uint64_t> plain = run({}, none_faults);
+  LearnedOptions junk;
+  junk.onnx = std::make_shared<const std::vector<uint8_t>>(std::vector<uint8_t>{1, 2, 3, 4});
+  junk.source = "crop.onnx";
+  const std::vector<uint64_t> with_junk = run(junk, junk_faults);
+  LearnedOptions missing;
+  missing.source = "gone.onnx";
+  missing.unreadable = "gone.onnx: no such file";
+  const std::vector<uint64_t> with_missing = run(missing, missing_faults);
+  EXPECT_EQ(with_junk, plain);
+  EXPECT_EQ(with_missing, plain);
+  ASSERT_FALSE(plain.empty());
+  EXPECT_GT(std::count_if(plain.begin(), plain.end(), [](uint64_t m) { return m != 0; }), 10);
+  ASSERT_FALSE(junk_faults.empty());
+  EXPECT_EQ(static_cast<int>(junk_faults.size()), frames);  // every frame says so, first
+  EXPECT_EQ(junk_faults.front().rfind("segmenter model crop.onnx: not loaded (", 0), 0u) << junk_faults.front();
+  EXPECT_NE(junk_faults.front().find("crop and weed by the grid's rule"), std::string::npos);
+  ASSERT_FALSE(missing_faults.empty());
+  EXPECT_EQ(missing_faults.front(),
+            "segmenter model gone.onnx: not loaded (gone.onnx: no such file); crop and weed by the grid's rule");
+  for (const std::string& f : none_faults) EXPECT_EQ(f.find("segmenter model"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace plantscale::pipeline

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ranges>
+#include <string>
 
 namespace plantscale::treatment {
 
@@ -62,6 +63,12 @@ int PlantRegistry::Observe(const Eigen::Vector2d& bed, const classify::BlobDecis
   r.bed_m = (r.bed_m * r.observations + bed) / (r.observations + 1);
   ++r.observations;
   (d.crop ? r.crop_votes : r.weed_votes) += 1;
+  if (d.learned_class >= 0) {
+    r.learned_confidence = (r.learned_confidence * r.learned_observations + d.learned_confidence) /
+                           (r.learned_observations + 1);
+    ++r.learned_observations;
+    if (d.learned) ++r.learned_decided;
+  }
   if (!d.clipped && d.area_m2 > r.largest_m2) {
     r.largest_m2 = d.area_m2;
     if (r.sizes.empty()) r.area_m2 = d.area_m2;
@@ -89,7 +96,10 @@ namespace {
 
 // Why a record is what it is, in words (for its `why`).
 const char* ReasonOf(const PlantRecord& r) {
-  return r.crop_at_end ? "in the last view when the run ended, as large as a crop at a predicted crop that had no record: that crop, not yet associated"
+  const bool by_model = 2 * r.learned_decided > r.observations;
+  return by_model && r.crop() ? "the learned model's crop"
+         : by_model           ? "the learned model's weed"
+         : r.crop_at_end ? "in the last view when the run ended, as large as a crop at a predicted crop that had no record: that crop, not yet associated"
          : r.undersized ? "in a predicted crop's place, under the crops' size: a weed where a crop is missing"
          : r.crop() && r.small && r.grid_plant
              ? "below the size filter, alone in a predicted crop's region"
@@ -109,17 +119,24 @@ void PlantRegistry::Explain(const TreatmentMap& map, SprayMode mode,
       r.counts = map.Counts(column, row);
       r.map_class = map.ClassOf(column, row);
     }
-    char text[384];
+    char text[448];
     const char* reason = ReasonOf(r);
+    std::string learned;
+    if (r.learned_observations > 0) {
+      char m[96];
+      std::snprintf(m, sizeof m, "; learned model decided %d of %d, confidence %.2f",
+                    r.learned_decided, r.learned_observations, r.learned_confidence);
+      learned = m;
+    }
     std::snprintf(text, sizeof text,
                   "%s (%d crop / %d weed votes): %s; area %.4f m2 (filter %.4f), "
                   "gamma2 %.2f (gate %.2f), %.0f mm from the predicted crop; cell counters "
-                  "crop %d weed %d doubt %d -> %s; %s (spray-%s mode)",
+                  "crop %d weed %d doubt %d -> %s; %s (spray-%s mode)%s",
                   r.crop() ? "crop" : "weed", r.crop_votes, r.weed_votes, reason, r.area_m2,
                   r.size_filter_m2, std::isfinite(r.gamma2) ? r.gamma2 : -1.0, c.assoc_chi2,
                   std::isfinite(r.distance_m) ? r.distance_m * 1000.0 : -1.0, r.counts.crop,
                   r.counts.weed, r.counts.doubt, ToString(r.map_class), r.sprayed ? "sprayed" : "not sprayed",
-                  ToString(mode));
+                  ToString(mode), learned.c_str());
     r.why = text;
   }
 }

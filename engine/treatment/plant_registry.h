@@ -83,6 +83,12 @@ struct PlantRecord {
   bool counts_final = false;  // read as the map let its row go (TakeFinalCounts)
   bool sprayed = false;
   bool grid_plant = false;  // associated with a predicted crop at grid_bed_m
+  // The learned model (BlobDecision::learned_class): in how many of the
+  // observations its class decided, and the mean of its confidence over
+  // the observations it classified (0 when it classified none).
+  int learned_decided = 0;
+  int learned_observations = 0;
+  double learned_confidence = 0.0;
   Eigen::Vector2d grid_bed_m{0.0, 0.0};
   std::string why;
 

@@ -297,7 +297,9 @@ void TreatmentSystem::VoteWeedParts(const BedPose& pose, std::span<const cv::Poi
 int TreatmentSystem::ObserveWeedsBeyondOutline(const vision::Blob& blob, const classify::BlobDecision& d,
                                                const cv::Mat& mask, const BedPose& pose) {
   const double limit = classifier_.options().outline_limit_sd;
-  if (!(limit > 0.0) || !d.crop || !d.associated || d.clipped || d.fragment || d.lone || mask.empty() ||
+  // A blob the model classified was already cut where crop meets weed.
+  if (!(limit > 0.0) || !d.crop || !d.associated || d.clipped || d.fragment || d.lone ||
+      d.learned_class >= 0 || mask.empty() ||
       !BlobPixels(mask, blob, split_pixels_)) {
     return 0;
   }
@@ -340,6 +342,14 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
   const std::vector<classify::PredictedCrop> crops =
       classify::PredictCrops(tracker.model(), state, classifier_.crop_reach_m());
   classifier_.Classify(features, crops, tracker.covariance(), frame_.decisions);
+  // The grower's model, where it classified the blobs and is sure.
+  for (size_t i = 0; i < features.size(); ++i) {
+    const vision::Blob& b = blobs[static_cast<size_t>(blob_of_feature[i])];
+    if (b.learned_class >= 0) {
+      classify::FuseLearned(b.learned_class, b.learned_confidence, options_.classifier,
+                            frame_.decisions[i]);
+    }
+  }
   frame_.classified = true;
   const BedPose pose = BedPoseFromGrid(utime, state, tracker.forward_distance_m(), 0.0);
   // What the camera saw this frame (the image on the plane): soil there is soil.
@@ -446,8 +456,15 @@ void TreatmentSystem::MapBlob(int feature, const vision::Blob& blob, const class
                               const std::vector<classify::PredictedCrop>& crops,
                               const tracking::GridTracker& tracker, const cv::Mat& mask,
                               const BedPose& pose, std::vector<PlantFootprint>& plants) {
-  const bool maybe_merged = !d.crop && !d.associated && (d.clipped || d.area_m2 >= d.size_filter_m2);
-  if (d.crop && d.associated && options_.crop_footprint_per_plant) {
+  // The model sure of crop but no crop's region took it: touching crops,
+  // split among the predictions as the rule's merged blobs are.
+  const bool maybe_merged =
+      d.learned ? d.crop && !d.associated
+                : !d.crop && !d.associated && (d.clipped || d.area_m2 >= d.size_filter_m2);
+  if (d.learned && !d.crop) {
+    // A weed by the model: its own box, wherever it stands.
+    if (VotesWeed(d, blob, crops)) AddFootprint(pose, blob, false);
+  } else if (d.crop && d.associated && options_.crop_footprint_per_plant) {
     AddToPlant(plants, d.m, d.n, blob.area_px, blob.area_px * blob.centroid_px, blob.bbox_px);
   } else if (maybe_merged && options_.split_merged && !mask.empty() &&
              SplitMergedBlob(feature, blob, d, crops, tracker.covariance(), mask)) {
@@ -487,7 +504,7 @@ void TreatmentSystem::MapSplitParts(const vision::Blob& blob, const classify::Bl
       AddFootprint(pose, moment[k] / area[k], box[k], true);
     }
   }
-  if (!VotesWeed(d, blob, crops)) return;
+  if (d.learned || !VotesWeed(d, blob, crops)) return;  // the model's crop: no weed in it
   if (!options_.merged_weed_parts_only) {
     AddFootprint(pose, blob, false);
     return;

@@ -98,6 +98,43 @@ void BlobExtractor::SetCores(std::span<const detail::RowRun> core) {
   }
 }
 
+void BlobExtractor::SetClasses(const cv::Mat& classes, const cv::Mat& confidence) {
+  if (classes.type() != CV_8UC1 || confidence.type() != CV_32FC1 || classes.size() != confidence.size()) {
+    throw DataError("learned classes must be CV_8UC1 with CV_32FC1 confidence of one size");
+  }
+  // Per blob: pixel count and summed probability of each class.
+  std::vector<double>& sums = class_sums_;
+  sums.assign(6 * static_cast<size_t>(count_), 0.0);
+  for (size_t j = 0; j < runs_.size(); ++j) {
+    const Run& r = runs_[j];
+    if (r.v >= classes.rows || r.u_end > classes.cols) {
+      throw DataError("learned classes of " + std::to_string(classes.cols) + "x" +
+                      std::to_string(classes.rows) + " px do not cover the mask");
+    }
+    const int b = slot_blob_[static_cast<size_t>(run_blob_[static_cast<size_t>(parent_[j])])];
+    if (b < 0) continue;
+    const uint8_t* c = classes.ptr<uint8_t>(r.v);
+    const float* p = confidence.ptr<float>(r.v);
+    double* s = &sums[6 * static_cast<size_t>(b)];
+    for (int u = r.u_begin; u < r.u_end; ++u) {
+      const int k = std::min<int>(c[u], 2);
+      s[2 * k] += 1.0;
+      s[2 * k + 1] += static_cast<double>(p[u]);
+    }
+  }
+  for (int i = 0; i < count_; ++i) {
+    Blob& blob = pool_[static_cast<size_t>(i)];
+    const double* s = &sums[6 * static_cast<size_t>(i)];
+    int best = 0;
+    for (int k = 1; k < 3; ++k) {
+      if (s[2 * k] > s[2 * best]) best = k;
+    }
+    const double n = s[0] + s[2] + s[4];
+    blob.learned_class = best;
+    blob.learned_confidence = n > 0.0 ? s[2 * best + 1] / n : 0.0;
+  }
+}
+
 void BlobExtractor::FindRuns(const cv::Mat& mask) {
   row_bits_.resize(static_cast<size_t>((mask.cols + 63) / 64));
   detail::LabelRuns(
@@ -140,6 +177,8 @@ void BlobExtractor::Accumulate(const cv::Mat& mask) {
     b.area_px = static_cast<int>(m[0]);
     MomentsToCentroid(m, b.centroid_px, b.covariance_px2);
     b.core_area_px = -1;
+    b.learned_class = -1;
+    b.learned_confidence = 0.0;
     b.bbox_px = boxes_[static_cast<size_t>(s)];
     b.on_ground = false;
     b.contour.clear();

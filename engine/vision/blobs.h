@@ -50,6 +50,13 @@ struct Blob {
   int core_area_px = -1;
   Eigen::Vector2d core_centroid_px{0.0, 0.0};
   Eigen::Matrix2d core_covariance_px2 = Eigen::Matrix2d::Zero();
+  // A learned model's class of the blob (BlobExtractor::SetClasses): the
+  // class (0 soil, 1 crop, 2 weed, as vision::PixelClass) most of its pixels
+  // take, and the mean over all its pixels of the probability of that class
+  // where a pixel chose it (0 where it chose another): agreement and
+  // certainty in one number. −1: no model ran.
+  int learned_class = -1;
+  double learned_confidence = 0.0;
 };
 
 // A blob's core (above): its pixel count, centroid and covariance.
@@ -84,6 +91,11 @@ class BlobExtractor {
   // the mask before growth in raster order, each inside a run of the last
   // extraction's mask (growth only adds pixels).
   void SetCores(std::span<const detail::RowRun> core);
+  // Sets every blob's learned class and confidence (Blob::learned_class)
+  // from per-pixel classes (CV_8UC1, 0…2) and the probability of each
+  // pixel's class (CV_32FC1), both of the last extraction's mask's size.
+  // Throws DataError when they do not fit.
+  void SetClasses(const cv::Mat& classes, const cv::Mat& confidence);
 
   const BlobOptions& options() const { return options_; }
 
@@ -103,6 +115,7 @@ class BlobExtractor {
   std::vector<int> first_run_;
   std::vector<int> slot_blob_;    // per blob slot: its index in pool_, -1 when dropped
   std::vector<double> core_moments_;  // SetCores' sums, per blob
+  std::vector<double> class_sums_;    // SetClasses' sums, per blob
   std::vector<Blob> pool_;        // blob storage kept across frames
   int count_ = 0;
 };

@@ -21,12 +21,9 @@
 #include <span>
 
 #include "engine/common/options.h"
+#include "engine/vision/pixel_classes.h"
 
 namespace plantscale::vision {
-
-// Pixel classes, as in every label image: 0 soil, 1 crop, 2 weed.
-enum class PixelClass : uint8_t { kSoil = 0, kCrop = 1, kWeed = 2 };
-inline constexpr int kPixelClassCount = 3;
 
 // What a model takes and gives; from its card (MODEL.json).
 struct LearnedModelSpec {
@@ -37,11 +34,6 @@ struct LearnedModelSpec {
   int output_stride = 2;      // the logits are 1/output_stride of the input
 
   OptionErrors Validate() const;
-};
-
-struct ClassMaps {
-  cv::Mat classes;     // CV_8UC1, the photograph's size: 0 soil, 1 crop, 2 weed
-  cv::Mat confidence;  // CV_32FC1, the photograph's size: probability of the class chosen
 };
 
 // The photograph as the model takes it: grey or BGR as the spec says (a

@@ -182,9 +182,27 @@ const Segmentation& Segmenter::Process(const cv::Mat& image,
   return Process(image, &camera);
 }
 
+const Segmentation& Segmenter::Process(const cv::Mat& image, const geometry::CameraModel& camera,
+                                       const ClassMaps& classes) {
+  return Process(image, &camera, &classes);
+}
+
 const Segmentation& Segmenter::Process(const cv::Mat& image,
-                                       const geometry::CameraModel* camera) {
+                                       const geometry::CameraModel* camera,
+                                       const ClassMaps* classes) {
+  if (classes && (classes->classes.size() != image.size() || classes->confidence.size() != image.size())) {
+    throw DataError("learned classes of " + std::to_string(classes->classes.cols) + "x" +
+                    std::to_string(classes->classes.rows) + " px for an image of " +
+                    std::to_string(image.cols) + "x" + std::to_string(image.rows) + " px");
+  }
   Threshold(image);
+  // Cut before growth (the tracker's blobs) and again after it (growth may
+  // join the parts again); the pixels kept before growth stay inside the
+  // grown mask, as SetCores needs.
+  if (classes) {
+    ClassCut(classes->classes, cut_);
+    result_.mask.setTo(0, cut_);
+  }
   const auto extract = [&](BlobExtractor& e) {
     return camera ? e.Extract(result_.mask, *camera) : e.Extract(result_.mask);
   };
@@ -203,8 +221,13 @@ const Segmentation& Segmenter::Process(const cv::Mat& image,
               : track_blobs_.ExtractLabelled(soil_.mask_runs(), soil_.mask_parent(), camera);
     }
   }
+  if (classes && grows) result_.mask.setTo(0, cut_);
   result_.blobs = extract(blobs_);
   if (grows) blobs_.SetCores(track_blobs_.runs());  // what the mask held before growth
+  if (classes) {
+    blobs_.SetClasses(classes->classes, classes->confidence);
+    if (grows) track_blobs_.SetClasses(classes->classes, classes->confidence);
+  }
   if (!grows) result_.track_blobs = result_.blobs;
   return result_;
 }

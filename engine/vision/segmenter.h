@@ -14,6 +14,7 @@
 #include "engine/vision/colour_index.h"
 #include "engine/vision/holes.h"
 #include "engine/vision/local_threshold.h"
+#include "engine/vision/pixel_classes.h"
 #include "engine/vision/smoothing.h"
 #include "engine/vision/soil_growth.h"
 
@@ -98,6 +99,13 @@ class Segmenter {
   const Segmentation& Process(const cv::Mat& image);
   // The same, with blobs projected onto the camera's virtual ground plane.
   const Segmentation& Process(const cv::Mat& image, const geometry::CameraModel& camera);
+  // The same, with a learned model's classes of the image (its size): the
+  // mask is cut where crop meets weed (ClassCut), before and after growth,
+  // so that a weed touching a crop is a blob of its own, and every blob
+  // (and tracker blob) carries its learned class and confidence.
+  // Throws DataError when the classes are not of the image's size.
+  const Segmentation& Process(const cv::Mat& image, const geometry::CameraModel& camera,
+                              const ClassMaps& classes);
 
   // The continuous score behind the last mask (CV_32FC1) and the score
   // level the mask is cut at: grey level (fixed, Otsu), I/μ(v) (adaptive) or
@@ -111,7 +119,8 @@ class Segmenter {
   ThresholdMethod used_method() const { return used_; }
 
  private:
-  const Segmentation& Process(const cv::Mat& image, const geometry::CameraModel* camera);
+  const Segmentation& Process(const cv::Mat& image, const geometry::CameraModel* camera,
+                              const ClassMaps* classes = nullptr);
   void Threshold(const cv::Mat& image);
   bool GrowsInHulls() const;
   void GrowInHulls();
@@ -130,6 +139,7 @@ class Segmenter {
   SoilGrower soil_;
   cv::Mat raw_;  // the plant image before smoothing (a header on the input or index_)
   cv::Mat low_mask_;
+  cv::Mat cut_;  // ClassCut of the classes given
   Segmentation result_;
 };
 
