@@ -359,10 +359,6 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   a.cell_length_m = o.cell_length_m;
   a.area_treated_m2 = run.area_treated_m2;
   if (run.area_treated_m2) a.product_l = *run.area_treated_m2 * 1e-4 * o.rate_l_ha;
-  if (run.area_mapped_m2 && *run.area_mapped_m2 > 0.0) {
-    a.broadcast_product_l = *run.area_mapped_m2 * 1e-4 * o.rate_l_ha;
-    if (a.product_l) a.product_saved_fraction = 1.0 - *a.product_l / *a.broadcast_product_l;
-  }
 
   std::vector<const PlantRecord*> crops;
   for (const auto& [id, r] : model.plants()) {
@@ -370,6 +366,10 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
   }
   a.row_spacing_m = RowSpacing(model, crops, a.row_spacing_source);
   AddPlantFigures(a, model.plants(), o);
+  if (a.product_l && a.surveyed_area_m2 > 0.0) {
+    a.broadcast_product_l = a.surveyed_area_m2 * 1e-4 * o.rate_l_ha;
+    a.product_saved_fraction = 1.0 - *a.product_l / *a.broadcast_product_l;
+  }
   return a;
 }
 

@@ -128,8 +128,9 @@ struct AgronomySummary {
   SizeStats weed_size;
   std::optional<double> area_treated_m2;
   std::optional<double> product_l;
-  // A broadcast application of the bed the map covered at the same rate,
-  // and the share of it the spot sprayer saved (1 − product / broadcast).
+  // A broadcast application of the bed (the surveyed band of the rows over
+  // the stand) at the same rate, and the share of it the spot sprayer saved
+  // (1 − product / broadcast). None without tiles or a stand.
   std::optional<double> broadcast_product_l;
   std::optional<double> product_saved_fraction;
   double rate_l_ha = 0.0;

@@ -108,7 +108,8 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
   if (a.broadcast_product_l && a.product_saved_fraction) {
     Row(out, "product saved", Fixed(100.0 * *a.product_saved_fraction, 1) + " % against " +
                                   Fixed(*a.broadcast_product_l, 3) +
-                                  " L broadcast over the bed mapped");
+                                  " L broadcast over the " +
+                                  Fixed(a.surveyed_area_m2, 1) + " m² of the rows' band");
   }
   Row(out, "nozzle shots, faults", std::to_string(a.shots) + ", " + std::to_string(a.faults));
   out << "</table>\n";

@@ -299,16 +299,13 @@ RunSummary RunModel::Summary() const {
   s.plants_seen = static_cast<int>(registry_.size());
   s.shots = static_cast<int>(shots_.size());
   if (!tiles_.empty()) {
-    double area = 0.0, mapped = 0.0;
+    double area = 0.0;
     for (const auto& [key, t] : tiles_) {
-      const double cell = t.resolution_m * t.resolution_m;
       for (uint8_t c : t.cells) {
-        if (c == plantscale_map_tile_t::CELL_TREATED) area += cell;
-        if (c != plantscale_map_tile_t::CELL_UNKNOWN) mapped += cell;
+        if (c == plantscale_map_tile_t::CELL_TREATED) area += t.resolution_m * t.resolution_m;
       }
     }
     s.area_treated_m2 = area;
-    s.area_mapped_m2 = mapped;
   }
   for (const std::string& f : vehicle_faults_) s.faults.push_back("vehicle: " + f);
   for (const plantscale_event_t& e : events_) {

@@ -83,9 +83,7 @@ struct RunSummary {
   // the run ended: what a grower still has to deal with.
   int weeds_left = 0;
   std::optional<double> area_treated_m2;  // from TREATED map cells; none without tiles
-  // The bed the map covered (every cell the camera saw): what a broadcast
-  // application of the same pass would have sprayed. None without tiles.
-  std::optional<double> area_mapped_m2;
+
   std::vector<std::string> faults;        // vehicle faults, error events, bad messages
   int64_t messages = 0;
   int vehicle_restarts = 0;

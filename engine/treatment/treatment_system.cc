@@ -365,6 +365,11 @@ const FrameTreatment& TreatmentSystem::OnFrame(int64_t utime, const tracking::Gr
     const classify::BlobDecision& d = frame_.decisions[i];
     const vision::Blob& blob = blobs[static_cast<size_t>(blob_of_feature[i])];
     MapBlob(static_cast<int>(i), blob, d, crops, tracker, mask, pose, plants);
+    // Crop by the model but no crop's region took it: a crop seen far off
+    // before the grid places it, a leaf cut off, touching crops. Its
+    // plants are recorded from the frames that place them; a record of its
+    // own would count a crop twice.
+    if (d.learned && d.crop && !d.associated) continue;
     const std::optional<Eigen::Vector2d> low =
         d.crop ? std::nullopt : camera_.ImageToPlane(blob.centroid_px, options_.weed_height_m);
     frame_.plant_ids[i] = registry_.Observe(
