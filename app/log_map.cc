@@ -39,6 +39,7 @@ std::string WhyText(int why) {
     case plantscale_plant_t::WHY_FAILSAFE: return "not sprayed: fail-safe";
     case plantscale_plant_t::WHY_MODE: return "not sprayed: treatment mode";
     case plantscale_plant_t::WHY_NOT_REACHED: return "not sprayed: the run ended before the bar reached it";
+    case plantscale_plant_t::WHY_LEARNED: return "the grower's learned model's class";
     default: return "undecided";
   }
 }

@@ -268,6 +268,7 @@ uint8_t TileCell(treatment::CellClass c) {
 }
 
 int WhyCode(const treatment::PlantRecord& r) {
+  if (2 * r.learned_decided > r.observations) return plantscale_plant_t::WHY_LEARNED;
   if (r.crop()) return plantscale_plant_t::WHY_CROP_IN_REGION;
   if (r.small) return plantscale_plant_t::WHY_TOO_SMALL;
   return plantscale_plant_t::WHY_OUTSIDE_REGION;
