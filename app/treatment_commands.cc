@@ -150,6 +150,15 @@ TreatmentEvalOptions TreatmentEvalOptionsFrom(const TreatmentArgs& a, const Glob
   o.calibration_error_text = a.profiles.calibration_error;
   o.treatment = ProductTreatmentOptions(*o.profiles);
   o.learned = LearnedPipelineOptions(o.profiles->crop);
+  if (o.learned.enabled()) {
+    // An evaluation measures with the model it was asked for, or not at all.
+    try {
+      if (!o.learned.unreadable.empty()) throw DataError(o.learned.unreadable);
+      vision::LearnedSegmenter loads(*o.learned.onnx, o.learned.spec);
+    } catch (const std::exception& e) {
+      throw ConfigError(o.learned.source, "segmenter model", std::string("not loaded: ") + e.what());
+    }
+  }
   ApplyTreatmentArgs(a, o.treatment);
   ApplyClassifierArgs(a, o.treatment.classifier);
   ApplySegmenterArgs(a, o.segmenter);

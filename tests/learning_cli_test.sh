@@ -76,4 +76,21 @@ expect 2 'corrupt/n.json: not a plantscale model card' -- \
   "$bin" evaluate classes --images "$work/colour/frames" --labels "$work/colour/labels" --model "$work/corrupt/n.onnx"
 [[ ! -e "$work/seg_c" ]] || [[ -z "$(ls -A "$work/seg_c")" ]] || fail "a model that failed to load left outputs"
 
+# On the vehicle (crop profile segmenter.model, or --segmenter-model): a model
+# that does not load leaves the grid's rule; the run goes on and says so in
+# an event. A model that is not there, or an evaluation with one that does
+# not load: exit 2 naming it.
+"$bin" simulate --preset field --seed 3 --length-m 4 --publish --fast --lcm-url memq:// --quiet \
+  --log "$work/bad.lcmlog" --segmenter-model "$work/corrupt/m.onnx" >"$work/bad_sim.out" 2>&1 ||
+  fail "simulate --publish with a model that does not load stopped: $(tail -3 "$work/bad_sim.out")"
+"$bin" report "$work/bad.lcmlog" --out "$work/bad_report" >/dev/null 2>&1 || fail "report of that run failed"
+grep -q "segmenter_model_not_loaded" "$work/bad_report/index.html" ||
+  fail "the run's report has no segmenter_model_not_loaded event"
+grep -q "corrupt/m.onnx: not loaded" "$work/bad_report/index.html" ||
+  fail "the event does not name the model"
+expect 2 '--segmenter-model: no-such-model: no model' -- \
+  "$bin" evaluate treatment --preset field --seeds 1 --length-m 2 --segmenter-model no-such-model
+expect 2 'corrupt/m.onnx: segmenter model: not loaded' -- \
+  "$bin" evaluate treatment --preset field --seeds 1 --length-m 2 --segmenter-model "$work/corrupt/m.onnx"
+
 finish learning_cli
