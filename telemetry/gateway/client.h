@@ -83,7 +83,7 @@ struct GatewayClientOptions {
   std::string token;
   std::filesystem::path ca_file;  // PEM; empty: the system's trusted roots
   ReconnectPolicy reconnect;
-  double connect_timeout_s = 3.0;  // TCP connect, TLS and WebSocket handshakes
+  double connect_timeout_s = 2.0;  // each of TCP connect, TLS and WebSocket handshakes
   double idle_timeout_s = 3.0;     // no data for this long: link lost (ping at half)
   size_t max_message_bytes = 64 * 1024 * 1024;
 
