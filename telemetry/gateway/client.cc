@@ -13,6 +13,7 @@
 #include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <boost/beast/websocket/ssl.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -424,6 +425,15 @@ class ConnectionT : public Connection {
       subscriptions.push_back({{"id", id}, {"channelId", id}});
     }
     if (subscriptions.empty()) return;  // the JSON topics' advertisement
+    // The odometry and poses first: the gateway sends each channel's latest
+    // message in the order subscribed, and the run model places a grid
+    // state at the distance driven by its time, so after a cut the latest
+    // odometry must come before the latest grid (else the grid is drawn at
+    // the distance before the cut).
+    std::stable_partition(subscriptions.begin(), subscriptions.end(), [&](const nlohmann::json& s) {
+      const std::string& ch = channels_[s["id"].get<uint32_t>()];
+      return ch == channels::kOdometry || ch == channels::kPose || ch == channels::kSimTruthPose;
+    });
     Send(nlohmann::json{{"op", "subscribe"}, {"subscriptions", subscriptions}}.dump(), false);
     if (operator_) {
       const nlohmann::json command = {{"id", kCommandChannelId},
