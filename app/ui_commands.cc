@@ -30,6 +30,7 @@ extern char** environ;
 #include "maps/map_errors.h"
 #include "maps/plants_layer.h"
 #include "telemetry/command_auth.h"
+#include "telemetry/gateway/client.h"
 #include "ui/canvas.h"
 #include "ui/report.h"
 #include "ui/station.h"
@@ -42,6 +43,8 @@ struct StationArgs {
   ui::StationOptions options;
   std::string log;
   std::string review;
+  std::string connect, token_file, ca;
+  std::vector<std::string> press;
 };
 
 struct ReportArgs {
@@ -262,8 +265,66 @@ double PeakResidentMb() {
   return static_cast<double>(u.ru_maxrss) / 1024.0;
 }
 
+// A bad --connect, --token-file, --ca or --press: one line naming it.
+struct StationInputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// --press KEY@SECONDS, sorted by time.
+std::vector<std::pair<double, std::string>> ParsePresses(const std::vector<std::string>& presses) {
+  std::vector<std::pair<double, std::string>> out;
+  for (const std::string& p : presses) {
+    const size_t at = p.rfind('@');
+    size_t used = 0;
+    double s = -1.0;
+    try {
+      if (at != std::string::npos && at > 0) s = std::stod(p.substr(at + 1), &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (at == std::string::npos || at == 0 || used == 0 || at + 1 + used != p.size() || !(s >= 0.0)) {
+      throw StationInputError("--press '" + p + "': expected KEY@SECONDS, e.g. C@3 (the key C 3 s after the start)");
+    }
+    out.emplace_back(s, p.substr(0, at));
+  }
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
+// --connect, --token-file and --ca into the gateway client's options.
+void ConnectOptions(const StationArgs& a, ui::StationOptions& o) {
+  namespace gw = telemetry::gateway;
+  if (a.connect.empty()) {
+    if (!a.token_file.empty()) throw StationInputError("--token-file: only with --connect");
+    if (!a.ca.empty()) throw StationInputError("--ca: only with --connect");
+    return;
+  }
+  if (a.token_file.empty()) {
+    throw StationInputError("--token-file: required with --connect (the token `plantscale users add` printed, in a file of mode 0600)");
+  }
+  gw::GatewayClientOptions g;
+  g.url = gw::ParseGatewayUrl(a.connect);
+  g.token = gw::ReadTokenFile(a.token_file);
+  if (!a.ca.empty()) {
+    if (!g.url.tls) throw StationInputError("--ca: only with wss://");
+    if (!std::ifstream(a.ca).good()) throw StationInputError("--ca " + a.ca + ": cannot be read");
+    g.ca_file = a.ca;
+  }
+  o.gateway = g;
+}
+
 int Station(StationArgs& a) {
   a.options.log = a.log;
+  try {
+    ConnectOptions(a, a.options);
+    a.options.press = ParsePresses(a.press);
+  } catch (const StationInputError& e) {
+    std::cerr << "plantscale: error: station: " << e.what() << '\n';
+    return 2;
+  } catch (const telemetry::gateway::GatewayClientError& e) {
+    std::cerr << "plantscale: error: station: " << e.what() << '\n';
+    return 2;
+  }
   if (!a.options.screenshot.empty() || a.options.tour_frames > 0) RerunUnderXvfb();
   try {
     if (!a.review.empty()) LoadReview(a.review, a.options);
@@ -273,6 +334,14 @@ int Station(StationArgs& a) {
               << " MB\n";
     PrintTour(r.tour_frame_ms, r.tour_cpu_ms);
     std::cout << "station: link: " << r.link << '\n';
+    for (const std::string& l : r.link_changes) std::cout << "station: gateway: " << l << '\n';
+    for (const std::string& c : r.command_replies) std::cout << "station: command: " << c << '\n';
+    std::cout << "station: model: " << r.messages << " messages, " << r.grid_states << " grid states, " << r.map_tiles
+              << " map tiles (" << r.tile_revisions << " revisions), " << r.plants << " plants, " << r.events.size()
+              << " events\n";
+    for (const std::string& e : r.events) {
+      if (e.rfind("command", 0) == 0 || e.rfind("gateway", 0) == 0) std::cout << "station: event: " << e << '\n';
+    }
     for (const std::string& p : r.problems) std::cout << "station: problem: " << p << '\n';
   } catch (const ui::DisplayError& e) {
     return NoDisplay(e);
@@ -281,6 +350,9 @@ int Station(StationArgs& a) {
     return 2;
   } catch (const ReviewInputError& e) {
     std::cerr << "plantscale: error: station --review: " << e.what() << '\n';
+    return 2;
+  } catch (const telemetry::gateway::GatewayClientError& e) {
+    std::cerr << "plantscale: error: station: " << e.what() << '\n';
     return 2;
   } catch (const telemetry::LogError& e) {
     std::cerr << "plantscale: error: station: " << e.what() << '\n';
@@ -461,7 +533,7 @@ int DemoSystem(const DemoArgs& a) {
 
 void AddUiCommands(CommandRegistry& registry) {
   StationArgs& s = registry.Keep(StationArgs{});
-  CLI::App* station = registry.Add("station", "operator station window (live LCM or a log)",
+  CLI::App* station = registry.Add("station", "operator station window (live LCM, over the gateway, or a log)",
                                    [&s] { return Station(s); });
   station->add_option("--lcm-url", s.options.lcm_url, "LCM URL to subscribe to (default LCM's)");
   station->add_option("--log", s.log, "replay this LCM log with a timeline instead of live")
@@ -489,6 +561,20 @@ void AddUiCommands(CommandRegistry& registry) {
   station->add_option("--command-key", s.options.command_key,
                       "sign vehicle commands with this key file (plantscale keygen, mode 0600); without it "
                       "they go unsigned and a vehicle refuses them unless --accept-unsigned-commands");
+  station->add_option("--connect", s.connect,
+                      "live over the gateway instead of LCM: wss://HOST:PORT (docs/remote.md); reconnects by "
+                      "itself")
+      ->excludes("--lcm-url")
+      ->excludes("--log")
+      ->excludes("--review");
+  station->add_option("--token-file", s.token_file,
+                      "with --connect: the file (mode 0600) holding the token `plantscale users add` printed");
+  station->add_option("--ca", s.ca,
+                      "with --connect: trust the gateway's certificate (or its CA) in this PEM file (default: the "
+                      "system's trusted roots)");
+  station->add_option("--press", s.press,
+                      "press KEY SECONDS after the start, as KEY@SECONDS (repeatable; e.g. C@3 sends spray the "
+                      "crop): a scripted session");
 
   ReportArgs& r = registry.Keep(ReportArgs{});
   CLI::App* report = registry.Add("report", "render a run report (index.html and PNGs) from a log",

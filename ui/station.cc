@@ -22,6 +22,7 @@
 
 #include "ui/palette.h"
 #include "ui/station_controller.h"
+#include "ui/gateway_source.h"
 #include "ui/station_sources.h"
 
 namespace plantscale::ui {
@@ -54,6 +55,14 @@ OptionErrors StationOptions::Validate() const {
   RequireNonNegative(e, "close_when_quiet_s", close_when_quiet_s);
   RequireInRange(e, "tour_frames", tour_frames, 0, 1000000);
   if (!log.empty() && review_model) e.push_back({"review", "a log to replay or a run to review, not both"});
+  if (gateway && (!log.empty() || review_model)) {
+    e.push_back({"gateway", "live over the gateway, or a log or a run to review, not both"});
+  }
+  RequireNonNegative(e, "gateway_wait_s", gateway_wait_s);
+  for (const auto& [at, key] : press) {
+    if (!(at >= 0.0)) e.push_back({"press", "the time of key '" + key + "' must be >= 0 s"});
+    if (key.empty()) e.push_back({"press", "an empty key"});
+  }
   if (offscreen && max_seconds <= 0.0 && close_when_quiet_s <= 0.0 && tour_frames == 0) {
     e.push_back({"offscreen", "needs max_seconds or close_when_quiet_s (nothing would close it)"});
   }
@@ -241,6 +250,7 @@ void RunInteractive(Canvas& canvas, StationController& controller) {
       case vtkCommand::MiddleButtonReleaseEvent:
         return c->controller->DragEnd();
       case vtkCommand::TimerEvent: {
+        c->controller->PressDue(c->start);
         const Clock::time_point now = Clock::now();
         c->controller->Frame(std::chrono::duration<double>(now - c->last).count());
         c->last = now;
@@ -289,6 +299,10 @@ StationResult RunStation(const StationOptions& options) {
     source = std::make_unique<ReviewSource>(options.review_model, options.review_name, options.review_error);
   } else if (!options.log.empty()) {
     source = std::make_unique<LogSource>(options.log, options.speed);
+  } else if (options.gateway) {
+    auto gateway = std::make_unique<GatewaySource>(*options.gateway, std::move(command_key));
+    gateway->WaitFirstAttempt(options.gateway_wait_s);  // a refused token: thrown before any window
+    source = std::move(gateway);
   } else {
     source = std::make_unique<LiveSource>(options.lcm_url, std::move(command_key));
   }
@@ -306,6 +320,7 @@ StationResult RunStation(const StationOptions& options) {
   } else if (options.offscreen) {
     Clock::time_point last = start;
     while (!controller.ShouldClose(start)) {
+      controller.PressDue(start);
       const Clock::time_point now = Clock::now();
       if (!controller.Frame(std::chrono::duration<double>(now - last).count())) {
         std::this_thread::sleep_for(std::chrono::milliseconds(5));  // nothing changed
@@ -330,6 +345,15 @@ StationResult RunStation(const StationOptions& options) {
   if (!source->LogError().empty()) result.problems.push_back("log: " + source->LogError());
   for (const std::string& p : source->model().Problems(source->now_utime())) result.problems.push_back(p);
   result.link = source->model().Link(source->now_utime()).text;
+  result.link_changes = source->LinkChanges();
+  result.command_replies = controller.command_replies();
+  const RunModel& model = source->model();
+  result.messages = model.messages();
+  result.grid_states = model.trace().size();
+  result.map_tiles = model.tiles().size();
+  result.tile_revisions = model.tile_revision_sum();
+  result.plants = model.plants().size();
+  for (const plantscale_event_t& e : model.events()) result.events.push_back(e.kind + ": " + e.text);
   return result;
 }
 

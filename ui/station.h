@@ -13,12 +13,15 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <vtkImageActor.h>
 
 #include "engine/common/options.h"
+#include "telemetry/gateway/client.h"
 #include "ui/camera_view.h"
 #include "ui/canvas.h"
 #include "ui/hud.h"
@@ -45,6 +48,12 @@ struct StationOptions {
   bool offscreen = false;      // no window: render into the back buffer only
   std::filesystem::path screenshot;  // non-empty: the last frame as PNG on closing
   std::filesystem::path command_key;  // live: sign vehicle commands with this key file
+  // Set: live over the gateway (`station --connect`) instead of LCM.
+  std::optional<telemetry::gateway::GatewayClientOptions> gateway;
+  double gateway_wait_s = 5.0;  // for the first connection before the window opens
+  // Keys pressed this many seconds after the start, in order (a scripted
+  // session: --press KEY@SECONDS; VTK key symbols, e.g. C, space, Up).
+  std::vector<std::pair<double, std::string>> press;
   // > 0: after the first frame, draw this many frames touring the bed (see
   // StationController::TourStep) as fast as it can, and time each.
   int tour_frames = 0;
@@ -103,6 +112,15 @@ struct StationResult {
   double frames_per_second = 0.0;
   std::vector<std::string> problems;  // what was wrong when it closed
   std::string link;                   // the link when it closed (LinkStatus::text)
+  std::vector<std::string> link_changes;    // over the gateway: "UNIX_SECONDS TEXT" per change
+  std::vector<std::string> command_replies;  // what each command key did
+  // What the run model holds when it closed.
+  int64_t messages = 0;
+  size_t grid_states = 0;  // the offset trace's samples
+  size_t map_tiles = 0;
+  int tile_revisions = 0;
+  size_t plants = 0;
+  std::vector<std::string> events;  // every event received, "KIND: TEXT"
   // With tour_frames: the time of each toured frame (update and render), ms.
   std::vector<double> tour_frame_ms;
   double tour_cpu_ms = 0.0;  // process CPU time (all threads, llvmpipe's too) over the tour
@@ -111,8 +129,10 @@ struct StationResult {
 // Runs until the window closes, max_seconds pass or, with close_when_quiet_s,
 // messages have stopped for that long. Throws DisplayError
 // without an X display, InvalidOptionsError, telemetry::LogError,
-// telemetry::TransportError or telemetry::CommandAuthError (the key file,
-// read before anything else is opened).
+// telemetry::TransportError, telemetry::CommandAuthError (the key file,
+// read before anything else is opened) or
+// telemetry::gateway::GatewayClientError (--connect: the token refused, the
+// certificate not trusted, the CA file).
 StationResult RunStation(const StationOptions& options);
 
 }  // namespace plantscale::ui

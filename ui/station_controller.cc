@@ -86,7 +86,15 @@ bool StationController::Frame(double wall_s) {
   return true;
 }
 
+void StationController::PressDue(std::chrono::steady_clock::time_point start) {
+  const double at = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  while (pressed_ < options_.press.size() && options_.press[pressed_].first <= at) {
+    quit_ = Key(options_.press[pressed_++].second) || quit_;
+  }
+}
+
 bool StationController::ShouldClose(std::chrono::steady_clock::time_point start) const {
+  if (quit_) return true;
   const std::chrono::steady_clock::time_point now = std::chrono::steady_clock::now();
   if (options_.max_seconds > 0 && std::chrono::duration<double>(now - start).count() > options_.max_seconds) {
     return true;
@@ -143,6 +151,7 @@ void StationController::CommandKey(const std::string& key) {
   if (key == "C") tool_text_ = source_.SendCommand(C::COMMAND_SET_MODE, C::MODE_SPRAY_CROP);
   if (key == "W") tool_text_ = source_.SendCommand(C::COMMAND_SET_MODE, C::MODE_SPRAY_WEED);
   if (key == "O") tool_text_ = source_.SendCommand(C::COMMAND_SET_MODE, C::MODE_SPRAY_OFF);
+  if (key == "S" || key == "P" || key == "C" || key == "W" || key == "O") command_replies_.push_back(tool_text_);
 }
 
 void StationController::Click(int x, int y) {

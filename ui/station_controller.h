@@ -34,7 +34,10 @@ class StationController {
   // An idle station then costs nothing between messages (copying the window
   // to the screen alone is ~5 ms of CPU at 1280×720 under Xvfb).
   bool Frame(double wall_s);
-  // max_seconds reached, or messages stopped close_when_quiet_s ago.
+  // Presses the keys of options.press that are due at this time after `start`.
+  void PressDue(std::chrono::steady_clock::time_point start);
+  // max_seconds reached, messages stopped close_when_quiet_s ago, or a
+  // pressed key (--press q) asked to quit.
   bool ShouldClose(std::chrono::steady_clock::time_point start) const;
   // One key (VTK key symbol); true when it asks to quit.
   bool Key(const std::string& key);
@@ -56,6 +59,8 @@ class StationController {
   // What the last click or measurement said (shown on the HUD's second line).
   const std::string& tool_text() const { return tool_text_; }
   std::optional<int64_t> picked() const { return pick_; }
+  // What each command key did (sent, or why not), in order.
+  const std::vector<std::string>& command_replies() const { return command_replies_; }
 
  private:
   std::string Tools() const;
@@ -85,6 +90,9 @@ class StationController {
   std::string tool_text_;
   std::vector<Rgb> strip_;  // review: the bed's weed strip (WeedStrip), made once
   int64_t frames_ = 0;
+  size_t pressed_ = 0;  // keys of options_.press pressed so far
+  bool quit_ = false;
+  std::vector<std::string> command_replies_;
   bool dirty_ = true;
   int64_t last_messages_ = 0;
   std::chrono::steady_clock::time_point last_message_time_ = std::chrono::steady_clock::now();

@@ -102,5 +102,20 @@ TEST_F(StationControllerTest, KeysToggleGridPauseAndQuit) {
   EXPECT_TRUE(controller_->Key("q"));
 }
 
+TEST_F(StationControllerTest, ScriptedKeysArePressedWhenDueAndQuitCloses) {
+  StationOptions o = options_;
+  o.press = {{0.0, "g"}, {0.0, "C"}, {100.0, "q"}};  // --press g@0 --press C@0 --press q@100
+  StationController scripted(*canvas_, *scene_, *source_, o);
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_TRUE(scene_->map().Visible(MapLayerId::kGrid));
+  scripted.PressDue(start);
+  EXPECT_FALSE(scene_->map().Visible(MapLayerId::kGrid));
+  ASSERT_EQ(scripted.command_replies().size(), 1u);
+  EXPECT_NE(scripted.command_replies()[0].find("need a live station"), std::string::npos);
+  EXPECT_FALSE(scripted.ShouldClose(start));  // q is due at 100 s
+  scripted.PressDue(start - std::chrono::seconds(101));
+  EXPECT_TRUE(scripted.ShouldClose(start));
+}
+
 }  // namespace
 }  // namespace plantscale::ui

@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
 #include "telemetry/transport.h"
@@ -44,8 +45,10 @@ class Source {
   // Sends a station command to the vehicle (plantscale_command_t COMMAND_*,
   // MODE_* with COMMAND_SET_MODE); returns what happened, for the HUD.
   virtual std::string SendCommand(int8_t /*command*/, int8_t /*mode*/) {
-    return "vehicle commands need a live station (--lcm-url), not a log";
+    return "vehicle commands need a live station (--lcm-url or --connect), not a log";
   }
+  // Over the gateway: each change of the link, "UNIX_SECONDS TEXT".
+  virtual std::vector<std::string> LinkChanges() const { return {}; }
   std::mutex mutex;  // held while the model is read or changed
 };
 
@@ -122,6 +125,35 @@ class ReviewSource : public Source {
   std::string error_;
 };
 
+// A station command (plantscale_command_t COMMAND_*, MODE_* with
+// COMMAND_SET_MODE) stamped now, from station@HOST, signed with `key` when
+// given. Its seq is the wall clock's microseconds (or one more than
+// `last_seq`, which it updates): seqs keep increasing across station
+// restarts, which the vehicle's replay check needs.
+inline plantscale_command_t NewStationCommand(int8_t command, int8_t mode, int64_t& last_seq,
+                                              const std::optional<telemetry::CommandKey>& key) {
+  plantscale_command_t c{};
+  c.utime = telemetry::WallUtime();
+  last_seq = std::max(last_seq + 1, c.utime);
+  c.seq = last_seq;
+  c.command = command;
+  c.mode = mode;
+  char host[256] = "station";
+  gethostname(host, sizeof host - 1);
+  c.origin = std::string("station@") + host;
+  if (key) telemetry::Sign(c, *key);
+  return c;
+}
+
+// A command in words ("spray the crop").
+inline std::string CommandText(int8_t command, int8_t mode) {
+  if (command == plantscale_command_t::COMMAND_START) return "start";
+  if (command == plantscale_command_t::COMMAND_PAUSE) return "pause";
+  if (mode == plantscale_command_t::MODE_SPRAY_CROP) return "spray the crop";
+  if (mode == plantscale_command_t::MODE_SPRAY_WEED) return "spray the weeds";
+  return "spraying off";
+}
+
 // Commands are signed with `command_key` (telemetry/command_auth.h); without
 // one they go unsigned, and a vehicle obeys them only with
 // --accept-unsigned-commands.
@@ -148,19 +180,7 @@ class LiveSource : public Source {
   int64_t now_utime() const override { return telemetry::WallUtime(); }
   std::string Status() const override { return "live " + transport_.url(); }
   std::string SendCommand(int8_t command, int8_t mode) override {
-    plantscale_command_t c{};
-    c.utime = telemetry::WallUtime();
-    // The wall clock's microseconds (or one more than the last): seqs keep
-    // increasing across station restarts, which the vehicle's replay check
-    // needs.
-    command_seq_ = std::max(command_seq_ + 1, c.utime);
-    c.seq = command_seq_;
-    c.command = command;
-    c.mode = mode;
-    char host[256] = "station";
-    gethostname(host, sizeof host - 1);
-    c.origin = std::string("station@") + host;
-    if (command_key_) telemetry::Sign(c, *command_key_);
+    const plantscale_command_t c = NewStationCommand(command, mode, command_seq_, command_key_);
     const telemetry::Bytes bytes = telemetry::Encode(c);
     try {
       transport_.Publish(telemetry::channels::kCommand, bytes.data(), bytes.size());
@@ -169,13 +189,6 @@ class LiveSource : public Source {
     }
     return std::string(command_key_ ? "sent to the vehicle: " : "sent unsigned (no --command-key): ") +
            CommandText(command, mode);
-  }
-  static std::string CommandText(int8_t command, int8_t mode) {
-    if (command == plantscale_command_t::COMMAND_START) return "start";
-    if (command == plantscale_command_t::COMMAND_PAUSE) return "pause";
-    if (mode == plantscale_command_t::MODE_SPRAY_CROP) return "spray the crop";
-    if (mode == plantscale_command_t::MODE_SPRAY_WEED) return "spray the weeds";
-    return "spraying off";
   }
   const telemetry::Subscriber& subscriber() const { return subscriber_; }
 

@@ -24,6 +24,7 @@
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 #include "telemetry/gateway/foxglove_convert.h"
+#include "telemetry/gateway/lcm_topics.h"
 
 namespace plantscale::telemetry::gateway {
 
@@ -76,8 +77,24 @@ class Session : public std::enable_shared_from_this<Session> {
 
 struct CachedMessage {
   int64_t utime = 0;
-  std::shared_ptr<const std::string> json;
+  std::shared_ptr<const std::string> json;  // or, on an LCM topic, the message's bytes
 };
+
+// The topics a session may subscribe to: Topics() (JSON), then LcmTopics()
+// (the LCM bytes as they are) at index Topics().size() + i.
+size_t TopicCount() { return Topics().size() + LcmTopics().size(); }
+bool IsLcmTopic(int topic) { return topic >= static_cast<int>(Topics().size()); }
+const LcmTopic& LcmTopicAt(int topic) {
+  return LcmTopics()[static_cast<size_t>(topic) - Topics().size()];
+}
+TopicClass DropClassOf(int topic) {
+  return IsLcmTopic(topic) ? LcmTopicAt(topic).drop_class
+                           : Topics()[static_cast<size_t>(topic)].drop_class;
+}
+const std::string& ChannelOf(int topic) {
+  return IsLcmTopic(topic) ? LcmTopicAt(topic).channel
+                           : Topics()[static_cast<size_t>(topic)].lcm_channel;
+}
 
 }  // namespace
 
@@ -96,7 +113,7 @@ struct Gateway::Impl {
   std::set<std::shared_ptr<Session>> sessions;  // from TCP accept to close
   int open_clients = 0;                         // of those, past the WebSocket upgrade
   std::vector<CachedMessage> latest;            // per topic
-  std::map<std::string, CachedMessage> tiles;   // newest revision per tile
+  std::map<std::pair<int, std::string>, CachedMessage> tiles;  // newest revision per topic and tile
   size_t tile_bytes = 0;
   RefusalLimiter refusals;
   RefusalLimiter command_audit;
@@ -177,7 +194,7 @@ class SessionT : public Session {
     const auto it = topic_subscription_.find(topic);
     if (it == topic_subscription_.end() || !open_) return;
     OutMessage m;
-    m.drop = queue_.Classify(Topics()[static_cast<size_t>(topic)].drop_class, utime);
+    m.drop = queue_.Classify(DropClassOf(topic), utime);
     m.binary = true;
     m.header =
         MessageDataHeader(it->second, static_cast<uint64_t>(std::max<int64_t>(utime, 0)) * 1000);
@@ -234,6 +251,8 @@ class SessionT : public Session {
   void OnRequest(beast::error_code ec) {
     if (ec) return End();
     request_ = parser_->release();
+    lcm_ = QueryParameter(std::string_view(request_.target().data(), request_.target().size()),
+                          "lcm") == "1";
     const std::string token =
         TokenFromRequest(std::string_view(request_.target().data(), request_.target().size()),
                          std::string_view(request_[http::field::authorization].data(),
@@ -306,6 +325,7 @@ class SessionT : public Session {
     SendText(
         ServerInfo({hub_.options.name, hub_.session_id, op, user_->name, RoleName(user_->role)}));
     SendText(AdvertiseAll());
+    if (lcm_) SendText(AdvertiseLcm());
     Read();
   }
 
@@ -372,7 +392,8 @@ class SessionT : public Session {
   void Handle(const Subscribe& s) {
     for (const auto& item : s.subscriptions) {
       const int topic = static_cast<int>(item.channel_id) - 1;
-      if (topic < 0 || topic >= static_cast<int>(Topics().size())) {
+      const int served = static_cast<int>(lcm_ ? TopicCount() : Topics().size());
+      if (topic < 0 || topic >= served) {
         SendStatus(2, "no channel " + std::to_string(item.channel_id));
         continue;
       }
@@ -399,8 +420,11 @@ class SessionT : public Session {
       m.payload = c.json;
       return m;
     };
-    if (Topics()[static_cast<size_t>(topic)].lcm_channel == channels::kMapTiles) {
-      for (const auto& [key, c] : hub_.tiles) backlog_.push_back(make(c));
+    if (ChannelOf(topic) == channels::kMapTiles) {
+      for (auto it = hub_.tiles.lower_bound({topic, std::string()});
+           it != hub_.tiles.end() && it->first.first == topic; ++it) {
+        backlog_.push_back(make(it->second));
+      }
     } else if (hub_.latest[static_cast<size_t>(topic)].json) {
       queue_.Push(make(hub_.latest[static_cast<size_t>(topic)]));
     }
@@ -470,6 +494,7 @@ class SessionT : public Session {
   http::request<http::empty_body> request_;
   std::optional<http::response<http::string_body>> response_;
   const User* user_ = nullptr;
+  bool lcm_ = false;  // asked for the LCM topics (lcm=1)
   bool open_ = false;
   bool accepted_ = false;
   bool ended_ = false;
@@ -533,6 +558,12 @@ void Gateway::Impl::OnLcm(const ReceivedMessage& m) {
   std::string error;
   std::vector<Converted> converted = ConvertLcm(m.channel, m.data, m.size, &error);
   if (!error.empty()) Count(&GatewayStats::lcm_rejected);
+  // The bytes as they came, to the clients that decode LCM themselves.
+  if (const int raw = LcmTopicIndex(m.channel); raw >= 0 && !converted.empty()) {
+    Converted c{static_cast<int>(Topics().size()) + raw, converted.front().utime,
+                std::string(static_cast<const char*>(m.data), m.size), converted.front().cache_key};
+    converted.push_back(std::move(c));
+  }
   static const int scene = TopicIndex(std::string(channels::kGrid) + "/scene");
   std::erase_if(converted, [&](const Converted& c) {
     if (c.topic != scene) return false;
@@ -553,13 +584,13 @@ void Gateway::Impl::Dispatch(const std::vector<Converted>& converted) {
     CachedMessage cached{c.utime, json};
     latest[static_cast<size_t>(c.topic)] = cached;
     if (!c.cache_key.empty()) {
-      CachedMessage& slot = tiles[c.cache_key];
+      CachedMessage& slot = tiles[{c.topic, c.cache_key}];
       const size_t before = slot.json ? slot.json->size() : 0;
       if (tile_bytes - before + json->size() <= options.max_cached_tile_bytes) {
         tile_bytes = tile_bytes - before + json->size();
         slot = cached;
       } else {
-        if (!slot.json) tiles.erase(c.cache_key);
+        if (!slot.json) tiles.erase({c.topic, c.cache_key});
         Count(&GatewayStats::tiles_not_cached);
       }
     }
@@ -573,7 +604,7 @@ Gateway::Gateway(const GatewayOptions& options, Users users, Transport& transpor
     : impl_(std::make_unique<Impl>(options, std::move(users), transport)) {
   ThrowIfInvalid("gateway", options.Validate());
   Impl& d = *impl_;
-  d.latest.resize(Topics().size());
+  d.latest.resize(TopicCount());
   if (!options.insecure_loopback) {
     d.tls.emplace(ssl::context::tls_server);
     d.tls->set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 |

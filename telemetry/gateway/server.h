@@ -13,6 +13,8 @@
 //     for field: the station's HMAC signature goes through unchanged and
 //     the vehicle checks it (the gateway holds no key and cannot forge one).
 //   - Each client has a bounded queue that drops by priority (client_queue.h).
+//   - A client that asks (lcm=1 in the query: the station) is also served
+//     each LCM channel's bytes as they came (lcm_topics.h).
 //   - A client that subscribes is sent the latest message of the topic at
 //     once, and for map tiles every tile's newest revision (paced by its
 //     link), so a reconnecting client gets the whole map again.

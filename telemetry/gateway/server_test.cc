@@ -21,6 +21,7 @@
 #include "telemetry/command_auth.h"
 #include "telemetry/convert.h"
 #include "telemetry/gateway/foxglove_convert.h"
+#include "telemetry/gateway/lcm_topics.h"
 
 namespace plantscale::telemetry::gateway {
 namespace {
@@ -301,6 +302,42 @@ TEST_F(GatewayServer, ALateSubscriberGetsTheLatestMessageAtOnce) {
   const auto m = c->Read();
   ASSERT_TRUE(m);
   EXPECT_DOUBLE_EQ(json::parse(m->second.substr(13)).at("offset_m").get<double>(), 0.02);
+}
+
+// The LCM topics (lcm_topics.h) only for a client that asks (lcm=1): a
+// Foxglove client is advertised the JSON topics alone and cannot subscribe
+// to an LCM one; the station's gets the grid's bytes as published.
+TEST_F(GatewayServer, TheLcmTopicsGoOnlyToAClientThatAsksWithTheBytesAsPublished) {
+  const uint32_t lcm_grid = LcmChannelId(static_cast<size_t>(LcmTopicIndex(channels::kGrid)));
+  auto foxglove = Connected(viewer_token_);
+  foxglove->Text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 1}, {"channelId", lcm_grid}}}}}.dump());
+  const json refused = foxglove->ReadJson();
+  EXPECT_EQ(refused.value("op", ""), "status");
+  EXPECT_EQ(refused.value("message", ""), "no channel " + std::to_string(lcm_grid));
+
+  auto station = std::make_unique<Client>();
+  ASSERT_EQ(station->Connect(gateway_->port(), "/?lcm=1&token=" + viewer_token_), 101);
+  EXPECT_EQ(station->ReadJson().value("op", ""), "serverInfo");
+  EXPECT_EQ(station->ReadJson().at("channels").size(), Topics().size());
+  const json lcm = station->ReadJson();
+  ASSERT_EQ(lcm.value("op", ""), "advertise");
+  ASSERT_EQ(lcm.at("channels").size(), LcmTopics().size());
+  const json& grid = lcm.at("channels").at(static_cast<size_t>(LcmTopicIndex(channels::kGrid)));
+  EXPECT_EQ(grid.at("id"), lcm_grid);
+  EXPECT_EQ(grid.at("topic"), channels::kGrid);
+  EXPECT_EQ(grid.at("encoding"), "lcm");
+  EXPECT_EQ(grid.at("schemaName"), "plantscale_grid_state_t");
+  EXPECT_EQ(grid.at("schema"), FingerprintHex(plantscale_grid_state_t::getHash()));
+  station->Text(json{{"op", "subscribe"}, {"subscriptions", {{{"id", 5}, {"channelId", lcm_grid}}}}}.dump());
+  std::this_thread::sleep_for(100ms);
+  PublishGrid(0.0375, 1'765'000'000'250'000);
+  const auto m = station->Read();
+  ASSERT_TRUE(m);
+  ASSERT_FALSE(m->first);
+  EXPECT_EQ(static_cast<uint8_t>(m->second[1]), 5);
+  const auto decoded = Decode<plantscale_grid_state_t>(channels::kGrid, m->second.data() + 13, m->second.size() - 13);
+  ASSERT_TRUE(decoded);
+  EXPECT_DOUBLE_EQ(FromLcm(*decoded).state.offset_m, 0.0375);
 }
 
 TEST_F(GatewayServer, MalformedAndUnknownClientMessagesGetAnErrorStatus) {
