@@ -16,7 +16,7 @@ enum class ObservationSpace {
 
 struct TrackerOptions {
   bool estimate_spacing = true;  // 5-state (thesis §4.1.2) or 3-state (§4.1.1)
-  bool plant_offsets = true;     // per-plant offset states (see above)
+  bool plant_offsets = true;     // per-plant offset states (grid_tracker.h says why)
   ObservationSpace space = ObservationSpace::kGround;
   // Camera bounce (pitch, roll, height) moves every feature of a frame
   // together; with model_bounce it is a per-frame nuisance state.
