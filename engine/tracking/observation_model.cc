@@ -1,9 +1,8 @@
 #include "engine/tracking/observation_model.h"
 
 #include <cmath>
-#include <stdexcept>
 
-#include "engine/tracking/grid_tracker.h"
+#include "engine/tracking/tracker_options.h"
 
 namespace plantscale::tracking {
 
@@ -129,23 +128,6 @@ Measurement ObservationModel::Measure(const Feature& f) const {
     z.covariance = rw * Eigen::Matrix2d::Identity() + rp * jp * jp.transpose();
   }
   return z;
-}
-
-StripPrediction PredictStrip(std::span<const Prediction> plants) {
-  if (plants.size() < 2) throw std::invalid_argument("PredictStrip: a strip needs two plants or more");
-  StripPrediction out;
-  out.value.setZero();
-  out.jacobian = Eigen::MatrixXd::Zero(2, plants.front().jacobian.cols());
-  out.bounce_jacobian.setZero();
-  const double w = 1.0 / static_cast<double>(plants.size());
-  for (const Prediction& p : plants) {
-    out.value += w * p.value;
-    out.jacobian += w * p.jacobian;
-    out.bounce_jacobian += w * p.bounce_jacobian;
-  }
-  const Eigen::Vector2d along = (plants.back().value - plants.front().value).normalized();
-  out.normal = Eigen::Vector2d(-along.y(), along.x());
-  return out;
 }
 
 }  // namespace plantscale::tracking

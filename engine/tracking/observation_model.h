@@ -1,10 +1,12 @@
 #pragma once
 // Observation model of the grid tracker (thesis §4.2): where a grid plant
 // appears, on the virtual ground plane or in the image, and how uncertain a
-// measured centroid is there (eq. 4.28).
+// measured centroid is there (eq. 4.28). The plant point model; on the
+// filter's full state: plant_point_model.h. The merged-blob strip:
+// strip_model.h; height from size: height_from_size.h. Finite-difference
+// tests of every Jacobian here: observation_model_test.cc.
 
 #include <Eigen/Core>
-#include <span>
 
 #include "engine/geometry/camera_model.h"
 #include "engine/geometry/centroid_height.h"
@@ -48,22 +50,6 @@ struct Measurement {
   Eigen::Matrix2d covariance;
 };
 
-// Plants touching along one row, seen as one blob (a strip,
-// TrackerOptions::merged_row_strips): its centroid is taken as the mean of
-// their predictions, and only across the row. `normal`: the unit normal of
-// the line through the first and last of `plants` (ordered along the row),
-// held at the prediction; `value` and `jacobian`: the mean of the plants'
-// predictions and of their Jacobians, so that the strip's lateral position
-// is normalᵀ·value with the Jacobian normalᵀ·jacobian. `plants` holds two or
-// more predictions with Jacobians of one size.
-struct StripPrediction {
-  Eigen::Vector2d normal;
-  Eigen::Vector2d value;
-  Eigen::MatrixXd jacobian;
-  Eigen::Matrix<double, 2, 3> bounce_jacobian;  // the mean of the plants'
-};
-StripPrediction PredictStrip(std::span<const Prediction> plants);
-
 class ObservationModel {
  public:
   // heights: where centroids are located (null: on the virtual plane).
@@ -77,6 +63,7 @@ class ObservationModel {
   Measurement Measure(const Feature& feature) const;
   // Prior variances of a plant's own states: δx, δy, then δh (plant_heights).
   static Eigen::VectorXd PlantPrior(const TrackerOptions& options);
+  const TrackerOptions& options() const { return options_; }
 
  private:
   const geometry::CameraModel& camera_;
