@@ -39,32 +39,28 @@ void Paint(Raster& r, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double
   cv::fillConvexPoly(r.mask, pts, 4, cv::Scalar(255), cv::LINE_8, kShift);
 }
 
-bool UnderACrop(const sim::Field& field, const sim::Plant& weed) {
+// The crop whose leaf-tip outline comes nearest a weed's root, and that
+// root's distance beyond the outline (≤ 0: the weed is under the crop's
+// leaves); null and ∞ when no crop stands within half a metre along.
+struct NearestOutline {
+  const sim::Plant* crop = nullptr;
+  double gap_m = std::numeric_limits<double>::infinity();
+};
+NearestOutline NearestCropOutline(const sim::Field& field, const sim::Plant& weed) {
   const auto [b, e] = field.PlantsBetween(weed.position_m.y() - 0.5, weed.position_m.y() + 0.5);
+  NearestOutline nearest;
   for (size_t i = b; i < e; ++i) {
     const sim::Plant& p = field.plants()[i];
     if (p.cls != sim::PlantClass::kCrop) continue;
-    if ((weed.position_m - (p.position_m + p.lean_m)).norm() <= p.radius_m) return true;
+    const double gap = (weed.position_m - (p.position_m + p.lean_m)).norm() - p.radius_m;
+    if (gap < nearest.gap_m) nearest = {&p, gap};
   }
-  return false;
+  return nearest;
 }
 
-// The crop whose outline a weed clear of every crop's leaves touches (the
-// nearest such), or null.
-const sim::Plant* TouchedCrop(const sim::Field& field, const sim::Plant& weed) {
-  const auto [b, e] = field.PlantsBetween(weed.position_m.y() - 0.5, weed.position_m.y() + 0.5);
-  const sim::Plant* touched = nullptr;
-  double nearest = std::numeric_limits<double>::infinity();
-  for (size_t i = b; i < e; ++i) {
-    const sim::Plant& p = field.plants()[i];
-    if (p.cls != sim::PlantClass::kCrop) continue;
-    const double d = (weed.position_m - (p.position_m + p.lean_m)).norm();
-    if (d <= p.radius_m + weed.radius_m && d - p.radius_m < nearest) {
-      nearest = d - p.radius_m;
-      touched = &p;
-    }
-  }
-  return touched;
+// Whether the spray covers field point `p` (and its raster cell).
+bool SprayedAt(const Raster& r, const Eigen::Vector2d& p, int& col, int& row) {
+  return r.At(p, col, row) && r.mask.at<uint8_t>(row, col) != 0;
 }
 
 // Centre of the bounding box of the sprayed patch holding pixel (col, row),
@@ -146,19 +142,19 @@ SprayScore ScoreSpray(const sim::Field& field, std::span<const treatment::Shot> 
   for (const sim::Plant& p : field.plants()) {
     if (!in_region(p.position_m)) continue;
     int col = 0, row = 0;
-    const bool sprayed = r.At(p.position_m, col, row) && r.mask.at<uint8_t>(row, col) != 0;
+    const bool sprayed = SprayedAt(r, p.position_m, col, row);
     if (p.cls == sim::PlantClass::kWeed) {
       ++score.weeds;
       score.weed_hits += sprayed;
-      if (!UnderACrop(field, p)) {
+      const NearestOutline crop = NearestCropOutline(field, p);
+      if (crop.gap_m > 0.0) {  // not under a crop's leaves
         ++score.weeds_clear;
         score.weed_hits_clear += sprayed;
-        if (const sim::Plant* crop = TouchedCrop(field, p)) {
+        if (crop.gap_m <= p.radius_m) {  // its outline touches the crop's
           int c = 0, w = 0;
-          const bool crop_sprayed = r.At(crop->position_m, c, w) && r.mask.at<uint8_t>(w, c) != 0;
           ++score.weeds_touching;
           score.weed_hits_touching += sprayed;
-          score.weed_hits_touching_crop_dry += sprayed && !crop_sprayed;
+          score.weed_hits_touching_crop_dry += sprayed && !SprayedAt(r, crop.crop->position_m, c, w);
         }
       }
       continue;
