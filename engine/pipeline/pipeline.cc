@@ -218,6 +218,7 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   frame_.blobs = {};
   frame_.track_blobs = {};
   frame_.mask = cv::Mat();
+  spare_classes_ = std::move(frame_.classes);  // its buffers serve the next model pass
   frame_.classes = {};
   frame_.track_features = {};
   frame_.features = {};
@@ -240,7 +241,8 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   } else {
     if (learned_) {
       try {
-        frame_.classes = learned_->Classify(image);
+        frame_.classes = std::move(spare_classes_);
+        learned_->Classify(image, frame_.classes);
       } catch (const std::exception& e) {  // this frame by the grid's rule
         frame_.classes = {};
         frame_.faults.push_back(std::string("segmenter model: ") + e.what() +

@@ -205,6 +205,7 @@ class Pipeline {
   std::optional<treatment::TickResult> last_tick_;
   PoseResult pose_;
   FrameResult frame_;
+  vision::ClassMaps spare_classes_;  // the previous frame's class maps, reused by the model
   std::vector<tracking::Feature> track_features_, features_;
   std::vector<int> blob_of_feature_;
   std::vector<treatment::TickResult> frame_ticks_;

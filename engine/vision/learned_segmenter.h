@@ -57,13 +57,22 @@ class LearnedSegmenter {
 
   // Classes and confidence at the photograph's size (8-bit grey or BGR, any size).
   ClassMaps Classify(const cv::Mat& image);
+  // The same into `maps`, reusing its buffers when no one else holds them (a
+  // fresh 5 MB plane per frame costs more in page faults than the arithmetic).
+  void Classify(const cv::Mat& image, ClassMaps& maps);
 
   // Classes and confidence at the given size from logits (1 × C × h × w).
   static ClassMaps FromLogits(const cv::Mat& logits, cv::Size size);
+  // The same into `maps` and the upsampled logits into `planes`, reusing
+  // their buffers (what Classify(image, maps) does frame after frame).
+  static void FromLogits(const cv::Mat& logits, cv::Size size, ClassMaps& maps,
+                         cv::Mat (&planes)[kPixelClassCount]);
 
  private:
+
   LearnedModelSpec spec_;
   cv::dnn::Net net_;
+  cv::Mat planes_[kPixelClassCount];  // the upsampled logits, kept between frames
 };
 
 }  // namespace plantscale::vision
