@@ -70,6 +70,38 @@ TEST(ClassCut, CutsASoilBridgeHalfway) {
   EXPECT_EQ(cv::countNonZero(cut), 0);
 }
 
+// The cut from the two-pass sweep is the cut from OpenCV's exact L1 distance
+// transforms, pixel for pixel, on scattered crops and weeds of every size
+// (frames of a simulated field's shape and odd sizes, borders included).
+TEST(ClassCut, SweepMatchesOpenCvsDistanceTransform) {
+  cv::RNG rng(7);
+  int with_a_cut = 0;
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(97, 31), cv::Size(1, 50), cv::Size(50, 1)}) {
+    for (int trial = 0; trial < 4; ++trial) {
+      cv::Mat classes(size, CV_8UC1, cv::Scalar(0));
+      for (int k = 0; k < 60; ++k) {
+        const cv::Point c(rng.uniform(0, size.width), rng.uniform(0, size.height));
+        cv::circle(classes, c, rng.uniform(0, 30), cv::Scalar(k % 4 == 0 ? 2 : 1), cv::FILLED);
+      }
+      cv::Mat cut;
+      ClassCut(classes, cut);
+      cv::Mat expected = cv::Mat::zeros(size, CV_8UC1);
+      const cv::Mat crop = classes == 1, weed = classes == 2;
+      if (cv::countNonZero(crop) > 0 && cv::countNonZero(weed) > 0) {
+        cv::Mat to_crop, to_weed, crop_side, near_crop;
+        cv::distanceTransform(~crop, to_crop, cv::DIST_L1, 3, CV_32F);
+        cv::distanceTransform(~weed, to_weed, cv::DIST_L1, 3, CV_32F);
+        cv::compare(to_crop, to_weed, crop_side, cv::CMP_LE);
+        cv::dilate(crop_side, near_crop, cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
+        cv::bitwise_and(near_crop, ~crop_side, expected);
+      }
+      EXPECT_EQ(cv::countNonZero(cut != expected), 0) << size << " trial " << trial;
+      with_a_cut += cv::countNonZero(expected) > 0;
+    }
+  }
+  EXPECT_GE(with_a_cut, 8);  // of 16: a one-pixel-wide frame mostly holds one class
+}
+
 TEST(BlobExtractor, LearnedClassIsTheMajorityAndConfidenceItsMeanProbability) {
   cv::Mat mask(20, 20, CV_8UC1, cv::Scalar(0));
   mask(cv::Rect(2, 2, 10, 10)).setTo(255);  // 100 px
