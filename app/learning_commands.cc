@@ -37,7 +37,7 @@ int TrainCommand(TrainArgs& a) {
   command << "plantscale train-segmenter --images " << Quote(a.images) << " --labels " << Quote(a.labels)
           << " --out " << Quote(a.out) << " --epochs " << r.epochs << " --seed " << r.seed << " --input-size "
           << a.input_size << " --validation-fraction " << r.validation_fraction << " --width " << r.width
-          << " --max-minutes " << r.max_minutes;
+          << " --output-stride " << r.output_stride << " --max-minutes " << r.max_minutes;
   if (!r.licence.empty()) command << " --licence " << Quote(r.licence);
   if (!r.attribution.empty()) command << " --attribution " << Quote(r.attribution);
   r.command_line = command.str();
@@ -102,6 +102,11 @@ void AddLearningCommands(CommandRegistry& registry) {
       ->capture_default_str();
   train->add_option("--width", t.request.width, "the network's channels at its first scale (x2, x3, x4 deeper)")
       ->check(CLI::Range(4, 64))
+      ->capture_default_str();
+  train->add_option("--output-stride", t.request.output_stride,
+                    "2: logits at half the input's resolution; 1: a last stage at the input's resolution, for "
+                    "plants a few pixels across (a quarter more work)")
+      ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
   train->add_option("--threads", t.request.threads, "CPU threads for training (0: every core)")
       ->check(CLI::Range(0, 256))

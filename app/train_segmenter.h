@@ -28,6 +28,7 @@ struct TrainSegmenterRequest {
   int input_height_px = 384;
   double validation_fraction = 0.15;
   int width = 16;            // the network's channels at its first scale
+  int output_stride = 2;     // logits at 1/output_stride of the input: 2, or 1 (a full-resolution stage)
   int threads = 0;           // 0: every core
   // A time budget for the optimiser (0: none): when the epochs would not
   // fit, the learning rate anneals by time and training ends within it.

@@ -20,7 +20,8 @@ constexpr int kStripColumns = 640;    // review: the bed's weed strip along the 
 
 std::string WhyName(int why) {
   static const char* names[] = {"undecided", "crop in its region", "outside crop region", "too small",
-                                "too large", "failsafe", "spray mode", "run ended before the bar"};
+                                "too large", "failsafe", "spray mode", "run ended before the bar",
+                                "the grower's model"};  // plantscale_plant_t::WHY_*
   return why >= 0 && why < static_cast<int>(std::size(names)) ? names[why] : "?";
 }
 

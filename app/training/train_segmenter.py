@@ -71,15 +71,19 @@ def conv1(cin, cout):
 
 
 class SegNet(nn.Module):
-    """A U-Net of four scales (1/2 .. 1/16), width w; output at 1/2 scale.
+    """A U-Net of four scales (1/2 .. 1/16), width w; output at 1/2 scale, or
+    with output_stride 1 at the input's scale through one more stage of width
+    w/2 whose skip is a convolution of the input itself (weeds a few pixels
+    across keep their outline).
 
     The decoder merges each skip by concatenation and a 1x1 convolution, then
     one 3x3 convolution: most of a U-Net's cost is its full-width decoder.
     """
 
-    def __init__(self, channels, mean, std, width=16):
+    def __init__(self, channels, mean, std, width=16, output_stride=2):
         super().__init__()
         w = width
+        self.full = output_stride == 1
         self.norm = Normalise(mean, std)
         self.stem = conv_bn(channels, w, 2)                                          # 1/2
         self.down1 = nn.Sequential(conv_bn(w, 2 * w, 2), conv_bn(2 * w, 2 * w))     # 1/4
@@ -88,7 +92,13 @@ class SegNet(nn.Module):
         self.up2 = nn.Sequential(conv1(4 * w + 3 * w, 3 * w), conv_bn(3 * w, 3 * w))
         self.up1 = nn.Sequential(conv1(3 * w + 2 * w, 2 * w), conv_bn(2 * w, 2 * w))
         self.up0 = nn.Sequential(conv1(2 * w + w, w), conv_bn(w, w))
-        self.head = nn.Conv2d(w, CLASSES, 1)
+        if self.full:  # a last stage at the input's resolution, its skip from the input itself
+            f = max(4, w // 2)
+            self.skipf = conv_bn(channels, f)
+            self.upf = nn.Sequential(conv1(w + f, f), conv_bn(f, f))
+            self.head = nn.Conv2d(f, CLASSES, 1)
+        else:
+            self.head = nn.Conv2d(w, CLASSES, 1)
 
     @staticmethod
     def _up(x):
@@ -103,6 +113,8 @@ class SegNet(nn.Module):
         y = self.up2(torch.cat([self._up(s3), s2], 1))
         y = self.up1(torch.cat([self._up(y), s1], 1))
         y = self.up0(torch.cat([self._up(y), s0], 1))
+        if self.full:
+            y = self.upf(torch.cat([self._up(y), self.skipf(x)], 1))
         return self.head(y)
 
 
@@ -213,6 +225,7 @@ def main():
     p.add_argument("--epochs", type=int, default=30)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--width", type=int, default=16)
+    p.add_argument("--output-stride", type=int, default=2, choices=(1, 2))
     p.add_argument("--crop", type=int, default=256)
     p.add_argument("--batch", type=int, default=8)
     p.add_argument("--crops-per-image", type=int, default=4)
@@ -250,7 +263,7 @@ def main():
     pix = tr_images.reshape(-1, channels).astype(np.float64)
     mean = pix.mean(0).tolist()
     std = np.maximum(pix.std(0), 1.0).tolist()
-    model = SegNet(channels, mean, std, a.width)
+    model = SegNet(channels, mean, std, a.width, a.output_stride)
     weights = class_weights(tr_labels)
     opt = torch.optim.AdamW([q for q in model.parameters() if q.requires_grad], lr=a.lr, weight_decay=1e-4)
     steps_per_epoch = max(1, math.ceil(len(train_idx) * a.crops_per_image / a.batch))
@@ -329,7 +342,7 @@ def main():
     emit(event="done", interrupted=interrupted["flag"], stopped_for_time=stopped_for_time,
          epochs_run=epoch if a.epochs else 0, best_epoch=best["epoch"], test=test,
          validation=best["val"], seconds=round(time.time() - start, 1), mean=mean, std=std,
-         width=a.width, parameters=sum(q.numel() for q in model.parameters()))
+         width=a.width, output_stride=a.output_stride, parameters=sum(q.numel() for q in model.parameters()))
     return 0 if best["epoch"] > 0 else 3
 
 
