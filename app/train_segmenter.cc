@@ -164,8 +164,20 @@ struct OptimiserResult {
   std::string stderr_tail;
 };
 
+// The optimiser's pid while it runs, for the SIGTERM handler.
+volatile sig_atomic_t g_optimiser_pid = 0;
+
+// SIGTERM (a service manager, `kill`) is passed on to the optimiser, which
+// stops as on Ctrl-C and keeps the best model so far; this process then
+// writes that model and removes its work folder (the photographs as arrays,
+// hundreds of megabytes) as on any other ending.
+void ForwardTerm(int) {
+  if (g_optimiser_pid > 0) ::kill(static_cast<pid_t>(g_optimiser_pid), SIGTERM);
+}
+
 // Runs the optimiser, drawing its progress; Ctrl-C reaches it (it keeps the
-// best model so far) while this process waits for it.
+// best model so far) while this process waits for it, and SIGTERM is passed
+// on to it (ForwardTerm).
 OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::path& err_file, bool progress,
                              std::ostream& log) {
   // glibc returns freed blocks over 128 kB to the kernel at once; PyTorch
@@ -204,6 +216,7 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
   }
   if (pid == 0) {
     ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);  // this process killed: the optimiser stops too
     ::dup2(fds[1], STDOUT_FILENO);
     const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
@@ -213,6 +226,11 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
     ::execve(args[0], args.data(), envp.data());
     ::_exit(127);
   }
+  g_optimiser_pid = pid;
+  struct sigaction forward {}, old_term{};
+  forward.sa_handler = ForwardTerm;
+  forward.sa_flags = SA_RESTART;
+  ::sigaction(SIGTERM, &forward, &old_term);
   ::close(fds[1]);
   OptimiserResult r;
   const bool tty = ::isatty(STDERR_FILENO) != 0;
@@ -237,6 +255,8 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   ::sigaction(SIGINT, &old_int, nullptr);
+  ::sigaction(SIGTERM, &old_term, nullptr);
+  g_optimiser_pid = 0;
   if (drawn && tty) log << '\n';
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   std::ifstream err(err_file);

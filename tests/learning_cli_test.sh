@@ -76,6 +76,27 @@ expect 2 'corrupt/n.json: not a plantscale model card' -- \
   "$bin" evaluate classes --images "$work/colour/frames" --labels "$work/colour/labels" --model "$work/corrupt/n.onnx"
 [[ ! -e "$work/seg_c" ]] || [[ -z "$(ls -A "$work/seg_c")" ]] || fail "a model that failed to load left outputs"
 
+# SIGTERM while training (a service manager stopping it): the optimiser stops
+# as on Ctrl-C, the best model so far is written with its card saying so,
+# and no work folder (the photographs as arrays) is left beside it.
+if /usr/bin/python3 -c 'import torch, onnx' 2>/dev/null; then
+  mkdir -p "$work/term"
+  "$bin" train-segmenter --quiet --epochs 500 --max-minutes 0 --input-size 128x96 --width 4 \
+    --images "$work/grey/frames" --labels "$work/grey/labels" --out "$work/term/m.onnx" \
+    >"$work/term/out" 2>&1 &
+  trainer=$!
+  for _ in $(seq 1 600); do  # until the first epoch's model is written (at most 60 s)
+    compgen -G "$work/term/.m.training-*/model.onnx" >/dev/null && break
+    sleep 0.1
+  done
+  kill -TERM "$trainer"
+  wait "$trainer"; status=$?
+  [[ $status -eq 0 ]] || fail "train-segmenter stopped by SIGTERM: exit $status: $(tail -3 "$work/term/out")"
+  [[ -s "$work/term/m.onnx" && -s "$work/term/m.json" ]] || fail "SIGTERM: no model written"
+  grep -q '"interrupted": true' "$work/term/m.json" || fail "SIGTERM: the card does not say interrupted"
+  ! compgen -G "$work/term/.m.training-*" >/dev/null || fail "SIGTERM: the work folder was left behind"
+fi
+
 # On the vehicle (crop profile segmenter.model, or --segmenter-model): a model
 # that does not load leaves the grid's rule; the run goes on and says so in
 # an event. A model that is not there, or an evaluation with one that does
