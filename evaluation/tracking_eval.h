@@ -72,6 +72,15 @@ TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t see
 
 // One run (seed) of one tracker: every run counts, a run that never
 // started or lost the grid included.
+// The tracker found the bed's row spacing disagreeing with the crop
+// profile's (FrameReport::row_spacing_mismatch): where, and the truth there.
+struct RowSpacingEvent {
+  double distance_m = 0.0;         // driven (truth) since the run began
+  double since_start_m = 0.0;      // driven since the tracker's first start
+  double true_row_spacing_m = 0.0; // the simulator's, where it was found
+  tracking::SpacingMismatch mismatch;
+};
+
 struct TrackingRun {
   uint64_t seed = 0;
   CalibrationError calibration_error;  // drawn for this seed
@@ -79,6 +88,7 @@ struct TrackingRun {
   int frames = 0, frames_lost = 0, losses = 0;
   double lateral_rmse_m = 0.0;  // NaN when no frame was scored
   double nees_in_bounds_fraction = 0.0;
+  std::vector<RowSpacingEvent> row_spacing_events;  // ours's, at most one a run
 };
 
 struct TrackingMetrics {
@@ -91,6 +101,7 @@ struct TrackingMetrics {
   int frames_tracking = 0;  // frames in which the filter was tracking
   int updates = 0;
   int losses = 0;
+  int row_spacing_events = 0;  // runs whose row spacing disagreed with the crop profile's
   double lateral_rmse_m = 0.0;
   double lateral_mean_m = 0.0;
   double forward_mean_m = 0.0;  // signed mean error of Y (modulo l̄)
