@@ -378,6 +378,12 @@ TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t see
   e.ours.row_spacing_m += options.spacing_offset_m;
   e.ours.plant_spacing_m += options.spacing_offset_m;
   if (options.centroids_on_virtual_plane) e.ours.crop_radius_m = e.ours.crop_height_m = 0.0;
+  if (options.calibration_scale_consider) {
+    e.ours.calibration_pitch_sd_rad = p.vehicle.calibration_tilt_sd_rad;
+    e.ours.calibration_height_sd_m = p.vehicle.calibration_height_sd_m;
+    e.ours.calibration_focal_sd = p.vehicle.calibration_focal_sd;
+    e.ours.calibration_scale_consider = true;
+  }
   e.thesis = ThesisTrackerOptions(p);
   return e;
 }

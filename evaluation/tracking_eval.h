@@ -41,6 +41,11 @@ struct TrackingEvalOptions {
   // Ours locates centroids on the virtual plane, not at the crop's
   // centroid heights (to measure what the height model is worth).
   bool centroids_on_virtual_plane = false;
+  // Ours carries the camera's tilt, height and focal length (the vehicle's
+  // calibration_sd) as consider states beside the roll
+  // (TrackerOptions::calibration_scale_consider), which the product's
+  // profile does not (`--scale-consider`, for measuring).
+  bool calibration_scale_consider = false;
   // Per-frame errors of ours (one CSV row per scored frame), when set.
   std::ostream* trace = nullptr;
   double settle_m = 1.0;           // errors count from this far past initialisation
