@@ -82,7 +82,10 @@ TEST(SpacingCheck, AllowsTheCamerasScaleError) {
   const Posterior far = Update(r0, v0, r0 + 0.05, r);
   const auto m = wide.Check(far.mean, far.var);
   ASSERT_TRUE(m.has_value());
-  EXPECT_NEAR(m->chi2, 0.05 * 0.05 / (v0 + r + vs), 1e-6 * m->chi2);
+  // The move from the prior against its own variance plus the scale's.
+  const double moved = far.mean - r0;
+  EXPECT_NEAR(m->chi2, moved * moved / (v0 - far.var + vs), 1e-6 * m->chi2);
+  EXPECT_NEAR(m->measured_m, r0 + 0.05, 1e-9);
   EXPECT_NEAR(m->measured_sd_m, std::sqrt(r + vs), 1e-9);
   EXPECT_NEAR(m->profile_sd_m, std::sqrt(v0 + vs), 1e-12);
 }
