@@ -172,9 +172,9 @@ TEST(TrackingSystem, FieldWithCalibrationError) {
 // grower would, from the profile (the engine never reads the simulator's
 // 0.50): the tracker says so within 10 m of its start, naming the spacing
 // it measured within 10 mm of the truth there; the same field with the
-// right profile says nothing (nor the field preset's 0.475 m with its
-// drifting spacing: the other seeds). Short runs (12 m): the check fires on
-// the first metres or not at all. Measured on seeds 1–3:
+// right profile says nothing. Short runs (12 m): the check fires on the
+// first metres or not at all. Seed 1 (not yet run; measured on the
+// synthetic bed in tracker_test.cc):
 // docs/results/2026-12-07-row-spacing.md.
 TrackingEvaluation RowSpacingRun(double true_m, double profile_m, uint64_t seed, int seeds) {
   TrackingEvalOptions o;
@@ -199,8 +199,6 @@ TEST(TrackingSystem, AProfilesWrongRowSpacingIsSaidWithin10m) {
   EXPECT_EQ(wrong.ours.row_spacing_events, 1);
   const TrackingEvaluation right = RowSpacingRun(0.50, 0.50, 1, 1);
   EXPECT_EQ(right.ours.row_spacing_events, 0);
-  const TrackingEvaluation nominal = RowSpacingRun(0.475, 0.475, 2, 2);
-  EXPECT_EQ(nominal.ours.row_spacing_events, 0);
 }
 
 }  // namespace
