@@ -24,6 +24,7 @@ struct TrackingArgs {
   ProfileArgs profiles;
   std::string baseline;
   bool virtual_plane = false;
+  bool scale_consider = false;
   std::string trace_csv;
   bool json = false;
   std::string reference = "grid";  // or "plant-lines" (thesis §8.1)
@@ -41,6 +42,7 @@ TrackingEvalOptions TrackingOptionsOf(const TrackingArgs& a, const GlobalOptions
   o.spacing_offset_m = a.spacing_offset_mm / 1000.0;
   o.baseline_thesis = a.baseline == "thesis";
   o.centroids_on_virtual_plane = a.virtual_plane;
+  o.calibration_scale_consider = a.scale_consider;
   o.odometry_fault = ToOdometryFault(a.fault);
   o.visual_motion = a.fault.visual_motion;
   o.reference = a.reference == "plant-lines" ? TrackingReference::kPlantLines : TrackingReference::kGrid;
@@ -82,6 +84,11 @@ void AddTrackingCommands(CommandRegistry& registry) {
   cmd->add_flag("--virtual-plane", args.virtual_plane,
                 "locate our blob centroids on the preset's virtual plane (thesis §2.3.8) instead of "
                 "at the crop's centroid heights");
+  cmd->add_flag("--scale-consider", args.scale_consider,
+                "carry the camera's tilt, height and focal length (the vehicle profile's "
+                "calibration_sd) in our tracker as consider states, as well as the roll "
+                "(TrackerOptions::calibration_scale_consider; off in the product: "
+                "docs/results/2026-11-27-calibration.md)");
   cmd->add_option("--trace-csv", args.trace_csv,
                   "write our per-frame errors, σ, spacings and wheel scale to this CSV");
   cmd->add_option("--reference", args.reference,

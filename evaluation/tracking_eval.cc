@@ -76,6 +76,7 @@ struct Scorer {
   std::vector<double> init_frames;
   int init_trials = 0, init_successes = 0;
   int fault_frames = 0, fault_tracking = 0, fault_losses = 0;
+  std::vector<RowSpacingEvent> row_spacing_events;
   double fault_lat2 = 0.0, fault_fwd2 = 0.0;
 
   Scorer(const geometry::CameraOptions& camera_options,
@@ -130,6 +131,10 @@ struct Scorer {
       if (InitCorrect(est, truth)) ++init_successes;
     }
     if (was_tracking && tracker.mode() == tracking::TrackerMode::kLost) ++losses;
+    if (r.row_spacing_mismatch) {
+      row_spacing_events.push_back({frame.truth.distance_m, frame.truth.distance_m - init_distance_m,
+                                    truth.row_spacing_m, *r.row_spacing_mismatch});
+    }
     ScoreFault(frame, was_tracking, est);
     const double past = frame.truth.distance_m - init_distance_m;
     if (tracker.mode() != tracking::TrackerMode::kTracking) {
@@ -257,6 +262,8 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   run.losses = s.losses;
   run.lateral_rmse_m = run_lateral_rmse_or_nan(s);
   run.nees_in_bounds_fraction = s.scored > 0 ? static_cast<double>(s.nees_in) / s.scored : 0.0;
+  run.row_spacing_events = s.row_spacing_events;
+  m.row_spacing_events += s.row_spacing_events.empty() ? 0 : 1;
   m.runs.push_back(run);
   m.runs_not_started += s.ever_tracked ? 0 : 1;
   m.plant_lines_scored += s.lines_scored;
@@ -371,6 +378,12 @@ TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t see
   e.ours.row_spacing_m += options.spacing_offset_m;
   e.ours.plant_spacing_m += options.spacing_offset_m;
   if (options.centroids_on_virtual_plane) e.ours.crop_radius_m = e.ours.crop_height_m = 0.0;
+  if (options.calibration_scale_consider) {
+    e.ours.calibration_pitch_sd_rad = p.vehicle.calibration_tilt_sd_rad;
+    e.ours.calibration_height_sd_m = p.vehicle.calibration_height_sd_m;
+    e.ours.calibration_focal_sd = p.vehicle.calibration_focal_sd;
+    e.ours.calibration_scale_consider = true;
+  }
   e.thesis = ThesisTrackerOptions(p);
   return e;
 }

@@ -41,6 +41,11 @@ struct TrackingEvalOptions {
   // Ours locates centroids on the virtual plane, not at the crop's
   // centroid heights (to measure what the height model is worth).
   bool centroids_on_virtual_plane = false;
+  // Ours carries the camera's tilt, height and focal length (the vehicle's
+  // calibration_sd) as consider states beside the roll
+  // (TrackerOptions::calibration_scale_consider), which the product's
+  // profile does not (`--scale-consider`, for measuring).
+  bool calibration_scale_consider = false;
   // Per-frame errors of ours (one CSV row per scored frame), when set.
   std::ostream* trace = nullptr;
   double settle_m = 1.0;           // errors count from this far past initialisation
@@ -72,6 +77,15 @@ TrackingEngine TrackingEngineOf(const TrackingEvalOptions& options, uint64_t see
 
 // One run (seed) of one tracker: every run counts, a run that never
 // started or lost the grid included.
+// The tracker found the bed's row spacing disagreeing with the crop
+// profile's (FrameReport::row_spacing_mismatch): where, and the truth there.
+struct RowSpacingEvent {
+  double distance_m = 0.0;         // driven (truth) since the run began
+  double since_start_m = 0.0;      // driven since the tracker's first start
+  double true_row_spacing_m = 0.0; // the simulator's, where it was found
+  tracking::SpacingMismatch mismatch;
+};
+
 struct TrackingRun {
   uint64_t seed = 0;
   CalibrationError calibration_error;  // drawn for this seed
@@ -79,6 +93,7 @@ struct TrackingRun {
   int frames = 0, frames_lost = 0, losses = 0;
   double lateral_rmse_m = 0.0;  // NaN when no frame was scored
   double nees_in_bounds_fraction = 0.0;
+  std::vector<RowSpacingEvent> row_spacing_events;  // ours's, at most one a run
 };
 
 struct TrackingMetrics {
@@ -91,6 +106,7 @@ struct TrackingMetrics {
   int frames_tracking = 0;  // frames in which the filter was tracking
   int updates = 0;
   int losses = 0;
+  int row_spacing_events = 0;  // runs whose row spacing disagreed with the crop profile's
   double lateral_rmse_m = 0.0;
   double lateral_mean_m = 0.0;
   double forward_mean_m = 0.0;  // signed mean error of Y (modulo l̄)

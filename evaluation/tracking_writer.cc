@@ -9,6 +9,23 @@
 namespace plantscale::app {
 namespace {
 
+nlohmann::json RowSpacingEventsJson(const std::vector<RowSpacingEvent>& events) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const RowSpacingEvent& e : events) {
+    out.push_back({{"distance_m", e.distance_m},
+                   {"since_start_m", e.since_start_m},
+                   {"measured_row_spacing_m", e.mismatch.measured_m},
+                   {"measured_row_spacing_sd_m", e.mismatch.measured_sd_m},
+                   {"estimated_row_spacing_m", e.mismatch.estimate_m},
+                   {"profile_row_spacing_m", e.mismatch.profile_m},
+                   {"profile_row_spacing_sd_m", e.mismatch.profile_sd_m},
+                   {"chi2", e.mismatch.chi2},
+                   {"true_row_spacing_m", e.true_row_spacing_m},
+                   {"text", e.mismatch.Text()}});
+  }
+  return out;
+}
+
 nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
   nlohmann::json out = nlohmann::json::array();
   for (const TrackingRun& r : runs) {
@@ -19,7 +36,8 @@ nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
                    {"frames_lost", r.frames_lost},
                    {"losses", r.losses},
                    {"lateral_rmse_m", Finite(r.lateral_rmse_m)},
-                   {"nees_in_bounds_fraction", r.nees_in_bounds_fraction}});
+                   {"nees_in_bounds_fraction", r.nees_in_bounds_fraction},
+                   {"row_spacing_events", RowSpacingEventsJson(r.row_spacing_events)}});
   }
   return out;
 }
@@ -58,6 +76,7 @@ nlohmann::json MetricsJson(const TrackingMetrics& m) {
       {"frames_tracking", m.frames_tracking},
       {"updates", m.updates},
       {"losses", m.losses},
+      {"row_spacing_events", m.row_spacing_events},
       {"mean_matched", m.mean_matched},
       {"run_lateral_rmse_m", m.run_lateral_rmse_m},
       {"run_forward_drift_cm_per_m", m.run_forward_drift_cm_per_m},

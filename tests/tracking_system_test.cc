@@ -167,5 +167,39 @@ TEST(TrackingSystem, FieldWithCalibrationError) {
   EXPECT_LT(e.ours.lateral_rmse_m, 0.6 * e.thesis->lateral_rmse_m);
 }
 
+// A crop profile whose row spacing is wrong (issue 61's bad input): the
+// drill was set to 0.50 m and the profile says 0.45 m. Configured as a
+// grower would, from the profile (the engine never reads the simulator's
+// 0.50): the tracker says so within 10 m of its start, naming the spacing
+// it measured within 10 mm of the truth there; the same field with the
+// right profile says nothing. Short runs (12 m): the check fires on the
+// first metres or not at all. Seed 1 (not yet run; measured on the
+// synthetic bed in tracker_test.cc):
+// docs/results/2026-12-07-row-spacing.md.
+TrackingEvaluation RowSpacingRun(double true_m, double profile_m, uint64_t seed, int seeds) {
+  TrackingEvalOptions o;
+  o.sim = LoadSimulatorPreset("field", DefaultConfigDir());
+  o.sim.length_m = 12.0;
+  o.sim.seed = seed;
+  o.sim.field.row_spacing_m = true_m;
+  o.profiles = LoadProfiles("", "", o.sim.preset, DefaultConfigDir());
+  o.profiles->crop.row_spacing_m = profile_m;
+  o.seeds = seeds;
+  return EvaluateTracking(o);
+}
+
+TEST(TrackingSystem, AProfilesWrongRowSpacingIsSaidWithin10m) {
+  const TrackingEvaluation wrong = RowSpacingRun(0.50, 0.45, 1, 1);
+  ASSERT_EQ(wrong.ours.runs.size(), 1U);
+  const auto& events = wrong.ours.runs[0].row_spacing_events;
+  ASSERT_EQ(events.size(), 1U);
+  EXPECT_LE(events[0].since_start_m, 10.0);
+  EXPECT_NEAR(events[0].mismatch.measured_m, events[0].true_row_spacing_m, 0.010);
+  EXPECT_NEAR(events[0].mismatch.profile_m, 0.45, 1e-12);
+  EXPECT_EQ(wrong.ours.row_spacing_events, 1);
+  const TrackingEvaluation right = RowSpacingRun(0.50, 0.50, 1, 1);
+  EXPECT_EQ(right.ours.row_spacing_events, 0);
+}
+
 }  // namespace
 }  // namespace plantscale::app

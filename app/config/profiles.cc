@@ -126,6 +126,7 @@ CropProfile LoadCropProfile(const std::string& name_or_path, const fs::path& con
   }
   c.rows = static_cast<int>(rows);
   c.row_spacing_m = k.Number("row_spacing_m", 0.1, 2.0, "m");
+  c.row_spacing_sd_m = k.Number("row_spacing_sd_m", 0.0005, 0.1, "m", kGrowerRowSpacingSdM);
   c.plant_spacing_m = k.Number("plant_spacing_m", 0.02, 2.0, "m");
   c.leaf_radius_m = k.Number("leaf_radius_m", 0.005, 0.5, "m");
   c.leaf_radius_sd_fraction =
@@ -419,6 +420,21 @@ tracking::TrackerOptions ProductTrackerOptions(const Profiles& p) {
   o.rows_each_side = (c.rows - 1) / 2;
   o.row_spacing_m = c.row_spacing_m;
   o.plant_spacing_m = c.plant_spacing_m;
+  // How precisely the drill's spacing is known: the prior on r̄, and what
+  // the check of the bed against the profile allows.
+  o.row_spacing_sd_m = c.row_spacing_sd_m;
+  // A camera off its calibration by the vehicle's calibration_sd scales
+  // the rows' spacing as the camera sees it: at the centre of the view a
+  // height error by δH/(H − h), a tilt error by δθ/tan θ (θ below the
+  // horizontal), a focal error by its fraction. The check of the spacing
+  // against the profile allows that (spacing_check.h).
+  {
+    const geometry::CameraOptions& cam = v.camera;
+    const double above = std::max(0.1, cam.height_m - c.virtual_plane_height_m);
+    const double h = v.calibration_height_sd_m / above;
+    const double t = v.calibration_tilt_sd_rad / std::tan(cam.tilt_rad);
+    o.spacing_check_scale_sd = std::min(0.5, std::sqrt(h * h + t * t + std::pow(v.calibration_focal_sd, 2)));
+  }
   o.track_width_m = v.track_width_m;
   // The crop as a grower knows it: mean leaf-tip radius and height, how
   // much plants vary in size (their centroid heights scale with them), and

@@ -29,6 +29,7 @@ struct CropProfile {
   std::string file;
   int rows = 3;                         // rows per bed (odd: a central row)
   double row_spacing_m = 0.0;           // as the drill was set
+  double row_spacing_sd_m = 0.0;        // how precisely it is known (sd; default kGrowerRowSpacingSdM)
   double plant_spacing_m = 0.0;         // as the planter was set
   double leaf_radius_m = 0.0;           // mean leaf-tip radius at the growth stage
   double leaf_radius_sd_fraction = 0.0; // plant-to-plant size spread (sd / mean)
@@ -49,6 +50,10 @@ struct CropProfile {
 // believes a tighter spread than the field has is overconfident.
 inline constexpr double kGrowerPlanterSdM = 0.02;
 inline constexpr double kGrowerLeafRadiusSdFraction = 0.2;
+// A drill's row spacing is a machine setting: within 5 mm of what it was set
+// to unless the profile says otherwise. The tracker's prior on r̄, and what
+// its check of the bed against the profile allows (spacing_check.h).
+inline constexpr double kGrowerRowSpacingSdM = 0.005;
 
 // A vehicle: its wheels, camera, bar and suspension.
 struct VehicleProfile {

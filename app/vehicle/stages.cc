@@ -375,6 +375,10 @@ void PipelineStage::Process(const VehicleFrame& frame, RunStatus& status, Publis
                             "alone): read from the other wheel, turn rate held");
   }
   if (r.accepted) PublishGrid(r, publisher);
+  if (r.report.row_spacing_mismatch) {
+    // Once a run: the drill's spacing in the crop profile is not the bed's.
+    Event(publisher, frame.utime, "row_spacing_mismatch", r.report.row_spacing_mismatch->Text());
+  }
   if (!pipeline_.treatment()) return;
   ReportTicks(status);
   ReportUncertainty(frame.utime, publisher);

@@ -283,6 +283,11 @@ const FrameResult& Pipeline::ProcessFrame(int64_t utime, int frame_index, const 
   if (frame_.accepted && frame_.mode == tracking::TrackerMode::kLost) {
     frame_.faults.push_back("tracker: " + frame_.report.skipped_reason);
   }
+  // The bed's row spacing disagrees with the crop profile's: a health line
+  // while it lasts (the report's row_spacing_mismatch is the event, once).
+  if (frame_.accepted && tracker_.row_spacing_mismatch()) {
+    frame_.faults.push_back("tracker: " + tracker_.row_spacing_mismatch()->Text());
+  }
   frame_.state = tracker_.state();
   frame_.covariance = tracker_.covariance();
   frame_.forward_distance_m = tracker_.forward_distance_m();

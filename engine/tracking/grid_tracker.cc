@@ -44,7 +44,8 @@ GridTracker::GridTracker(const geometry::CameraModel& camera, const TrackerOptio
       filter_(options),
       wheels_(options),
       sizes_(options, camera.height()),
-      loss_(options) {
+      loss_(options),
+      spacing_check_(options.estimate_spacing ? options.spacing_check_chi2 : 0.0) {
   Reset();
 }
 
@@ -57,6 +58,8 @@ void GridTracker::Reset() {
   since_frame_ = {};
   lines_in_view_ = -1;
   loss_.Reset(filter_.x()(GridState::kForward));
+  spacing_check_.Start(options_.row_spacing_m, 0.0);
+  spacing_reported_ = false;
 }
 
 GridState GridTracker::state() const { return filter_.state(); }
@@ -70,6 +73,8 @@ void GridTracker::Initialise(int64_t utime, const GridState& s, const Matrix5d& 
   if (utime_ < 0 || utime > utime_) utime_ = utime;
   lines_in_view_ = -1;
   loss_.Start(utime, filter_.x()(GridState::kForward));
+  spacing_check_.Start(s.row_spacing_m, covariance(3, 3),
+                       std::pow(options_.spacing_check_scale_sd * s.row_spacing_m, 2));
   FrameReport ignored;
   ShiftReference(ignored);
 }
@@ -279,6 +284,14 @@ void GridTracker::Update(std::span<const Feature> features, FrameReport& report)
   }
   report.updated = true;
   loss_.Updated(utime_);
+  if (options_.estimate_spacing) {
+    const std::optional<SpacingMismatch> m = spacing_check_.Check(
+        filter_.x()(GridState::kRowSpacing), filter_.p()(GridState::kRowSpacing, GridState::kRowSpacing));
+    if (m && !spacing_reported_) {
+      report.row_spacing_mismatch = m;
+      spacing_reported_ = true;
+    }
+  }
 }
 
 void GridTracker::NoteLinesInView(const std::vector<geometry::GridPlant>& in_view) {
@@ -292,7 +305,11 @@ void GridTracker::NoteLinesInView(const std::vector<geometry::GridPlant>& in_vie
   first += loss_.lines_passed();
   last += loss_.lines_passed();
   if (lines_in_view_ >= 0) {
-    filter_.AddSpacingNoise(std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_));
+    const int changed = std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_);
+    filter_.AddSpacingNoise(changed);
+    if (options_.estimate_spacing) {
+      spacing_check_.AddNoise(options_.spacing_step_sd_m * options_.spacing_step_sd_m * changed);
+    }
   }
   first_line_in_view_ = first;
   lines_in_view_ = last;

@@ -42,6 +42,7 @@
 #include "engine/tracking/loss_policy.h"
 #include "engine/tracking/height_from_size.h"
 #include "engine/tracking/slip_guard.h"
+#include "engine/tracking/spacing_check.h"
 #include "engine/tracking/tracker_options.h"
 #include "engine/tracking/tracker_report.h"
 
@@ -119,6 +120,10 @@ class GridTracker {
   // Plant (m, n)'s centroid height above the crop's (δh, TrackerOptions::
   // plant_heights); none when the plant has no such state.
   std::optional<double> PlantHeightOffset(int m, int n) const;
+  // The row spacing the frames measure disagrees with the crop profile's
+  // (spacing_check.h), as of the last update; none when it agrees or is not
+  // yet known. The first such frame's report carries it as the event.
+  const std::optional<SpacingMismatch>& row_spacing_mismatch() const { return spacing_check_.current(); }
   // Ground distance per measured wheel distance (1 + k); 1 when not estimated.
   double odometry_scale() const { return filter_.OdometryScale(); }
   // The forward ground speed dead-reckoned with: the last accepted wheel
@@ -163,6 +168,8 @@ class GridTracker {
   HeightFromSize sizes_;
   LossPolicy loss_;
   PlantSpread spread_;
+  SpacingCheck spacing_check_;
+  bool spacing_reported_ = false;  // the mismatch event was sent (once until Reset)
   int64_t utime_ = -1;          // time of the state
   WheelIncrement since_frame_;  // wheel motion since the last frame (initialisation)
   Eigen::Vector3d caught_up_ = Eigen::Vector3d::Zero();  // (t_x, Y, Ψ) at utime_ while held

@@ -10,6 +10,8 @@ OptionErrors TrackerOptions::Validate() const {
   RequireNonNegative(e, "row_spacing_sd_m", row_spacing_sd_m);
   RequireNonNegative(e, "plant_spacing_sd_m", plant_spacing_sd_m);
   RequireNonNegative(e, "spacing_step_sd_m", spacing_step_sd_m);
+  RequireNonNegative(e, "spacing_check_chi2", spacing_check_chi2);
+  RequireInRange(e, "spacing_check_scale_sd", spacing_check_scale_sd, 0.0, 0.5);
   RequirePositive(e, "plant_offset_sd_m", plant_offset_sd_m);
   RequireNonNegative(e, "plant_offset_walk_across_sd_per_sqrt_m", plant_offset_walk_across_sd_per_sqrt_m);
   RequireNonNegative(e, "plant_offset_walk_along_sd_per_sqrt_m", plant_offset_walk_along_sd_per_sqrt_m);

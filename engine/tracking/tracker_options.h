@@ -59,7 +59,10 @@ struct TrackerOptions {
   int rows_each_side = 1;      // the bed: rows −k..k
   double row_spacing_m = 0.475;    // r̄: nominal, the fixed value or the initial estimate
   double plant_spacing_m = 0.45;   // l̄
-  double row_spacing_sd_m = 0.03;  // initial σ of r̄, l̄ when estimated
+  // Initial σ of r̄, l̄ when estimated. r̄'s is how precisely the drill's
+  // row spacing is known (the crop profile's row_spacing_sd_m, 5 mm for a
+  // product run); 0.03 here for a tracker told nothing.
+  double row_spacing_sd_m = 0.03;
   double plant_spacing_sd_m = 0.03;
   // Process noise on r̄, l̄ per line entering or leaving (§4.1.2). The
   // thesis adds it because the mean over the plants in view changes as
@@ -67,6 +70,16 @@ struct TrackerOptions {
   // state, so this only carries the bed's true drift (a planter's slipping
   // ground wheel: about 1 mm per metre, some 2 lines in and 2 out).
   double spacing_step_sd_m = 0.001;
+  // The row spacing the frames measure against the profile's
+  // (spacing_check.h): d² = (r̂ − r₀)²/(V₀ − P) beyond this is a
+  // mismatch, reported once (FrameReport::row_spacing_mismatch). 10.83:
+  // χ²₁'s 99.9 % point, as d² is tested on every update. 0: not checked
+  // (and never with fixed spacings).
+  double spacing_check_chi2 = 10.83;
+  // The fractional sd of the scale a camera off its calibration puts on
+  // the distances it sees (tilt, height, focal; ProductTrackerOptions from
+  // the vehicle's calibration_sd): the check allows r̄ that much more.
+  double spacing_check_scale_sd = 0.0;
   double plant_offset_sd_m = 0.015;  // σ of a plant's persistent offset from its grid position
   // Where a plant's centroid is located wanders as the view of it changes
   // (leaves turn in and out of view, self-shadow, lobes): a random walk of

@@ -3,6 +3,7 @@
 // each input's acceptance, each frame's associations and update, the grid
 // predicted ahead, and the planter's spread as the plants show it.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,19 @@ struct Association {
   double gamma2 = 0.0;  // normalised innovation (eq. 6.5)
 };
 
+// The bed's row spacing disagrees with the crop profile's beyond what the
+// profile's precision (row_spacing_sd_m, with the spacing's random walk)
+// and the filter's covariance allow (SpacingCheck, spacing_check.h).
+struct SpacingMismatch {
+  double measured_m = 0.0;     // what the frames measured, the profile's share taken out
+  double measured_sd_m = 0.0;
+  double estimate_m = 0.0;     // the filter's r̄ (the profile's prior in it)
+  double profile_m = 0.0;      // the crop profile's row_spacing_m
+  double profile_sd_m = 0.0;   // its precision, with the random walk since the start and the camera's scale
+  double chi2 = 0.0;           // d² = (r̂ − r₀)² / (V₀ − P + (s·r₀)²)
+  std::string Text() const;    // "row spacing measured 0.501 m ± 0.002, the crop profile says ..."
+};
+
 struct FrameReport {
   InputStatus input;
   TrackerMode mode = TrackerMode::kInitialising;
@@ -37,6 +51,10 @@ struct FrameReport {
   int strips = 0;              // merged blobs along one row taken for its lateral position
   int lines_shifted = 0;       // reference shifts (eq. 4.6) before this frame's update
   double nis = 0.0;            // stacked normalised innovation squared
+  // The first frame of a run (tracker's life, until Reset) whose update
+  // finds the row spacing disagreeing with the crop profile's: the event.
+  // GridTracker::row_spacing_mismatch() holds it while it lasts.
+  std::optional<SpacingMismatch> row_spacing_mismatch;
   std::vector<Association> associations;
 };
 

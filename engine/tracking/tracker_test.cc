@@ -761,5 +761,40 @@ TEST(GridTracker, PlantsTouchingAlongTheirRowsAreMeasuredAcrossThem) {
   EXPECT_LT(with, 0.75 * without) << "with " << with << " m, without " << without << " m";
 }
 
+// The crop profile's row spacing against the bed's (spacing_check.h): a
+// drill set to 0.50 m written as 0.45 m (5 mm sd) is said once within 10 m,
+// naming the spacing the frames measured; the right profile says nothing.
+TEST(GridTracker, SaysWhenTheProfilesRowSpacingIsWrong) {
+  for (const double profile_m : {0.45, 0.50}) {
+    TrackerOptions o;
+    o.row_spacing_m = profile_m;
+    o.row_spacing_sd_m = 0.005;
+    Drive d(o);
+    d.scene.truth.row_spacing_m = 0.50;
+    std::optional<SpacingMismatch> event;
+    double at_m = 0.0;
+    int events = 0;
+    for (int f = 0; f < 180 && d.tracker.forward_distance_m() < 10.0; ++f) {  // 10 m at most
+      const FrameReport r = d.Frames(1);
+      if (r.row_spacing_mismatch) {
+        ++events;
+        if (!event) event = r.row_spacing_mismatch, at_m = d.tracker.forward_distance_m();
+      }
+    }
+    ASSERT_EQ(d.tracker.mode(), TrackerMode::kTracking) << profile_m;
+    if (profile_m == 0.50) {
+      EXPECT_EQ(events, 0);
+      EXPECT_FALSE(d.tracker.row_spacing_mismatch().has_value());
+      continue;
+    }
+    ASSERT_EQ(events, 1);
+    EXPECT_LE(at_m, 10.0);
+    EXPECT_NEAR(event->measured_m, 0.50, 0.005);
+    EXPECT_NEAR(event->profile_m, 0.45, 1e-12);
+    EXPECT_GT(event->chi2, o.spacing_check_chi2);
+    EXPECT_TRUE(d.tracker.row_spacing_mismatch().has_value());
+  }
+}
+
 }  // namespace
 }  // namespace plantscale::tracking
