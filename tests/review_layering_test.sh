@@ -21,6 +21,8 @@ closure="$2"
 binary="${3:-}"
 [[ -d "$src/review" ]] || { echo "FAIL: no review/ under '$src'"; exit 1; }
 [[ -s "$closure" ]] || { echo "FAIL: no link closure in '$closure' (re-run cmake)"; exit 1; }
+closure=$(realpath "$closure")
+[[ -z "$binary" ]] || binary=$(realpath "$binary")
 cd "$src" || exit 1
 failures=0
 include='^[[:space:]]*#[[:space:]]*include[[:space:]]*[<"](\.\./)*'
