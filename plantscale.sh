@@ -136,7 +136,7 @@ run_fuzzers() {
 run_complexity() {
   local files=("$@")
   if ((${#files[@]} == 0)); then
-    mapfile -t files < <(find engine app maps telemetry ui tools -name '*.cc' ! -name '*_test.cc' | sort)
+    mapfile -t files < <(find engine app maps telemetry review ui tools -name '*.cc' ! -name '*_test.cc' | sort)
   fi
   local checks='-*,readability-function-cognitive-complexity,readability-function-size' found
   found=$(printf '%s\n' "${files[@]}" | xargs -P "$(nproc)" -n 8 clang-tidy -p build --quiet \

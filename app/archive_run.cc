@@ -8,17 +8,17 @@
 
 #include "app/config/run_config.h"
 #include "maps/sim_truth.h"
+#include "review/agronomy.h"
+#include "review/run_model.h"
 #include "telemetry/log.h"
 #include "telemetry/subscriber.h"
-#include "ui/agronomy.h"
-#include "ui/run_model.h"
 
 namespace plantscale::app {
 namespace fs = std::filesystem;
 namespace {
 
 // Whole-run and per-row figures of an agronomic summary.
-maps::ArchiveFigures FiguresOf(const ui::AgronomySummary& a) {
+maps::ArchiveFigures FiguresOf(const review::AgronomySummary& a) {
   maps::ArchiveFigures f;
   f.crop = a.crop;
   f.plants_per_m = a.plants_per_m;
@@ -27,7 +27,7 @@ maps::ArchiveFigures FiguresOf(const ui::AgronomySummary& a) {
   f.median_radius_m = a.crop_size.median_m;
   f.weeds = a.weeds;
   f.weeds_per_m2 = a.weeds_per_m2;
-  for (const ui::RowAgronomy& r : a.rows) {
+  for (const review::RowAgronomy& r : a.rows) {
     f.rows.push_back({r.row, r.crop, a.y0_m, a.y1_m, r.row * a.row_spacing_m, r.plants_per_m, r.gaps, r.missing,
                       r.crop_size.median_m, r.weeds, r.weeds_per_m2});
   }
@@ -68,7 +68,7 @@ std::string IsoUtc(int64_t utime) {
 maps::ArchiveRun ArchiveRunFromLog(const fs::path& log) {
   telemetry::LogReader reader(log);
   telemetry::Subscriber subscriber;
-  ui::RunModel model;
+  review::RunModel model;
   model.Follow(subscriber);
   while (const std::optional<telemetry::LogEvent> e = reader.Next()) {
     model.Feed(subscriber, e->channel, e->data.data(), e->data.size(), e->utime);
@@ -87,9 +87,9 @@ maps::ArchiveRun ArchiveRunFromLog(const fs::path& log) {
     run.start_time = IsoUtc(model.first_message_utime());
     run.end_time = IsoUtc(model.last_message_utime());
   }
-  const ui::RunSummary summary = model.Summary();
+  const review::RunSummary summary = model.Summary();
   run.distance_m = summary.distance_m;
-  run.figures = FiguresOf(ui::Agronomy(model, summary));
+  run.figures = FiguresOf(review::Agronomy(model, summary));
   return run;
 }
 
@@ -97,9 +97,9 @@ maps::ArchiveRun ArchiveRunFromMap(const fs::path& input, const maps::CropMap& m
   maps::ArchiveRun run;
   run.run_id = RunIdOf(input);
   run.source = input.filename().string();
-  std::map<int64_t, ui::PlantRecord> plants;
+  std::map<int64_t, review::PlantRecord> plants;
   for (const maps::MapPlant& p : map.plants()) {
-    ui::PlantRecord& r = plants[p.id];
+    review::PlantRecord& r = plants[p.id];
     r.plant.id = p.id;
     r.plant.position_m = p.position_m;
     r.plant.kind = p.kind == maps::PlantKind::kCrop   ? telemetry::PlantKind::kCrop
@@ -108,8 +108,8 @@ maps::ArchiveRun ArchiveRunFromMap(const fs::path& input, const maps::CropMap& m
     r.plant.size_m2 = std::numbers::pi * p.radius_m * p.radius_m;
     r.plant.sprayed = p.treated;
   }
-  ui::AgronomySummary a;
-  ui::AddPlantFigures(a, plants);
+  review::AgronomySummary a;
+  review::AddPlantFigures(a, plants);
   run.figures = FiguresOf(a);
   return run;
 }

@@ -4,7 +4,7 @@
 #include <unistd.h>
 
 #include "app/log_map.h"
-#include "ui/synthetic_run.h"
+#include "review/synthetic_run.h"
 
 namespace plantscale::app {
 namespace {
@@ -14,8 +14,8 @@ fs::path Temp(const std::string& name) {
   return fs::temp_directory_path() / ("plantscale_archrun_" + std::to_string(::getpid()) + "_" + name);
 }
 
-ui::SyntheticRunOptions Bed(uint32_t seed) {
-  ui::SyntheticRunOptions o;
+review::SyntheticRunOptions Bed(uint32_t seed) {
+  review::SyntheticRunOptions o;
   o.length_m = 12.0;
   o.seed = seed;
   o.missing_crops = {{0, 6}, {0, 7}, {1, 10}};  // two gaps: one of 2 plants, one of 1
@@ -24,8 +24,8 @@ ui::SyntheticRunOptions Bed(uint32_t seed) {
 
 TEST(ArchiveRun, ALogGivesItsIdTimesAndFigures) {
   const fs::path log = Temp("a.lcmlog"), other = Temp("b.lcmlog");
-  ui::WriteSyntheticLog(log, Bed(1));
-  ui::WriteSyntheticLog(other, Bed(2));
+  review::WriteSyntheticLog(log, Bed(1));
+  review::WriteSyntheticLog(other, Bed(2));
   const maps::ArchiveRun run = ArchiveRunFromLog(log);
   EXPECT_EQ(run.run_id.size(), 16u);
   EXPECT_EQ(run.run_id, RunIdOf(log));           // the same log, the same run

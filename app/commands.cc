@@ -2,6 +2,7 @@
 
 #include "app/archive_commands.h"
 #include "app/command_auth_commands.h"
+#include "app/demo_commands.h"
 #include "app/export_commands.h"
 #include "app/figures_commands.h"
 #include "app/gateway_commands.h"
@@ -31,6 +32,7 @@ CommandLine::CommandLine(CLI::App& cli) : registry_(cli) {
   AddMotionCommands(registry_);
   AddRowsCommands(registry_);
   AddUiCommands(registry_);
+  AddDemoCommands(registry_);
   AddSprayBarCommands(registry_);
   AddCommandAuthCommands(registry_);
   AddLearningCommands(registry_);

@@ -8,10 +8,10 @@
 #include <plantscale_lcmtypes/plantscale_map_tile_t.hpp>
 #include <plantscale_lcmtypes/plantscale_plant_list_t.hpp>
 
+#include "review/synthetic_run.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 #include "telemetry/log.h"
-#include "ui/synthetic_run.h"
 
 namespace plantscale::app {
 namespace {
@@ -45,11 +45,11 @@ Expected Decode(const std::vector<telemetry::LogEvent>& events) {
 }
 
 TEST(LogMap, EveryPlantAndTileOfARunLandsInTheMap) {
-  ui::SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 8.0;
   const fs::path log = Temp("run.lcmlog");
-  ui::WriteSyntheticLog(log, o);
-  const Expected x = Decode(ui::SyntheticRun(o));
+  review::WriteSyntheticLog(log, o);
+  const Expected x = Decode(review::SyntheticRun(o));
   ASSERT_GT(x.plants.size(), 40u);
   ASSERT_GT(x.tiles, 0);
 
@@ -86,10 +86,10 @@ TEST(LogMap, EveryPlantAndTileOfARunLandsInTheMap) {
 }
 
 TEST(LogMap, ACutOffLogGivesTheMapUpToItsLastWholeEvent) {
-  ui::SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 4.0;
   const fs::path log = Temp("cut.lcmlog");
-  ui::WriteSyntheticLog(log, o);
+  review::WriteSyntheticLog(log, o);
   fs::resize_file(log, fs::file_size(log) - 7);
   LogMapReport report;
   const maps::CropMap map = CropMapFromLog(log, report);
@@ -123,12 +123,12 @@ TEST(LogMap, NotALogAndALogWithoutMapsAreClearErrors) {
 }
 
 TEST(LogMap, AMalformedTileIsCountedAndSkipped) {
-  ui::SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 3.0;
   const fs::path log = Temp("bad.lcmlog");
   {
     telemetry::LogWriter w(log);
-    for (const auto& e : ui::SyntheticRun(o)) w.Write(e.channel, e.data.data(), e.data.size(), e.utime);
+    for (const auto& e : review::SyntheticRun(o)) w.Write(e.channel, e.data.data(), e.data.size(), e.utime);
     const uint8_t junk[5] = {9, 9, 9, 9, 9};
     w.Write(ch::kMapTiles, junk, sizeof junk, o.start_utime + 10'000'000);
   }

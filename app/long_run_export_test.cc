@@ -14,7 +14,7 @@
 #include "app/log_map.h"
 #include "maps/archive.h"
 #include "maps/export.h"
-#include "ui/synthetic_run.h"
+#include "review/synthetic_run.h"
 
 namespace plantscale::app {
 namespace {
@@ -72,13 +72,13 @@ TEST(LongRunExport, A460MetreLogExportsWholeToEveryFormatAndTheArchive) {
   const fs::path dir = fs::temp_directory_path() / ("plantscale_longrun_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  ui::SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = kLength;
   o.speed_m_s = 2.0;
   o.cell_m = 0.01333;  // the vehicle's treatment-map cell
   o.tile_cells = 256;  // and its tile
   o.seed = 11;
-  ui::WriteSyntheticLog(dir / "run.lcmlog", o);
+  review::WriteSyntheticLog(dir / "run.lcmlog", o);
 
   LogMapReport report;
   const maps::CropMap map = CropMapFromLog(dir / "run.lcmlog", report);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "engine/common/stats.h"
+#include "review/synthetic_run.h"
 #include "telemetry/can/protocol.h"
 #include "telemetry/can/simulated_bar.h"
 #include "telemetry/can/spray_bar.h"
@@ -30,7 +31,6 @@
 #include "telemetry/replay.h"
 #include "telemetry/subscriber.h"
 #include "telemetry/transport.h"
-#include "ui/synthetic_run.h"
 
 namespace plantscale::telemetry {
 namespace {
@@ -100,10 +100,10 @@ void BM_TenMinuteFastReplayNoLoss(benchmark::State& state) {
   const double speed = static_cast<double>(state.range(0));
   const std::filesystem::path log =
       std::filesystem::temp_directory_path() / ("plantscale_bench_10min_" + std::to_string(::getpid()) + ".lcmlog");
-  ui::SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.speed_m_s = 0.5;
   o.length_m = 600.0 * o.speed_m_s;  // 10 minutes
-  ui::WriteSyntheticLog(log, o);
+  review::WriteSyntheticLog(log, o);
   std::unique_ptr<LcmTransport> tx, rx;
   if (!OpenPair(state, tx, rx)) return;
   int64_t messages = 0, lost = 0;

@@ -20,13 +20,13 @@
 #include <filesystem>
 #include <map>
 
+#include "review/log_timeline.h"
+#include "review/synthetic_run.h"
 #include "ui/canvas.h"
 #include "ui/report.h"
 #include "ui/station.h"
 #include "ui/station_controller.h"
 #include "ui/station_sources.h"
-#include "ui/station_timeline.h"
-#include "ui/synthetic_run.h"
 
 namespace plantscale::ui {
 namespace {
@@ -42,16 +42,16 @@ double ProcessCpuSeconds() {
 // The map covers `bed_m` of bed (the vehicle is 1 m past it: tiles are sent
 // once the camera footprint has passed them) and `play_s` of the run is
 // still to play.
-LogTimeline BedLoaded(double bed_m, double play_s) {
-  SyntheticRunOptions run;
+review::LogTimeline BedLoaded(double bed_m, double play_s) {
+  review::SyntheticRunOptions run;
   run.length_m = bed_m + 1.0 + play_s * run.speed_m_s;
-  LogTimeline timeline(SyntheticRun(run), "");
+  review::LogTimeline timeline(review::SyntheticRun(run), "");
   timeline.Seek((bed_m + 1.0) / run.speed_m_s);
   return timeline;
 }
 
 // Along-bed length the map tiles cover (m).
-double MapLength(const RunModel& model) {
+double MapLength(const review::RunModel& model) {
   double lo = 1e300, hi = -1e300;
   for (const auto& [key, t] : model.tiles()) {
     lo = std::min(lo, t.origin_m.y()), hi = std::max(hi, t.origin_m.y() + t.height * t.resolution_m);
@@ -61,7 +61,7 @@ double MapLength(const RunModel& model) {
 
 void StationFrames(benchmark::State& state, bool partial_redraw) {
   if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
-  LogTimeline timeline = BedLoaded(100.0, 30.0);
+  review::LogTimeline timeline = BedLoaded(100.0, 30.0);
   StationOptions options;
   options.width_px = static_cast<int>(state.range(0));
   options.height_px = options.width_px * 9 / 16;
@@ -94,7 +94,7 @@ BENCHMARK(BM_StationFrameFullRedraw)->Arg(1280)->Unit(benchmark::kMillisecond)->
 // The render alone, every viewport redrawn (nothing changes): what the GL side costs.
 void BM_StationRenderOnly(benchmark::State& state) {
   if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
-  LogTimeline timeline = BedLoaded(100.0, 0.0);
+  review::LogTimeline timeline = BedLoaded(100.0, 0.0);
   StationOptions options;
   Canvas canvas(options.width_px, options.height_px, /*offscreen=*/false);
   canvas.SetPartialRedraw(false);
@@ -111,16 +111,16 @@ std::filesystem::path BenchLog(int64_t length) {
   std::filesystem::create_directories(dir);
   const auto log = dir / ("run" + std::to_string(length) + "m.lcmlog");
   if (!std::filesystem::exists(log)) {
-    SyntheticRunOptions run;
+    review::SyntheticRunOptions run;
     run.length_m = static_cast<double>(length);
-    WriteSyntheticLog(log, run);
+    review::WriteSyntheticLog(log, run);
   }
   return log;
 }
 
 void BM_ReviewFrame(benchmark::State& state) {
   if (!DisplayAvailable()) return state.SkipWithError("no DISPLAY: run under xvfb-run -a");
-  const ReviewRun run = LoadReviewRun(BenchLog(state.range(0)));
+  const review::ReviewRun run = review::LoadReviewRun(BenchLog(state.range(0)));
   StationOptions options;
   Canvas canvas(options.width_px, options.height_px, /*offscreen=*/false);
   StationScene scene(canvas, options);

@@ -34,7 +34,7 @@
 
 namespace plantscale::maps {
 
-// A run's agronomic figures (computed by the caller, ui/agronomy.h definitions).
+// A run's agronomic figures (computed by the caller, review/agronomy.h definitions).
 struct ArchiveRowFigures {
   int row = 0;
   int crop = 0;

@@ -22,7 +22,7 @@ Polyline Circle(const Eigen::Vector2d& c, double r) {
 
 CameraView::CameraView(const CameraViewParams& params)
     : params_(params),
-      gate_k2_(EllipseScale2d(params.gate_probability)),
+      gate_k2_(review::EllipseScale2d(params.gate_probability)),
       crop_blobs_(palette::kBlobCrop, 2.0, 0.1),
       weed_blobs_(palette::kBlobWeed, 2.0, 0.1),
       other_blobs_(palette::kBlobUnknown, 2.0, 0.1),
@@ -59,7 +59,7 @@ Eigen::Vector2d CameraView::ToWorld(const Eigen::Vector2d& uv) const {
   return {uv.x() * sx, height_ - uv.y() * sy};
 }
 
-void CameraView::Update(const RunModel& model) {
+void CameraView::Update(const review::RunModel& model) {
   const tm::GridEstimate* grid = model.grid() ? &*model.grid() : model.truth() ? &*model.truth() : nullptr;
   const int64_t thumb = model.thumbnail() ? model.thumbnail()->seq : -1;
   const int64_t g = grid ? grid->utime : -1;

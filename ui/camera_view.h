@@ -11,8 +11,8 @@
 #include <vtkRenderer.h>
 
 #include "engine/geometry/grid_model.h"
+#include "review/run_model.h"
 #include "ui/poly.h"
-#include "ui/run_model.h"
 
 namespace plantscale::ui {
 
@@ -28,7 +28,7 @@ class CameraView {
   explicit CameraView(const CameraViewParams& params = {});
   void AddTo(vtkRenderer* renderer);
   // From the model's latest thumbnail and grid.
-  void Update(const RunModel& model);
+  void Update(const review::RunModel& model);
   // From a given thumbnail and grid (event snapshots in the report).
   void Show(const plantscale_thumbnail_t* thumbnail, const telemetry::GridEstimate* grid);
   void SetVisible(bool visible);

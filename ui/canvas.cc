@@ -119,18 +119,6 @@ vtkStandardNewMacro(CanvasWindow);
 
 }  // namespace
 
-bool DisplayAvailable() {
-  const char* display = std::getenv("DISPLAY");
-  return display != nullptr && display[0] != '\0';
-}
-
-void RequireDisplay(const std::string& what) {
-  if (DisplayAvailable()) return;
-  throw DisplayError(what +
-                     " needs an X display (VTK renders through GLX) and DISPLAY is not set; "
-                     "run it under a virtual one: xvfb-run -a plantscale ...");
-}
-
 Canvas::Canvas(int width_px, int height_px, bool offscreen)
     : window_(vtkSmartPointer<CanvasWindow>::New()) {
   RequireDisplay("rendering");

@@ -1,8 +1,8 @@
 #pragma once
 // An off-screen (or on-screen) VTK render window of a fixed size whose
-// pixels can be read back, plus the DISPLAY check: VTK 9.1 here renders only
-// through GLX and aborts the process without an X server, so everything
-// that renders calls RequireDisplay() first.
+// pixels can be read back. VTK 9.1 here renders only through GLX and aborts
+// the process without an X server, so a canvas calls RequireDisplay()
+// (ui/display.h) first.
 
 #include <vtkNew.h>
 #include <vtkRenderWindow.h>
@@ -14,21 +14,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "ui/display.h"
+
 namespace plantscale::ui {
 
 struct Rgb {
   double r = 0.0, g = 0.0, b = 0.0;  // 0..1
 };
-
-// No X display to render with.
-class DisplayError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-bool DisplayAvailable();
-// Throws DisplayError naming `what` and how to get a display (xvfb-run -a).
-void RequireDisplay(const std::string& what);
 
 // The window redraws only the renderers whose content changed since its last
 // render (camera, background, viewport, props and their data; a renderer

@@ -18,7 +18,7 @@ Eigen::Vector2d GridPoint(const geometry::GridState& g, double m, double n) {
   return {c * gx + s * gy + g.offset_m, -s * gx + c * gy};
 }
 
-const tm::GridEstimate* GridOf(const RunModel& model) {
+const tm::GridEstimate* GridOf(const review::RunModel& model) {
   if (model.grid()) return &*model.grid();
   return model.truth() ? &*model.truth() : nullptr;
 }
@@ -59,7 +59,7 @@ void GridOverlay::AddTo(vtkRenderer* renderer) {
   lines_.AddTo(renderer);
 }
 
-void GridOverlay::Update(const RunModel& model) {
+void GridOverlay::Update(const review::RunModel& model) {
   if (!built_.Changed(model)) return;
   const tm::GridEstimate* grid = GridOf(model);
   const std::optional<tm::Pose> pose = model.pose();
@@ -77,7 +77,7 @@ void GridOverlay::SetVisible(bool visible) {
   lines_.SetVisible(visible);
 }
 
-std::optional<Eigen::Matrix2d> VehicleCovariance(const RunModel& model, const tm::Pose& pose) {
+std::optional<Eigen::Matrix2d> VehicleCovariance(const review::RunModel& model, const tm::Pose& pose) {
   const Eigen::Matrix2d own = pose.covariance.topLeftCorner<2, 2>();
   if (own.trace() > 0.0) return own;
   const tm::GridEstimate* grid = GridOf(model);
@@ -92,7 +92,7 @@ std::optional<Eigen::Matrix2d> VehicleCovariance(const RunModel& model, const tm
 
 CovarianceEllipses::CovarianceEllipses(const EllipseParams& params)
     : params_(params),
-      k2_(EllipseScale2d(params.confidence)),
+      k2_(review::EllipseScale2d(params.confidence)),
       vehicle_(palette::kVehicle, 2.0, 0.07),
       plants_(palette::kPlantEllipse, 1.0, 0.06) {
   SetMagnification(params.magnification);
@@ -104,7 +104,7 @@ void CovarianceEllipses::AddTo(vtkRenderer* renderer) {
 }
 
 void CovarianceEllipses::SetConfidence(double confidence) {
-  k2_ = EllipseScale2d(confidence);
+  k2_ = review::EllipseScale2d(confidence);
   params_.confidence = confidence;
   seen_messages_ = -1;
   seen_plants_ = -1;
@@ -117,7 +117,7 @@ void CovarianceEllipses::SetMagnification(double magnification) {
   seen_plants_ = -1;
 }
 
-void CovarianceEllipses::Update(const RunModel& model, const FieldWindow& view) {
+void CovarianceEllipses::Update(const review::RunModel& model, const FieldWindow& view) {
   if (model.messages() != seen_messages_) {
     seen_messages_ = model.messages();
     const std::optional<tm::Pose> pose = model.pose();
@@ -148,7 +148,7 @@ void CovarianceEllipses::SetVisible(bool visible) {
   plants_.SetVisible(visible);
 }
 
-void PlantMarkers::Update(const RunModel& model, const FieldWindow& view) {
+void PlantMarkers::Update(const review::RunModel& model, const FieldWindow& view) {
   if (model.plant_messages() == seen_messages_ && built_.Covers(view)) return;
   seen_messages_ = model.plant_messages();
   built_ = BuiltRange::Around(view, 0.5 * (view.y1_m - view.y0_m));
@@ -171,7 +171,7 @@ void VehicleMarker::AddTo(vtkRenderer* renderer) {
   path_.AddTo(renderer);
 }
 
-void VehicleMarker::Update(const RunModel& model) {
+void VehicleMarker::Update(const review::RunModel& model) {
   if (!built_.Changed(model)) return;
   const std::optional<tm::Pose> pose = model.pose();
   if (!pose) return;

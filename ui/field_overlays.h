@@ -7,8 +7,8 @@
 #include <Eigen/Core>
 #include <optional>
 
+#include "review/run_model.h"
 #include "ui/poly.h"
-#include "ui/run_model.h"
 
 namespace plantscale::ui {
 
@@ -32,7 +32,7 @@ struct BuiltRange {
 class ModelStamp {
  public:
   // True when `model` differs from the last call's (another model, or new messages).
-  bool Changed(const RunModel& model) {
+  bool Changed(const review::RunModel& model) {
     if (&model == model_ && model.messages() == messages_) return false;
     model_ = &model, messages_ = model.messages();
     return true;
@@ -40,7 +40,7 @@ class ModelStamp {
   void Reset() { model_ = nullptr; }
 
  private:
-  const RunModel* model_ = nullptr;
+  const review::RunModel* model_ = nullptr;
   int64_t messages_ = -1;
 };
 
@@ -63,7 +63,7 @@ class GridOverlay {
  public:
   explicit GridOverlay(const GridOverlayParams& params = {});
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model);
+  void Update(const review::RunModel& model);
   void SetVisible(bool visible);
 
  private:
@@ -75,7 +75,7 @@ class GridOverlay {
 // The vehicle's position covariance in the field frame: its pose's, else
 // (a vehicle that publishes its pose without one) the tracker's covariance
 // of offset and forward position turned by the heading; nullopt without either.
-std::optional<Eigen::Matrix2d> VehicleCovariance(const RunModel& model, const telemetry::Pose& pose);
+std::optional<Eigen::Matrix2d> VehicleCovariance(const review::RunModel& model, const telemetry::Pose& pose);
 
 struct EllipseParams {
   double confidence = 0.95;  // probability inside each ellipse
@@ -93,7 +93,7 @@ class CovarianceEllipses {
   explicit CovarianceEllipses(const EllipseParams& params = {});
   void AddTo(vtkRenderer* renderer);
   // Plants are drawn near `view` only (the whole run in a report).
-  void Update(const RunModel& model, const FieldWindow& view);
+  void Update(const review::RunModel& model, const FieldWindow& view);
   void SetConfidence(double confidence);
   // Throws std::invalid_argument unless magnification > 0.
   void SetMagnification(double magnification);
@@ -117,7 +117,7 @@ class CovarianceEllipses {
 class PlantMarkers {
  public:
   void AddTo(vtkRenderer* renderer) { points_.AddTo(renderer); }
-  void Update(const RunModel& model, const FieldWindow& view);
+  void Update(const review::RunModel& model, const FieldWindow& view);
   void SetVisible(bool visible) { points_.SetVisible(visible); }
 
  private:
@@ -130,7 +130,7 @@ class VehicleMarker {
  public:
   VehicleMarker();
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model);
+  void Update(const review::RunModel& model);
   void SetVisible(bool visible);
 
  private:

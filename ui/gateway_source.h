@@ -53,7 +53,7 @@ class GatewaySource : public Source {
       last_state_ = state;
     }
   }
-  const RunModel& model() const override { return model_; }
+  const review::RunModel& model() const override { return model_; }
   int64_t now_utime() const override { return telemetry::WallUtime(); }
   std::string Status() const override {
     const telemetry::gateway::GatewayLinkStatus s = client_->status();
@@ -88,7 +88,7 @@ class GatewaySource : public Source {
   int64_t command_seq_ = 0;
   std::optional<telemetry::CommandKey> command_key_;
   telemetry::Subscriber subscriber_;
-  RunModel model_;
+  review::RunModel model_;
   std::map<std::string, std::string> last_bytes_;  // client thread only
   std::vector<std::string> changes_;               // UI thread (Tick) only
   telemetry::gateway::LinkState last_state_ = telemetry::gateway::LinkState::kConnecting;

@@ -44,18 +44,18 @@ std::string FilterModeName(tm::FilterMode mode) {
   return "?";
 }
 
-std::string HudLine(const RunModel& model, int64_t now_utime) {
+std::string HudLine(const review::RunModel& model, int64_t now_utime) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(2) << model.speed_m_s() << " m/s  ";
   const auto* grid = model.grid() ? &*model.grid() : model.truth() ? &*model.truth() : nullptr;
   out << (grid ? FilterModeName(grid->mode) : std::string("NO GRID")) << "  ";
   const double fps = model.health() ? model.health()->frame_rate_hz : 0.0;
   out << std::setprecision(1) << fps << " fps  " << model.distance_m() << " m  ";
-  const LinkStatus link = model.Link(now_utime);
+  const review::LinkStatus link = model.Link(now_utime);
   // Once the run finished the heartbeat's age only grows: the HUD leaves it
   // out so that the line fits a narrow window (the station's closing line
   // keeps it).
-  out << (link.level == LinkLevel::kFinished ? link.text.substr(0, link.text.find(';')) : link.text);
+  out << (link.level == review::LinkLevel::kFinished ? link.text.substr(0, link.text.find(';')) : link.text);
   return out.str();
 }
 
@@ -70,11 +70,11 @@ void Hud::AddTo(vtkRenderer* renderer) {
   renderer->AddActor2D(line2_);
 }
 
-void Hud::Update(const RunModel& model, int64_t now_utime) {
-  const LinkStatus link = model.Link(now_utime);
-  const Rgb bg = link.level == LinkLevel::kOk         ? palette::kHudOk
-                 : link.level == LinkLevel::kLost     ? palette::kHudLost
-                 : link.level == LinkLevel::kFinished ? palette::kHudFinished
+void Hud::Update(const review::RunModel& model, int64_t now_utime) {
+  const review::LinkStatus link = model.Link(now_utime);
+  const Rgb bg = link.level == review::LinkLevel::kOk         ? palette::kHudOk
+                 : link.level == review::LinkLevel::kLost     ? palette::kHudLost
+                 : link.level == review::LinkLevel::kFinished ? palette::kHudFinished
                                                       : palette::kHudNoMessages;
   if (renderer_) renderer_->SetBackground(bg.r, bg.g, bg.b);
   line1_->SetInput(HudLine(model, now_utime).c_str());
@@ -101,7 +101,7 @@ void NozzleBarView::AddTo(vtkRenderer* renderer) {
   renderer->GetActiveCamera()->ParallelProjectionOn();
 }
 
-void NozzleBarView::Update(const RunModel& model, int64_t now_utime) {
+void NozzleBarView::Update(const review::RunModel& model, int64_t now_utime) {
   const int n = model.nozzles() ? static_cast<int>(model.nozzles()->open.size()) : 0;
   std::vector<int> counts(static_cast<size_t>(std::max(n, 0)), 0);
   const int64_t since = now_utime - static_cast<int64_t>(params_.recent_s * 1e6);

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "review/run_model.h"
 #include "ui/poly.h"
-#include "ui/run_model.h"
 
 namespace plantscale::ui {
 
@@ -23,14 +23,14 @@ struct HudParams {
 };
 
 // One line of HUD text for people (also used by the report).
-std::string HudLine(const RunModel& model, int64_t now_utime);
+std::string HudLine(const review::RunModel& model, int64_t now_utime);
 std::string FilterModeName(telemetry::FilterMode mode);
 
 class Hud {
  public:
   explicit Hud(const HudParams& params = {});
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model, int64_t now_utime);
+  void Update(const review::RunModel& model, int64_t now_utime);
   // Extra text on the right of the second line (station: play state, tool).
   void SetStatus(const std::string& text) { status_ = text; }
 
@@ -50,7 +50,7 @@ class NozzleBarView {
  public:
   explicit NozzleBarView(const NozzleBarParams& params = {});
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model, int64_t now_utime);
+  void Update(const review::RunModel& model, int64_t now_utime);
 
  private:
   void Show(int nozzles);

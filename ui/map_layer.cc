@@ -111,7 +111,7 @@ void Paint(const telemetry::MapTileDelta& t, const Eigen::Vector2d& origin, doub
 
 }  // namespace
 
-void MapLayer::Update(const RunModel& model, const FieldWindow& view) {
+void MapLayer::Update(const review::RunModel& model, const FieldWindow& view) {
   if (renderer_ == nullptr) return;
   const double length = std::max(1e-3, view.y1_m - view.y0_m);
   const int level = length <= kDetailMaxM ? 0 : length <= kFarMaxM ? 1 : 2;
@@ -130,7 +130,7 @@ void MapLayer::Update(const RunModel& model, const FieldWindow& view) {
 
 // The extents of the model's tiles; tiles it no longer has (the station
 // sought back and replayed from the start) leave the index.
-void MapLayer::Index(const RunModel& model) {
+void MapLayer::Index(const review::RunModel& model) {
   for (const auto& [key, t] : model.tiles()) {
     Extent& e = index_[key];
     if (e.revision == t.revision) continue;
@@ -161,7 +161,7 @@ std::map<int, MapLayer::Piece> MapLayer::Wanted(const BuiltRange& near) const {
   return wanted;
 }
 
-void MapLayer::ShowPieces(const RunModel& model, const BuiltRange& near) {
+void MapLayer::ShowPieces(const review::RunModel& model, const BuiltRange& near) {
   const std::map<int, Piece> wanted = Wanted(near);
   for (auto it = pieces_.begin(); it != pieces_.end();) {
     if (wanted.count(it->first)) {
@@ -177,7 +177,7 @@ void MapLayer::ShowPieces(const RunModel& model, const BuiltRange& near) {
   }
 }
 
-void MapLayer::Draw(const RunModel& model, int index, const Piece& p, Drawn& slot) {
+void MapLayer::Draw(const review::RunModel& model, int index, const Piece& p, Drawn& slot) {
   BlockCells& b = level_ == 0 ? chunk_cells_ : far_cells_[{level_, index}];
   const std::vector<uint8_t>& cells = Cells(model, index, p, b);
   if (!slot.actor) slot.actor = NewActor();
@@ -188,7 +188,7 @@ void MapLayer::Draw(const RunModel& model, int index, const Piece& p, Drawn& slo
 
 // A chunk at its finest tile's resolution from its tiles' corner; a block
 // in its level's cells over its level's length of bed.
-const std::vector<uint8_t>& MapLayer::Cells(const RunModel& model, int index, const Piece& p, BlockCells& b) const {
+const std::vector<uint8_t>& MapLayer::Cells(const review::RunModel& model, int index, const Piece& p, BlockCells& b) const {
   const bool chunk = level_ == 0;
   if (!chunk && b.stamp == p.stamp && b.tiles == p.tiles.size() && b.y0 == p.y0 && b.y1 == p.y1) return b.cells;
   const double cell = chunk ? p.cell : BlockCellM(level_);

@@ -21,8 +21,8 @@
 #include <utility>
 #include <vector>
 
+#include "review/run_model.h"
 #include "ui/field_overlays.h"
-#include "ui/run_model.h"
 
 namespace plantscale::ui {
 
@@ -39,7 +39,7 @@ class MapLayer {
   void AddTo(vtkRenderer* renderer) { renderer_ = renderer; }
   // Shows the map of `model` near `view` (a tile the model no longer has,
   // after a seek back, leaves the screen).
-  void Update(const RunModel& model, const FieldWindow& view);
+  void Update(const review::RunModel& model, const FieldWindow& view);
   void SetVisible(bool visible);
   // Field-frame bounds of every tile of the model (x0, x1, y0, y1); false when none.
   bool Bounds(double bounds[4]) const;
@@ -72,14 +72,14 @@ class MapLayer {
   };
   using TileKey = std::pair<int, int>;
 
-  void Index(const RunModel& model);
+  void Index(const review::RunModel& model);
   // The chunks (close) or blocks (far) with a tile near the view, by index.
   std::map<int, Piece> Wanted(const BuiltRange& near) const;
-  void ShowPieces(const RunModel& model, const BuiltRange& near);
-  void Draw(const RunModel& model, int index, const Piece& piece, Drawn& slot);
+  void ShowPieces(const review::RunModel& model, const BuiltRange& near);
+  void Draw(const review::RunModel& model, int index, const Piece& piece, Drawn& slot);
   // The piece's cells at `cell` metres from `origin` (a far block's from
   // the kept ones when its tiles are the same).
-  const std::vector<uint8_t>& Cells(const RunModel& model, int index, const Piece& piece, BlockCells& out) const;
+  const std::vector<uint8_t>& Cells(const review::RunModel& model, int index, const Piece& piece, BlockCells& out) const;
   vtkSmartPointer<vtkImageActor> NewActor();
   void Drop(vtkImageActor* actor);
 

@@ -39,7 +39,7 @@ void MapView::AddTo(vtkRenderer* renderer) {
   camera->SetViewUp(-1.0, 0.0, 0.0);  // field −x up, so field +y runs to the right
 }
 
-void MapView::Update(const RunModel& model) {
+void MapView::Update(const review::RunModel& model) {
   const FieldWindow view = PlaceCamera(model);
   map_.Update(model, view);
   plants_.Update(model, view);
@@ -99,7 +99,7 @@ void MapView::DrawMarks() {
   measure_.Set(line);
 }
 
-FieldWindow MapView::WholeRun(const RunModel& model) const {
+FieldWindow MapView::WholeRun(const review::RunModel& model) const {
   // A pass over every plant and path point: once per model state (a
   // reviewed run's never changes).
   if (&model == whole_model_ && model.messages() == whole_messages_ && model.tile_revision_sum() == whole_tiles_) {
@@ -110,7 +110,7 @@ FieldWindow MapView::WholeRun(const RunModel& model) const {
   return whole_;
 }
 
-FieldWindow MapView::WholeRunOf(const RunModel& model) const {
+FieldWindow MapView::WholeRunOf(const review::RunModel& model) const {
   double lo = 1e300, hi = -1e300;
   for (const auto& [x, y] : model.path()) lo = std::min(lo, y), hi = std::max(hi, y);
   for (const auto& [id, r] : model.plants()) {
@@ -122,7 +122,7 @@ FieldWindow MapView::WholeRunOf(const RunModel& model) const {
   return {lo - 0.2, hi + 0.2, 0.0};
 }
 
-double MapView::FollowBehind(const RunModel& model, double vehicle_y_m) {
+double MapView::FollowBehind(const review::RunModel& model, double vehicle_y_m) {
   if (&model != trail_model_ || model.messages() < trail_messages_) trail_.clear();  // another run, or sought back
   trail_model_ = &model, trail_messages_ = model.messages();
   if (const auto front = model.map_front_y_m()) trail_.emplace_back(vehicle_y_m, vehicle_y_m - *front);
@@ -138,7 +138,7 @@ double MapView::FollowBehind(const RunModel& model, double vehicle_y_m) {
   return std::clamp(trail + params_.map_in_view_fraction * length, behind, most);
 }
 
-FieldWindow MapView::PlaceCamera(const RunModel& model) {
+FieldWindow MapView::PlaceCamera(const review::RunModel& model) {
   FieldWindow w;
   if (window_) {
     w = *window_;

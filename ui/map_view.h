@@ -41,7 +41,7 @@ class MapView {
  public:
   explicit MapView(const MapViewParams& params = {});
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model);
+  void Update(const review::RunModel& model);
   void SetVisible(MapLayerId layer, bool visible);
   bool Visible(MapLayerId layer) const;
   // Frame `window` (free camera) or, with nullopt, follow the vehicle.
@@ -60,7 +60,7 @@ class MapView {
   // (one: its first click, two: the line between them).
   void SetMarks(std::optional<Eigen::Vector2d> pick, std::vector<Eigen::Vector2d> measure);
   // The whole run: tiles, plants and path.
-  FieldWindow WholeRun(const RunModel& model) const;
+  FieldWindow WholeRun(const review::RunModel& model) const;
   CovarianceEllipses& ellipses() { return ellipses_; }
   const CovarianceEllipses& ellipses() const { return ellipses_; }
   const MapLayer& map_layer() const { return map_; }
@@ -70,10 +70,10 @@ class MapView {
   Eigen::Vector2d DisplayAtField(const Eigen::Vector2d& field) const;
 
  private:
-  FieldWindow PlaceCamera(const RunModel& model);
+  FieldWindow PlaceCamera(const review::RunModel& model);
   // How far behind the vehicle the followed view starts.
-  double FollowBehind(const RunModel& model, double vehicle_y_m);
-  FieldWindow WholeRunOf(const RunModel& model) const;
+  double FollowBehind(const review::RunModel& model, double vehicle_y_m);
+  FieldWindow WholeRunOf(const review::RunModel& model) const;
   void DrawMarks();
 
   MapViewParams params_;
@@ -91,11 +91,11 @@ class MapView {
   // How far the map's newest row trailed the vehicle (vehicle y, lag), the
   // last trail_window_m; and the model state they are of.
   std::deque<std::pair<double, double>> trail_;
-  const RunModel* trail_model_ = nullptr;
+  const review::RunModel* trail_model_ = nullptr;
   int64_t trail_messages_ = -1;
   std::optional<FieldWindow> window_;
   FieldWindow view_;
-  mutable const RunModel* whole_model_ = nullptr;  // WholeRun's cache: the model state it was for
+  mutable const review::RunModel* whole_model_ = nullptr;  // WholeRun's cache: the model state it was for
   mutable int64_t whole_messages_ = -1;
   mutable int whole_tiles_ = -1;
   mutable FieldWindow whole_;

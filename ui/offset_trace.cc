@@ -142,16 +142,16 @@ void OffsetTrace::Rasterise() {
 // units: offset mm, bearing degrees, bands at ±band_sigmas σ.
 // The first sample within window_m of the newest (distances never fall:
 // RunModel keeps the largest heard).
-size_t OffsetTrace::WindowStart(const std::vector<TraceSample>& trace) const {
+size_t OffsetTrace::WindowStart(const std::vector<review::TraceSample>& trace) const {
   if (params_.window_m <= 0.0 || trace.empty()) return 0;
   const double from = trace.back().distance_m - params_.window_m;
   const auto first = std::lower_bound(
       trace.begin(), trace.end(), from,
-      [](const TraceSample& t, double d) { return t.distance_m < d; });
+      [](const review::TraceSample& t, double d) { return t.distance_m < d; });
   return static_cast<size_t>(first - trace.begin());
 }
 
-void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) const {
+void OffsetTrace::Fill(vtkTable* table, const std::vector<review::TraceSample>& trace) const {
   const size_t first = WindowStart(trace);
   const size_t n = trace.size() - first;
   const size_t step = std::max<size_t>(1, n / static_cast<size_t>(params_.max_points));
@@ -159,7 +159,7 @@ void OffsetTrace::Fill(vtkTable* table, const std::vector<TraceSample>& trace) c
   table->SetNumberOfRows(static_cast<vtkIdType>((n + step - 1) / step));
   vtkIdType row = 0;
   for (size_t i = first; i < trace.size(); i += step, ++row) {
-    const TraceSample& t = trace[i];
+    const review::TraceSample& t = trace[i];
     const double values[] = {t.distance_m - origin_m_,
                              1e3 * t.offset_m,
                              1e3 * (t.offset_m - k * t.offset_sigma_m),
@@ -195,10 +195,10 @@ void OffsetTrace::SetDistanceTicks(double from_m, double to_m) {
   chart_->GetAxis(vtkAxis::BOTTOM)->SetCustomTickPositions(positions, labels);
 }
 
-void OffsetTrace::Update(const RunModel& model) {
+void OffsetTrace::Update(const review::RunModel& model) {
   // Without a tracker the simulator's truth stands in for the estimate.
   const bool tracker = !model.trace().empty();
-  const std::vector<TraceSample>& estimate = tracker ? model.trace() : model.truth_trace();
+  const std::vector<review::TraceSample>& estimate = tracker ? model.trace() : model.truth_trace();
   if (estimate.size() != seen_) {
     seen_ = estimate.size();
     if (!estimate.empty()) {
@@ -212,8 +212,8 @@ void OffsetTrace::Update(const RunModel& model) {
     chart_->SetTitle(tracker ? "Row offset and bearing (tracker)"
                              : "Row offset and bearing (simulator truth; no tracker in log)");
   }
-  const std::vector<TraceSample> none;
-  const std::vector<TraceSample>& truth = tracker ? model.truth_trace() : none;
+  const std::vector<review::TraceSample> none;
+  const std::vector<review::TraceSample>& truth = tracker ? model.truth_trace() : none;
   if (truth.size() != seen_truth_) {
     seen_truth_ = truth.size();
     Fill(truth_, truth);

@@ -14,7 +14,7 @@
 #include <vtkRenderer.h>
 #include <vtkTable.h>
 
-#include "ui/run_model.h"
+#include "review/run_model.h"
 
 namespace plantscale::ui {
 
@@ -34,14 +34,14 @@ class OffsetTrace {
  public:
   explicit OffsetTrace(const OffsetTraceParams& params = {});
   void AddTo(vtkRenderer* renderer);
-  void Update(const RunModel& model);
+  void Update(const review::RunModel& model);
   void SetVisible(bool visible);
 
  private:
   void Build();
   void Rasterise();
-  void Fill(vtkTable* table, const std::vector<TraceSample>& trace) const;
-  size_t WindowStart(const std::vector<TraceSample>& trace) const;
+  void Fill(vtkTable* table, const std::vector<review::TraceSample>& trace) const;
+  size_t WindowStart(const std::vector<review::TraceSample>& trace) const;
   // The distance axis's ticks, labelled in metres along the bed, over the
   // drawn span [from_m, to_m].
   void SetDistanceTicks(double from_m, double to_m);

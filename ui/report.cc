@@ -9,10 +9,10 @@
 #include <set>
 #include <sstream>
 
+#include "review/report_html.h"
 #include "telemetry/log.h"
 #include "ui/canvas.h"
 #include "ui/palette.h"
-#include "ui/report_html.h"
 
 namespace plantscale::ui {
 namespace {
@@ -25,7 +25,7 @@ std::string Fixed(double v, int decimals) {
   return out.str();
 }
 
-std::string CameraPicture(const std::filesystem::path& dir, const ReportOptions& o, const EventSnapshot& s,
+std::string CameraPicture(const std::filesystem::path& dir, const ReportOptions& o, const review::EventSnapshot& s,
                           int index) {
   Canvas canvas(o.camera_width_px, o.camera_height_px);
   CameraView view(o.camera);
@@ -38,7 +38,7 @@ std::string CameraPicture(const std::filesystem::path& dir, const ReportOptions&
 
 // Where the plants in view are (the close-up's centre): the mean y of the
 // latest frame's plants, else the vehicle.
-std::optional<double> ViewY(const RunModel& model) {
+std::optional<double> ViewY(const review::RunModel& model) {
   if (!model.plants_in_frame().empty()) {
     double y = 0.0;
     for (const tm::PlantObservation& p : model.plants_in_frame()) y += p.position_m.y();
@@ -54,7 +54,7 @@ class CloseupPicker {
  public:
   CloseupPicker(const ReportOptions& o, double half_length_m) : o_(o), half_(half_length_m) {}
 
-  void After(const RunModel& model) {
+  void After(const review::RunModel& model) {
     while (events_seen_ < model.events().size()) {
       const plantscale_event_t& e = model.events()[events_seen_++];
       if (e.severity < plantscale_event_t::SEVERITY_WARNING ||
@@ -80,7 +80,7 @@ class CloseupPicker {
     if (m.size() > 64) m.erase(m.begin());
   }
 
-  void Consider(const RunModel& model, double score, const std::string& what) {
+  void Consider(const review::RunModel& model, double score, const std::string& what) {
     // A new close-up only when 10 % worse than the last: a bounded number of
     // snapshots (each a pass over the map) however the error grows.
     if (model.distance_m() < o_.settle_m || score < 1e-3 || score <= 1.1 * worst_score_) return;
@@ -90,12 +90,12 @@ class CloseupPicker {
     worst_ = TakeCloseup(model, *y, half_, what + " " + Fixed(1e3 * score, 1) + " mm");
   }
 
-  void CheckOffset(const RunModel& model) {
+  void CheckOffset(const review::RunModel& model) {
     const bool est_new = model.trace().size() > trace_seen_, truth_new = model.truth_trace().size() > truth_seen_;
     trace_seen_ = model.trace().size();
     truth_seen_ = model.truth_trace().size();
     if (est_new) {
-      const TraceSample& t = model.trace().back();
+      const review::TraceSample& t = model.trace().back();
       Remember(est_, t.utime, t.offset_m);
       const auto it = truth_.find(t.utime);
       if (it != truth_.end()) {
@@ -105,7 +105,7 @@ class CloseupPicker {
       }
     }
     if (truth_new) {
-      const TraceSample& t = model.truth_trace().back();
+      const review::TraceSample& t = model.truth_trace().back();
       Remember(truth_, t.utime, t.offset_m);
       const auto it = est_.find(t.utime);
       if (it != est_.end()) Consider(model, std::abs(it->second - t.offset_m), "largest offset error (tracker - truth)");
@@ -122,7 +122,7 @@ class CloseupPicker {
 };
 
 // Across the bed: the crop rows ± half a spacing and a margin, else the map.
-std::pair<double, double> BedAcross(const RunModel& model, const AgronomySummary& a) {
+std::pair<double, double> BedAcross(const review::RunModel& model, const review::AgronomySummary& a) {
   if (!a.rows.empty()) {
     return {(a.rows.front().row - 0.5) * a.row_spacing_m - 0.15, (a.rows.back().row + 0.5) * a.row_spacing_m + 0.15};
   }
@@ -136,7 +136,7 @@ std::pair<double, double> BedAcross(const RunModel& model, const AgronomySummary
 }
 
 // Along the bed: the stand, else the map, else the path.
-std::optional<std::pair<double, double>> BedAlong(const RunModel& model, const AgronomySummary& a) {
+std::optional<std::pair<double, double>> BedAlong(const review::RunModel& model, const review::AgronomySummary& a) {
   if (a.crop > 0) return std::make_pair(a.y0_m, a.y1_m);
   double lo = 1e300, hi = -1e300;
   for (const auto& [key, t] : model.tiles()) {
@@ -151,7 +151,7 @@ std::optional<std::pair<double, double>> BedAlong(const RunModel& model, const A
 // The strips to draw: all of them when they fit, else the first, those with
 // a close-up, the longest gap and the most weeds, then evenly spaced.
 std::vector<int> PickStrips(int total, int max_strips, const std::vector<double>& wanted_y, double y0, double length,
-                            const AgronomySummary& a, std::vector<std::string>& why) {
+                            const review::AgronomySummary& a, std::vector<std::string>& why) {
   std::vector<int> all;
   if (total <= max_strips) {
     for (int i = 0; i < total; ++i) all.push_back(i);
@@ -164,7 +164,7 @@ std::vector<int> PickStrips(int total, int max_strips, const std::vector<double>
     if (static_cast<int>(picked.size()) < max_strips) picked.insert(strip_of(y));
   }
   if (!wanted_y.empty()) why.push_back("the close-ups");
-  for (const RowAgronomy& r : a.rows) {
+  for (const review::RowAgronomy& r : a.rows) {
     if (r.longest_gap == a.longest_gap && a.longest_gap > 0 && static_cast<int>(picked.size()) < max_strips) {
       picked.insert(strip_of(r.longest_gap_at_m));
       why.push_back("the longest gap");
@@ -174,7 +174,7 @@ std::vector<int> PickStrips(int total, int max_strips, const std::vector<double>
   // Weeds per strip.
   std::vector<std::pair<int, int>> weeds;  // count, strip
   std::map<int, int> per;
-  for (const HeatCell& c : a.cells) per[strip_of(a.y0_m + (c.index + 0.5) * a.cell_length_m)] += c.weeds;
+  for (const review::HeatCell& c : a.cells) per[strip_of(a.y0_m + (c.index + 0.5) * a.cell_length_m)] += c.weeds;
   for (const auto& [s, n] : per) weeds.emplace_back(-n, s);
   std::sort(weeds.begin(), weeds.end());
   for (size_t i = 0; i < weeds.size() && i < 2 && static_cast<int>(picked.size()) < max_strips; ++i) {
@@ -217,7 +217,7 @@ namespace {
 // Replays the log into `model`, `picker` choosing the close-ups on the way;
 // the log's problems, the run's summary and agronomy into `result`. The
 // run's configuration event, when the log has one.
-std::optional<std::string> ReadRun(const std::filesystem::path& log, const ReportOptions& o, RunModel& model,
+std::optional<std::string> ReadRun(const std::filesystem::path& log, const ReportOptions& o, review::RunModel& model,
                                    CloseupPicker& picker, ReportResult& result) {
   tm::LogReader reader(log);
   tm::Subscriber subscriber;
@@ -236,7 +236,7 @@ std::optional<std::string> ReadRun(const std::filesystem::path& log, const Repor
   if (reader.events_read() == 0) result.problems.push_back("log: no events in " + log.string());
   for (const std::string& p : model.Problems(clock)) result.problems.push_back(p);
   result.summary = model.Summary();
-  result.agronomy = Agronomy(model, result.summary, o.agronomy);
+  result.agronomy = review::Agronomy(model, result.summary, o.agronomy);
   if (result.agronomy.crop == 0 && reader.events_read() > 0) {
     result.problems.push_back("no crop plant records in the log: no agronomic figures per row");
   }
@@ -244,9 +244,9 @@ std::optional<std::string> ReadRun(const std::filesystem::path& log, const Repor
 }
 
 // The simulator's truth over the stand, when the log came from it.
-void AddTruth(const RunModel& model, const std::string& run_config, const ReportOptions& o, ReportResult& result) {
-  const AgronomySummary& a = result.agronomy;
-  StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m, {}};
+void AddTruth(const review::RunModel& model, const std::string& run_config, const ReportOptions& o, ReportResult& result) {
+  const review::AgronomySummary& a = result.agronomy;
+  review::StandWindow stand{a.y0_m, a.y1_m, a.rows.front().row, a.rows.back().row, a.row_spacing_m, {}};
   for (const auto& [id, r] : model.plants()) {
     if (r.plant.kind == tm::PlantKind::kCrop) stand.crops_m.emplace_back(r.plant.position_m.x(), r.plant.position_m.y());
   }
@@ -261,9 +261,9 @@ using SavePicture = std::function<std::string(const cv::Mat&, const std::string&
 
 // The bed as strips of strip_length_m, strips_per_picture to a picture, at
 // most max_strip_pictures pictures (PickStrips chooses which strips).
-void DrawBedStrips(const RunModel& model, const AgronomySummary& a, const std::vector<CloseupSnapshot>& closeups,
+void DrawBedStrips(const review::RunModel& model, const review::AgronomySummary& a, const std::vector<CloseupSnapshot>& closeups,
                    std::pair<double, double> across, const ReportOptions& o, const SavePicture& save,
-                   ReportPictures& pictures) {
+                   review::ReportPictures& pictures) {
   const auto along = BedAlong(model, a);
   if (!along) return;
   const double L = o.pictures.strip_length_m;
@@ -290,10 +290,10 @@ void DrawBedStrips(const RunModel& model, const AgronomySummary& a, const std::v
 }
 
 // Every picture of the report into `out_dir`.
-ReportPictures DrawPictures(const RunModel& model, const CloseupPicker& picker, const std::filesystem::path& out_dir,
+review::ReportPictures DrawPictures(const review::RunModel& model, const CloseupPicker& picker, const std::filesystem::path& out_dir,
                             const ReportOptions& o, ReportResult& result) {
-  const AgronomySummary& a = result.agronomy;
-  ReportPictures pictures;
+  const review::AgronomySummary& a = result.agronomy;
+  review::ReportPictures pictures;
   pictures.ellipse_confidence = o.pictures.ellipse_confidence;
   pictures.magnification = o.pictures.ellipse_magnification;
   const SavePicture save = [&](const cv::Mat& img, const std::string& name) {
@@ -336,18 +336,18 @@ ReportResult WriteReport(const std::filesystem::path& log, const std::filesystem
                          const ReportOptions& o) {
   ThrowIfInvalid("report options", o.Validate());
   std::filesystem::create_directories(out_dir);
-  RunModel model;
+  review::RunModel model;
   ReportResult result;
   CloseupPicker picker(o, 0.5 * o.pictures.closeup_length_m + 0.3);
   const std::optional<std::string> run_config = ReadRun(log, o, model, picker, result);
-  const AgronomySummary& a = result.agronomy;
+  const review::AgronomySummary& a = result.agronomy;
   if (o.truth && run_config && !a.rows.empty()) AddTruth(model, *run_config, o, result);
-  const ReportPictures pictures = DrawPictures(model, picker, out_dir, o, result);
+  const review::ReportPictures pictures = DrawPictures(model, picker, out_dir, o, result);
   const std::string name = log.filename().string();
-  WriteText(out_dir / "summary.csv", AgronomyCsv(a));
-  WriteText(out_dir / "summary.json", ReportJson(name, result.summary, a, result.truth, result.problems));
+  WriteText(out_dir / "summary.csv", review::AgronomyCsv(a));
+  WriteText(out_dir / "summary.json", review::ReportJson(name, result.summary, a, result.truth, result.problems));
   result.index = out_dir / "index.html";
-  WriteText(result.index, ReportHtml(name, result.summary, a, result.truth, result.problems, model.events(), pictures));
+  WriteText(result.index, review::ReportHtml(name, result.summary, a, result.truth, result.problems, model.events(), pictures));
   result.pictures = pictures.AllFiles();
   return result;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // `plantscale report`: replays an LCM log through the subscriber into a run
 // model once, then writes DIR/index.html with the run summary and the
-// agronomic summary (ui/agronomy.h, per run and per row; also
+// agronomic summary (review/agronomy.h, per run and per row; also
 // DIR/summary.csv and DIR/summary.json) and the pictures of
 // ui/report_pictures.h: the overview heat maps, the bed as 10 m strips, the
 // ellipse close-ups (at warning/error events and at the largest offset
@@ -18,39 +18,31 @@
 #include <vector>
 
 #include "engine/common/options.h"
-#include "ui/agronomy.h"
+#include "review/agronomy.h"
+#include "review/run_model.h"
 #include "ui/camera_view.h"
 #include "ui/report_pictures.h"
-#include "ui/run_model.h"
 
 namespace plantscale::ui {
 
-// Where the stand of a run lies, for the truth to be counted over.
-struct StandWindow {
-  double y0_m = 0.0, y1_m = 0.0;  // along the rows, field frame
-  int first_row = 0, last_row = 0;
-  double row_spacing_m = 0.0;
-  std::vector<std::pair<double, double>> crops_m;  // the crop records (x, y), to register a truth against
-};
-
 struct ReportOptions {
   PictureOptions pictures;
-  AgronomyOptions agronomy;
+  review::AgronomyOptions agronomy;
   int max_event_closeups = 6;  // close-ups at warning/error events
   double settle_m = 2.0;       // the largest offset error is looked for past this distance
   int camera_width_px = 320, camera_height_px = 240;
   CameraViewParams camera;
   // Simulator truth over the stand, given the text of the log's run_config
   // event (the app rebuilds the field); may return nothing or throw.
-  std::function<std::optional<AgronomyTruth>(const std::string& run_config, const StandWindow& stand)> truth;
+  std::function<std::optional<review::AgronomyTruth>(const std::string& run_config, const review::StandWindow& stand)> truth;
 
   OptionErrors Validate() const;
 };
 
 struct ReportResult {
-  RunSummary summary;
-  AgronomySummary agronomy;
-  std::optional<AgronomyTruth> truth;
+  review::RunSummary summary;
+  review::AgronomySummary agronomy;
+  std::optional<review::AgronomyTruth> truth;
   std::vector<std::string> pictures;  // file names inside the output folder
   std::vector<std::string> problems;  // what was wrong with the log
   std::filesystem::path index;

@@ -185,7 +185,7 @@ double NiceStep(double span, int ticks) {
 
 }  // namespace
 
-CloseupSnapshot TakeCloseup(const RunModel& model, double y_m, double half_length_m, std::string reason) {
+CloseupSnapshot TakeCloseup(const review::RunModel& model, double y_m, double half_length_m, std::string reason) {
   CloseupSnapshot s;
   s.reason = std::move(reason);
   s.distance_m = model.distance_m();
@@ -202,7 +202,7 @@ CloseupSnapshot TakeCloseup(const RunModel& model, double y_m, double half_lengt
   return s;
 }
 
-cv::Mat DrawOverview(const AgronomySummary& a, const PictureOptions& o) {
+cv::Mat DrawOverview(const review::AgronomySummary& a, const PictureOptions& o) {
   const double length = std::max(1.0, a.cells_along * a.cell_length_m);
   // Metres per line: 50, 100, 200, 500, … so that at most max_overview_lines.
   double per_line = 50.0;
@@ -219,11 +219,11 @@ cv::Mat DrawOverview(const AgronomySummary& a, const PictureOptions& o) {
        {10, 20}, 0.5);
   // Full stand: one plant per spacing; pressure scale: the 95th percentile of weeds per m².
   double spacing = 0.0;
-  for (const RowAgronomy& r : a.rows) spacing += r.plant_spacing_m / std::max<size_t>(1, a.rows.size());
+  for (const review::RowAgronomy& r : a.rows) spacing += r.plant_spacing_m / std::max<size_t>(1, a.rows.size());
   const double full = spacing > 0.0 ? a.cell_length_m / spacing : 1.0;
   std::vector<double> density;
   const double cell_area = a.cell_length_m * a.row_spacing_m;
-  for (const HeatCell& c : a.cells) density.push_back(c.weeds / std::max(1e-9, cell_area));
+  for (const review::HeatCell& c : a.cells) density.push_back(c.weeds / std::max(1e-9, cell_area));
   std::sort(density.begin(), density.end());
   double pressure_max = density.empty() ? 1.0 : density[static_cast<size_t>(0.95 * (density.size() - 1))];
   pressure_max = std::max(pressure_max, 5.0);
@@ -240,7 +240,7 @@ cv::Mat DrawOverview(const AgronomySummary& a, const PictureOptions& o) {
     for (size_t ri = 0; ri < a.rows.size(); ++ri) {
       for (int c = static_cast<int>(m0 / a.cell_length_m);
            c < a.cells_along && c * a.cell_length_m < m0 + per_line - 1e-9; ++c) {
-        const HeatCell& h = a.cells[ri * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
+        const review::HeatCell& h = a.cells[ri * static_cast<size_t>(a.cells_along) + static_cast<size_t>(c)];
         const int u0 = left + static_cast<int>(std::lround((c * a.cell_length_m - m0) * ppm));
         const int u1 = left + static_cast<int>(std::lround(((c + 1) * a.cell_length_m - m0) * ppm));
         const cv::Rect stand(u0, y_top + static_cast<int>(ri) * band, std::max(1, u1 - u0), band - 1);
@@ -269,7 +269,7 @@ cv::Mat DrawOverview(const AgronomySummary& a, const PictureOptions& o) {
   return img;
 }
 
-cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::vector<double>& starts,
+cv::Mat DrawStrips(const review::RunModel& model, const review::AgronomySummary& a, const std::vector<double>& starts,
                    double x_lo, double x_hi, const PictureOptions& o) {
   const int left = 16, top = 34, label_h = 24, gap = 10;
   const double ppm = (o.strip_width_px - 2 * left) / o.strip_length_m;
@@ -348,7 +348,7 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
   cv::Mat roi = img(frame);
   Window local = w;
   local.origin = {0, 0};
-  const double k = std::sqrt(EllipseScale2d(o.ellipse_confidence));
+  const double k = std::sqrt(review::EllipseScale2d(o.ellipse_confidence));
   bool plant_covariance = false;
   for (const tm::PlantObservation& p : s.plants) plant_covariance |= p.covariance.trace() > 0.0;
   for (const tm::PlantObservation& p : s.plants) {
@@ -396,8 +396,8 @@ cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo, double x_hi, const Pi
   return img;
 }
 
-cv::Mat DrawOffsetTrace(const RunModel& model, const PictureOptions& o) {
-  const std::vector<TraceSample>& est = !model.trace().empty() ? model.trace() : model.truth_trace();
+cv::Mat DrawOffsetTrace(const review::RunModel& model, const PictureOptions& o) {
+  const std::vector<review::TraceSample>& est = !model.trace().empty() ? model.trace() : model.truth_trace();
   const bool has_truth = !model.trace().empty() && !model.truth_trace().empty();
   const int left = 70, right = 20, top = 34, bottom = 46;
   cv::Mat img(o.trace_height_px, o.trace_width_px, CV_8UC3, kWhite);
@@ -416,12 +416,12 @@ cv::Mat DrawOffsetTrace(const RunModel& model, const PictureOptions& o) {
   std::vector<double> sum(pw, 0.0), sd(pw, 0.0), tsum(pw, 0.0);
   std::vector<int> cnt(pw, 0), tcnt(pw, 0);
   const auto col = [&](double d) { return std::clamp(static_cast<int>((d - d0) / (d1 - d0) * pw), 0, pw - 1); };
-  for (const TraceSample& t : est) {
+  for (const review::TraceSample& t : est) {
     const int c = col(t.distance_m);
     sum[c] += t.offset_m, sd[c] += t.offset_sigma_m, ++cnt[c];
   }
   if (has_truth) {
-    for (const TraceSample& t : model.truth_trace()) {
+    for (const review::TraceSample& t : model.truth_trace()) {
       const int c = col(t.distance_m);
       tsum[c] += t.offset_m, ++tcnt[c];
     }
@@ -477,10 +477,10 @@ cv::Mat DrawOffsetTrace(const RunModel& model, const PictureOptions& o) {
   return img;
 }
 
-cv::Mat DrawSizeHistograms(const AgronomySummary& a) {
+cv::Mat DrawSizeHistograms(const review::AgronomySummary& a) {
   const int w = 520, h = 260, left = 50, top = 36, pw = 440, ph = 170;
   cv::Mat img(h, 2 * w, CV_8UC3, kWhite);
-  const auto panel = [&](int x0, const SizeStats& s, const std::string& title, cv::Scalar colour) {
+  const auto panel = [&](int x0, const review::SizeStats& s, const std::string& title, cv::Scalar colour) {
     Text(img, title, {x0 + 10, 20}, 0.5);
     cv::rectangle(img, {x0 + left, top, pw, ph}, kInk, 1);
     const int bins = static_cast<int>(s.histogram.size());

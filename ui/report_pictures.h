@@ -17,8 +17,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "ui/agronomy.h"
-#include "ui/run_model.h"
+#include "review/agronomy.h"
+#include "review/run_model.h"
 
 namespace plantscale::ui {
 
@@ -48,15 +48,15 @@ struct PictureOptions {
 };
 
 // The overview heat maps; the metres per line are chosen from the run length.
-cv::Mat DrawOverview(const AgronomySummary& a, const PictureOptions& o);
+cv::Mat DrawOverview(const review::AgronomySummary& a, const PictureOptions& o);
 // Strips starting at `strip_starts_m` (field y), one picture.
-cv::Mat DrawStrips(const RunModel& model, const AgronomySummary& a, const std::vector<double>& strip_starts_m,
+cv::Mat DrawStrips(const review::RunModel& model, const review::AgronomySummary& a, const std::vector<double>& strip_starts_m,
                    double x_lo_m, double x_hi_m, const PictureOptions& o);
 cv::Mat DrawCloseup(const CloseupSnapshot& s, double x_lo_m, double x_hi_m, const PictureOptions& o);
-cv::Mat DrawOffsetTrace(const RunModel& model, const PictureOptions& o);
-cv::Mat DrawSizeHistograms(const AgronomySummary& a);
+cv::Mat DrawOffsetTrace(const review::RunModel& model, const PictureOptions& o);
+cv::Mat DrawSizeHistograms(const review::AgronomySummary& a);
 
 // Takes a snapshot of the model around field y `y_m`.
-CloseupSnapshot TakeCloseup(const RunModel& model, double y_m, double half_length_m, std::string reason);
+CloseupSnapshot TakeCloseup(const review::RunModel& model, double y_m, double half_length_m, std::string reason);
 
 }  // namespace plantscale::ui

@@ -12,11 +12,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "review/synthetic_run.h"
 #include "telemetry/log.h"
 #include "ui/canvas.h"
 #include "ui/golden.h"
 #include "ui/report.h"
-#include "ui/synthetic_run.h"
 
 namespace plantscale::ui {
 namespace {
@@ -56,11 +56,11 @@ void ExpectPictures(const ReportResult& r, const fs::path& dir) {
 
 TEST(Report, SummaryPicturesAndSameBytes) {
   const fs::path dir = Fresh("report_12m");
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 12.0;
-  WriteSyntheticLog(dir / "run.lcmlog", run);
+  review::WriteSyntheticLog(dir / "run.lcmlog", run);
   const ReportResult a = WriteReport(dir / "run.lcmlog", dir / "a", SmallReport());
-  const RunSummary& s = a.summary;
+  const review::RunSummary& s = a.summary;
   EXPECT_NEAR(s.distance_m, 12.0, 0.05);
   EXPECT_EQ(s.offset_source, "tracker");
   // Zig-zag of 40 mm amplitude over 1.5 periods plus 8 mm filter noise:
@@ -83,7 +83,7 @@ TEST(Report, SummaryPicturesAndSameBytes) {
   // The agronomy of the synthetic bed: three full rows at 0.45 m, crops of
   // 0.01 m² (leaf-tip radius √(0.01 / (π 0.832)) = 61.8 mm), weeds of
   // 0.002 m² (disc radius 25.2 mm), 2 weeds per metre over 1.4 m.
-  const AgronomySummary& g = a.agronomy;
+  const review::AgronomySummary& g = a.agronomy;
   ASSERT_EQ(g.rows.size(), 3u);
   EXPECT_EQ(g.rows.front().row, -1);
   EXPECT_EQ(g.rows.back().row, 1);
@@ -92,7 +92,7 @@ TEST(Report, SummaryPicturesAndSameBytes) {
   // Each observation carries N(0, 1 cm) per axis: the median of ~27
   // neighbour spacings (sd 1.4 cm) within 8 mm (≈ 2.4 standard errors), and
   // plants per metre, n plants over (n − 1)·l̄ + l̄, within 1 %.
-  for (const RowAgronomy& r : g.rows) {
+  for (const review::RowAgronomy& r : g.rows) {
     EXPECT_NEAR(r.plant_spacing_m, 0.45, 0.008);
     EXPECT_NEAR(r.plants_per_m, 1.0 / 0.45, 0.01 / 0.45);
   }
@@ -138,15 +138,15 @@ TEST(Report, SummaryPicturesAndSameBytes) {
 
 TEST(Agronomy, GapsAgainstMissingPlants) {
   const fs::path dir = Fresh("report_gaps");
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 20.0;
   // Row 0: one plant missing at line 5 and three at lines 10–12; row 1: one at line 20.
   run.missing_crops = {{0, 5}, {0, 10}, {0, 11}, {0, 12}, {1, 20}};
-  WriteSyntheticLog(dir / "run.lcmlog", run);
+  review::WriteSyntheticLog(dir / "run.lcmlog", run);
   ReportOptions o = SmallReport();
   o.agronomy.rate_l_ha = 150.0;
   const ReportResult r = WriteReport(dir / "run.lcmlog", dir / "out", o);
-  const AgronomySummary& g = r.agronomy;
+  const review::AgronomySummary& g = r.agronomy;
   ASSERT_EQ(g.rows.size(), 3u);
   EXPECT_EQ(g.gaps, 3);
   EXPECT_EQ(g.missing, 5);
@@ -161,26 +161,26 @@ TEST(Agronomy, GapsAgainstMissingPlants) {
   EXPECT_NEAR(*g.product_l, *g.area_treated_m2 * 1e-4 * 150.0, 1e-12);
   // The heat map: the cells of row 0 hold the plants of the row.
   int row0 = 0;
-  for (const HeatCell& c : g.cells) row0 += c.row == 0 ? c.crop : 0;
+  for (const review::HeatCell& c : g.cells) row0 += c.row == 0 ? c.crop : 0;
   EXPECT_EQ(row0, g.rows[1].crop);
 }
 
 TEST(Agronomy, SizeQuartiles) {
-  const SizeStats s = SizeStatsOf({0.05, 0.01, 0.03, 0.02, 0.04}, 0.01, 4);
+  const review::SizeStats s = review::SizeStatsOf({0.05, 0.01, 0.03, 0.02, 0.04}, 0.01, 4);
   EXPECT_EQ(s.count, 5);
   EXPECT_NEAR(s.median_m, 0.03, 1e-12);
   EXPECT_NEAR(s.q1_m, 0.02, 1e-12);
   EXPECT_NEAR(s.q3_m, 0.04, 1e-12);
   EXPECT_EQ(s.histogram, (std::vector<int>{0, 1, 1, 3}));  // the last bin open-ended
-  EXPECT_NEAR(LeafTipRadius(M_PI * 0.832 * 0.1 * 0.1, 0.832), 0.1, 1e-12);
+  EXPECT_NEAR(review::LeafTipRadius(M_PI * 0.832 * 0.1 * 0.1, 0.832), 0.1, 1e-12);
 }
 
 // A plant record of `kind` at (x, y) of ground area `area_m2`, its id the
 // next free one.
-void AddRecord(std::map<int64_t, PlantRecord>& plants, telemetry::PlantKind kind, double x, double y,
+void AddRecord(std::map<int64_t, review::PlantRecord>& plants, telemetry::PlantKind kind, double x, double y,
                double area_m2) {
   const auto id = static_cast<int64_t>(plants.size());
-  PlantRecord& r = plants[id];
+  review::PlantRecord& r = plants[id];
   r.plant.id = id;
   r.plant.kind = kind;
   r.plant.position_m = {x, y};
@@ -190,14 +190,14 @@ void AddRecord(std::map<int64_t, PlantRecord>& plants, telemetry::PlantKind kind
 // The plant figures of `plants` on rows 0.5 m apart, crop-sized weed
 // records at `far_view_fraction` of the crops' radius (0: none), smaller
 // ones near a gap's place at `gap_crop_fraction` (0: none).
-AgronomySummary FiguresOnRowsHalfAMetreApart(const std::map<int64_t, PlantRecord>& plants, double far_view_fraction,
-                                             double gap_crop_fraction = AgronomyOptions{}.gap_crop_fraction) {
-  AgronomySummary a;
+review::AgronomySummary FiguresOnRowsHalfAMetreApart(const std::map<int64_t, review::PlantRecord>& plants, double far_view_fraction,
+                                             double gap_crop_fraction = review::AgronomyOptions{}.gap_crop_fraction) {
+  review::AgronomySummary a;
   a.row_spacing_m = 0.5;
-  AgronomyOptions o;
+  review::AgronomyOptions o;
   o.far_view_fraction = far_view_fraction;
   o.gap_crop_fraction = gap_crop_fraction;
-  AddPlantFigures(a, plants, o);
+  review::AddPlantFigures(a, plants, o);
   return a;
 }
 
@@ -206,7 +206,7 @@ TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
   // 10 m, and weeds: a crop-sized record 0.1 m from its crop (a far view of
   // it), one as large between the rows (a weed: no crop within half a
   // spacing), one small under a canopy and four clear.
-  std::map<int64_t, PlantRecord> plants;
+  std::map<int64_t, review::PlantRecord> plants;
   const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1, big_m2 = M_PI * 0.08 * 0.08, small_m2 = M_PI * 0.01 * 0.01;
   for (int i = 0; i <= 20; ++i) {
     AddRecord(plants, telemetry::PlantKind::kCrop, 0.0, 0.5 * i, crop_m2);
@@ -216,7 +216,7 @@ TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.25, 5.25, big_m2);
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.5, 3.05, small_m2);
   for (int i = 1; i <= 4; ++i) AddRecord(plants, telemetry::PlantKind::kWeed, 0.25, i + 0.3, small_m2);
-  const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
+  const review::AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, review::AgronomyOptions{}.far_view_fraction);
   EXPECT_NEAR(a.surveyed_area_m2, 1.0 * 10.0, 1e-9);
   EXPECT_NEAR(a.crop_size.median_m, 0.1, 1e-9);
   EXPECT_EQ(a.far_views_of_crops, 1);
@@ -227,7 +227,7 @@ TEST(Agronomy, FarViewsOfCropsAndTheGroundSeen) {
   EXPECT_NEAR(a.unseen_canopy_m2, unseen_m2, 1e-9);
   EXPECT_NEAR(a.weeds_per_m2_seen, 5.0 / (10.0 - unseen_m2), 1e-9);
   // Off: every weed record counts.
-  const AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0);
+  const review::AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0);
   EXPECT_EQ(all.far_views_of_crops, 0);
   EXPECT_EQ(all.weeds, 7);
 }
@@ -239,7 +239,7 @@ TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
   // crop recorded as a weed); in the gap at 5 a small weed (a weed in a
   // gap); in the gap at 3.5–4 a crop-sized record at 4: the gap is one
   // plant shorter, at 3.5 alone.
-  std::map<int64_t, PlantRecord> plants;
+  std::map<int64_t, review::PlantRecord> plants;
   const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1, big_m2 = M_PI * 0.08 * 0.08, small_m2 = M_PI * 0.02 * 0.02;
   for (int i = 0; i <= 20; ++i) {
     const double y = 0.5 * i;
@@ -249,7 +249,7 @@ TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.03, 2.03, big_m2);
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 5.0, small_m2);
   AddRecord(plants, telemetry::PlantKind::kWeed, -0.02, 4.04, big_m2);
-  const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
+  const review::AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, review::AgronomyOptions{}.far_view_fraction);
   ASSERT_EQ(a.rows.size(), 1u);
   EXPECT_EQ(a.crops_recorded_as_weeds, 2);
   EXPECT_EQ(a.weed_records_taken_as_crops.size(), 2u);  // the bed picture draws the two as crops' rings
@@ -258,7 +258,7 @@ TEST(Agronomy, ACropRecordedAsAWeedFillsItsGap) {
   EXPECT_EQ(a.longest_gap, 1);
   EXPECT_EQ(a.weeds, 1);    // the small one; the two crop-sized records are crops
   // Off (every weed record a weed): the gaps as the crop records leave them.
-  const AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0, 0.0);
+  const review::AgronomySummary all = FiguresOnRowsHalfAMetreApart(plants, 0.0, 0.0);
   EXPECT_EQ(all.crops_recorded_as_weeds, 0);
   EXPECT_EQ(all.gaps, 4);
   EXPECT_EQ(all.missing, 5);
@@ -274,7 +274,7 @@ TEST(Agronomy, ASmallCropBesideItsPlaceFillsItsGap) {
   // 0.15 spacings: the small crop recorded as a weed); at 5, 12 cm off
   // (0.24 spacings: a weed in the gap); at 8, one of 0.03 m on the place
   // (0.3 of the crops' radius: a weed).
-  std::map<int64_t, PlantRecord> plants;
+  std::map<int64_t, review::PlantRecord> plants;
   const double crop_m2 = M_PI * 0.832 * 0.1 * 0.1;
   for (int i = 0; i <= 20; ++i) {
     const double y = 0.5 * i;
@@ -284,14 +284,14 @@ TEST(Agronomy, ASmallCropBesideItsPlaceFillsItsGap) {
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.03, 2.04, M_PI * 0.04 * 0.04);
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 5.12, M_PI * 0.04 * 0.04);
   AddRecord(plants, telemetry::PlantKind::kWeed, 0.0, 8.0, M_PI * 0.03 * 0.03);
-  const AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction);
+  const review::AgronomySummary a = FiguresOnRowsHalfAMetreApart(plants, review::AgronomyOptions{}.far_view_fraction);
   ASSERT_EQ(a.rows.size(), 1u);
   EXPECT_EQ(a.crops_recorded_as_weeds, 1);
   EXPECT_EQ(a.gaps, 2);  // 5, 8
   EXPECT_EQ(a.missing, 2);
   EXPECT_EQ(a.weeds, 2);
   // Only crop-sized records fill a gap: all three are weeds.
-  const AgronomySummary crop_sized_only = FiguresOnRowsHalfAMetreApart(plants, AgronomyOptions{}.far_view_fraction, 0.0);
+  const review::AgronomySummary crop_sized_only = FiguresOnRowsHalfAMetreApart(plants, review::AgronomyOptions{}.far_view_fraction, 0.0);
   EXPECT_EQ(crop_sized_only.crops_recorded_as_weeds, 0);
   EXPECT_EQ(crop_sized_only.missing, 3);
   EXPECT_EQ(crop_sized_only.weeds, 3);
@@ -302,9 +302,9 @@ TEST(Report, NoDisplayStillReports) {
   const std::string saved = display ? display : "";
   unsetenv("DISPLAY");
   const fs::path dir = Fresh("report_no_display");
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 6.0;
-  WriteSyntheticLog(dir / "run.lcmlog", run);
+  review::WriteSyntheticLog(dir / "run.lcmlog", run);
   const ReportResult r = WriteReport(dir / "run.lcmlog", dir / "out", SmallReport());
   if (!saved.empty()) setenv("DISPLAY", saved.c_str(), 1);
   EXPECT_TRUE(fs::exists(r.index));
@@ -351,9 +351,9 @@ TEST(Report, EmptyLogIsAProblemNotACrash) {
 
 TEST(Report, LogCutMidEventReportsWhatCameBefore) {
   const fs::path dir = Fresh("report_cut");
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 10.0;
-  WriteSyntheticLog(dir / "run.lcmlog", run);
+  review::WriteSyntheticLog(dir / "run.lcmlog", run);
   const std::string bytes = Slurp(dir / "run.lcmlog");
   // Cut in the middle of the file: inside an event, almost surely.
   std::ofstream(dir / "cut.lcmlog", std::ios::binary) << bytes.substr(0, bytes.size() / 2 + 7);

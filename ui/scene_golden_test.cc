@@ -8,20 +8,20 @@
 #include <numbers>
 
 #include "engine/geometry/grid_model.h"
+#include "review/log_timeline.h"
+#include "review/synthetic_run.h"
+#include "review/test_util.h"
+#include "telemetry/channels.h"
+#include "telemetry/codec.h"
+#include "telemetry/convert.h"
 #include "ui/camera_view.h"
 #include "ui/canvas.h"
 #include "ui/golden.h"
 #include "ui/hud.h"
+#include "ui/map_layer.h"
 #include "ui/map_view.h"
 #include "ui/offset_trace.h"
 #include "ui/palette.h"
-#include "ui/scene_test_util.h"
-#include "ui/map_layer.h"
-#include "ui/station_timeline.h"
-#include "ui/synthetic_run.h"
-#include "telemetry/channels.h"
-#include "telemetry/codec.h"
-#include "telemetry/convert.h"
 
 #include <vtkPropCollection.h>
 #include <vtkNew.h>
@@ -30,12 +30,12 @@ namespace plantscale::ui {
 namespace {
 
 using testing::MatchesGolden;
-using testing::RunUpTo;
+using review::testing::RunUpTo;
 
 bool IsRowYellow(const cv::Vec3b& bgr) { return bgr[2] > 200 && bgr[1] > 170 && bgr[0] < 90; }
 
 // Renders a map view of `model` with only `layers` visible.
-cv::Mat RenderMap(const RunModel& model, std::initializer_list<MapLayerId> layers, int w = 400,
+cv::Mat RenderMap(const review::RunModel& model, std::initializer_list<MapLayerId> layers, int w = 400,
                   int h = 300, std::optional<FieldWindow> window = std::nullopt) {
   Canvas canvas(w, h);
   MapView view;
@@ -53,9 +53,9 @@ cv::Mat RenderMap(const RunModel& model, std::initializer_list<MapLayerId> layer
 // map after seeking back to 10 s must be the map of a forward pass to 10 s.
 TEST(MapLayer, SeekBackShowsTheMapAsItWasThen) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 20.0;
-  LogTimeline sought(SyntheticRun(run), "");
+  review::LogTimeline sought(review::SyntheticRun(run), "");
   vtkNew<vtkRenderer> renderer_sought, renderer_forward;
   MapLayer back, forward;
   back.AddTo(renderer_sought);
@@ -66,7 +66,7 @@ TEST(MapLayer, SeekBackShowsTheMapAsItWasThen) {
   const int actors_at_35s = renderer_sought->GetViewProps()->GetNumberOfItems();
   sought.Seek(10.0);
   back.Update(sought.model(), whole);
-  LogTimeline fresh(SyntheticRun(run), "");
+  review::LogTimeline fresh(review::SyntheticRun(run), "");
   fresh.Seek(10.0);
   forward.Update(fresh.model(), whole);
   double b[4], f[4];
@@ -79,7 +79,7 @@ TEST(MapLayer, SeekBackShowsTheMapAsItWasThen) {
 
 TEST(SceneGolden, MapLayerShowsCropWeedSoilTreated) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 12.0);
+  const review::LogTimeline run = RunUpTo({}, 12.0);
   const cv::Mat image = RenderMap(run.model(), {MapLayerId::kMap});
   EXPECT_TRUE(MatchesGolden(image, "map_layer"));
 }
@@ -89,7 +89,7 @@ TEST(SceneGolden, MapLayerShowsCropWeedSoilTreated) {
 // 150 + x_n · 66.7 where x_n = n r̄ − t_x / cos ψ ≈ n · 0.475 m + vehicle x.
 TEST(SceneGolden, GridOverlayRowsAtExpectedImageRows) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 12.0);
+  const review::LogTimeline run = RunUpTo({}, 12.0);
   const cv::Mat image = RenderMap(run.model(), {MapLayerId::kGrid, MapLayerId::kVehicle});
   EXPECT_TRUE(MatchesGolden(image, "grid_overlay"));
   const auto& grid = *run.model().grid();
@@ -111,7 +111,7 @@ TEST(SceneGolden, GridOverlayRowsAtExpectedImageRows) {
 
 TEST(SceneGolden, EllipsesCloseUp) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 12.0);
+  const review::LogTimeline run = RunUpTo({}, 12.0);
   const double y = run.model().pose()->y_m;
   const cv::Mat image = RenderMap(run.model(), {MapLayerId::kEllipses, MapLayerId::kPlants, MapLayerId::kVehicle},
                                   400, 300, FieldWindow{y - 0.5, y + 2.5, 0.0});
@@ -120,7 +120,7 @@ TEST(SceneGolden, EllipsesCloseUp) {
 
 TEST(SceneGolden, OffsetTraceChart) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 20.0);
+  const review::LogTimeline run = RunUpTo({}, 20.0);
   Canvas canvas(400, 300);
   OffsetTrace trace;
   trace.AddTo(canvas.AddRenderer(0, 0, 1, 1, {1, 1, 1}));
@@ -136,7 +136,7 @@ TEST(SceneGolden, OffsetTraceLineWithinItsBandAtKilometres) {
   PLANTSCALE_REQUIRE_DISPLAY();
   namespace tm = telemetry;
   tm::Subscriber sub;
-  RunModel model;
+  review::RunModel model;
   model.Follow(sub);
   for (int i = 0; i <= 400; ++i) {
     const double d = 2450.0 + 0.05 * i;
@@ -182,7 +182,7 @@ TEST(SceneGolden, OffsetTraceLineWithinItsBandAtKilometres) {
 
 TEST(SceneGolden, CameraViewGridAtProjectedColumns) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 12.0);
+  const review::LogTimeline run = RunUpTo({}, 12.0);
   Canvas canvas(320, 240);
   CameraView view;
   view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
@@ -206,7 +206,7 @@ TEST(SceneGolden, CameraViewGridAtProjectedColumns) {
   EXPECT_GE(checked, 6);
 }
 
-cv::Mat RenderHud(const RunModel& model, int64_t now) {
+cv::Mat RenderHud(const review::RunModel& model, int64_t now) {
   Canvas canvas(400, 60);
   Hud hud;
   hud.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kHudOk));
@@ -216,7 +216,7 @@ cv::Mat RenderHud(const RunModel& model, int64_t now) {
 
 TEST(SceneGolden, HudGreenWhileHeartbeatArrives) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 6.0);
+  const review::LogTimeline run = RunUpTo({}, 6.0);
   const cv::Mat image = RenderHud(run.model(), run.now_utime());
   EXPECT_TRUE(MatchesGolden(image, "hud_ok"));
   const cv::Vec3b corner = image.at<cv::Vec3b>(58, 398);
@@ -226,9 +226,9 @@ TEST(SceneGolden, HudGreenWhileHeartbeatArrives) {
 
 TEST(SceneGolden, HudRedAtOnceOnLostLink) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.heartbeat_stops_at_s = 3.0;
-  const LogTimeline run = RunUpTo(o, 6.0);
+  const review::LogTimeline run = RunUpTo(o, 6.0);
   const cv::Mat image = RenderHud(run.model(), run.now_utime());
   EXPECT_TRUE(MatchesGolden(image, "hud_lost"));
   const cv::Vec3b corner = image.at<cv::Vec3b>(58, 398);  // background, below the text
@@ -239,7 +239,7 @@ TEST(SceneGolden, HudRedAtOnceOnLostLink) {
 
 TEST(SceneGolden, NozzleBar) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = RunUpTo({}, 12.0);
+  const review::LogTimeline run = RunUpTo({}, 12.0);
   Canvas canvas(400, 60);
   NozzleBarView bar;
   bar.AddTo(canvas.AddRenderer(0, 0, 1, 1, {0.12, 0.12, 0.13}));

@@ -20,9 +20,9 @@
 #include <vtkImageMapper3D.h>
 #include <vtkTextProperty.h>
 
+#include "ui/gateway_source.h"
 #include "ui/palette.h"
 #include "ui/station_controller.h"
-#include "ui/gateway_source.h"
 #include "ui/station_sources.h"
 
 namespace plantscale::ui {
@@ -150,7 +150,7 @@ std::string StationKeysHelp() {
          "  q or Esc quit";
 }
 
-std::vector<Rgb> WeedStrip(const RunModel& model, const FieldWindow& whole, int columns) {
+std::vector<Rgb> WeedStrip(const review::RunModel& model, const FieldWindow& whole, int columns) {
   const double length = std::max(1e-6, whole.y1_m - whole.y0_m);
   std::vector<int> weeds(static_cast<size_t>(columns), 0), plants(static_cast<size_t>(columns), 0);
   for (const auto& [id, r] : model.plants()) {
@@ -196,7 +196,7 @@ void StationScene::SetOverview(const std::vector<Rgb>& columns, double from, dou
   view_span_.Set({{{span.first, 0.5}, {std::max(span.second, span.first + min_width), 0.5}}});
 }
 
-void StationScene::Update(const RunModel& model, int64_t now_utime, double fraction) {
+void StationScene::Update(const review::RunModel& model, int64_t now_utime, double fraction) {
   map_.Update(model);
   annotations_.Update(map_.metres_per_pixel(), EllipseLegend(map_));
   hud_.Update(model, now_utime);
@@ -347,7 +347,7 @@ StationResult RunStation(const StationOptions& options) {
   result.link = source->model().Link(source->now_utime()).text;
   result.link_changes = source->LinkChanges();
   result.command_replies = controller.command_replies();
-  const RunModel& model = source->model();
+  const review::RunModel& model = source->model();
   result.messages = model.messages();
   result.grid_states = model.trace().size();
   result.map_tiles = model.tiles().size();

@@ -34,10 +34,10 @@ namespace plantscale::ui {
 struct StationOptions {
   std::string lcm_url;         // live (empty: LCM's default)
   std::filesystem::path log;   // non-empty: replay this log with a timeline
-  // Set: review this finished run, whole (no replay): a log's (LoadReviewRun
-  // in station_sources.h) or an exported map's plants (app/), named
+  // Set: review this finished run, whole (no replay): a log's (review::LoadReviewRun
+  // in review/log_timeline.h) or an exported map's plants (app/), named
   // review_name; review_error says what could not be read.
-  std::shared_ptr<const RunModel> review_model;
+  std::shared_ptr<const review::RunModel> review_model;
   std::string review_name, review_error;
   int width_px = 1280, height_px = 720;
   double ellipse_confidence = 0.95;
@@ -66,7 +66,7 @@ struct StationOptions {
 // from soil brown (no weed) to weed red (the most weeds per metre of any
 // column, or more), grey where no plant was seen: where the weed pressure is,
 // readable at any length.
-std::vector<Rgb> WeedStrip(const RunModel& model, const FieldWindow& whole, int columns);
+std::vector<Rgb> WeedStrip(const review::RunModel& model, const FieldWindow& whole, int columns);
 
 // Every key of the station and what it does, one per line (for `h` and --help).
 std::string StationKeysHelp();
@@ -76,7 +76,7 @@ std::string StationKeysHelp();
 class StationScene {
  public:
   StationScene(Canvas& canvas, const StationOptions& options);
-  void Update(const RunModel& model, int64_t now_utime, double timeline_fraction);
+  void Update(const review::RunModel& model, int64_t now_utime, double timeline_fraction);
   // Words at the timeline's two ends (position, and the whole run).
   void SetTimelineText(const std::string& left, const std::string& right);
   // Review: the bottom bar is the whole bed, coloured by `columns` (from its

@@ -43,7 +43,7 @@ std::string ClockText(double seconds) {
   return out.str();
 }
 
-std::string PlantRecordText(const PlantRecord& r) {
+std::string PlantRecordText(const review::PlantRecord& r) {
   const telemetry::PlantObservation& p = r.plant;
   const double cm2 = 1e4 * p.size_m2;
   std::ostringstream out;
@@ -285,7 +285,7 @@ std::optional<Eigen::Vector2d> StationController::PickPosition() const {
 // The nearest plant within 0.15 m of the click (or 15 pixels, zoomed out).
 void StationController::Pick(const Eigen::Vector2d& at) {
   const double limit = std::max(0.15, 15.0 * scene_.map().metres_per_pixel());
-  const PlantRecord* best = nullptr;
+  const review::PlantRecord* best = nullptr;
   double best_d = limit;
   for (const auto& [id, r] : source_.model().plants()) {
     const double d = (r.plant.position_m - at).norm();

@@ -22,7 +22,7 @@ std::string Rounded(double value, int decimals);
 std::string ClockText(double seconds);
 // A plant's record in words: what it is, how big (cm², 2 significant
 // figures), how far from the predicted crop (whole mm), where, sprayed and why.
-std::string PlantRecordText(const PlantRecord& record);
+std::string PlantRecordText(const review::PlantRecord& record);
 
 class StationController {
  public:

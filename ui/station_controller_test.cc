@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "review/synthetic_run.h"
 #include "ui/golden.h"
-#include "ui/synthetic_run.h"
 
 namespace plantscale::ui {
 namespace {
@@ -29,7 +29,7 @@ class StationControllerTest : public ::testing::Test {
   void SetUp() override {
     if (!DisplayAvailable()) GTEST_SKIP() << "no DISPLAY: VTK renders through GLX; run under xvfb-run -a";
     const fs::path log = fs::path(testing::OutputDir()) / "controller.lcmlog";
-    WriteSyntheticLog(log, {});
+    review::WriteSyntheticLog(log, {});
     options_.width_px = 640, options_.height_px = 360;
     source_ = std::make_unique<LogSource>(log, 1.0);
     source_->Seek(12.0, /*relative=*/true);
@@ -54,7 +54,7 @@ class StationControllerTest : public ::testing::Test {
 TEST_F(StationControllerTest, ClickOnAPlantShowsItsRecord) {
   const auto& plants = source_->model().plants();
   ASSERT_FALSE(plants.empty());
-  const PlantRecord& weed = [&]() -> const PlantRecord& {
+  const review::PlantRecord& weed = [&]() -> const review::PlantRecord& {
     for (const auto& [id, r] : plants) {
       if (r.plant.kind == telemetry::PlantKind::kWeed) return r;
     }

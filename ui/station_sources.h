@@ -18,11 +18,11 @@
 #include <vector>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
 
-#include "telemetry/transport.h"
+#include "review/log_timeline.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 #include "telemetry/command_auth.h"
-#include "ui/station_timeline.h"
+#include "telemetry/transport.h"
 
 namespace plantscale::ui {
 
@@ -31,7 +31,7 @@ class Source {
  public:
   virtual ~Source() = default;
   virtual void Tick(double wall_s) = 0;
-  virtual const RunModel& model() const = 0;
+  virtual const review::RunModel& model() const = 0;
   virtual int64_t now_utime() const = 0;
   virtual double fraction() const { return -1.0; }  // timeline position, < 0 live
   virtual double position_s() const { return -1.0; }  // log clock from its start, < 0 live
@@ -54,12 +54,12 @@ class Source {
 
 class LogSource : public Source {
  public:
-  LogSource(const std::filesystem::path& log, double speed) : timeline_(LogTimeline::Load(log)) {
+  LogSource(const std::filesystem::path& log, double speed) : timeline_(review::LogTimeline::Load(log)) {
     timeline_.SetSpeed(speed);
     timeline_.Seek(0.0);
   }
   void Tick(double wall_s) override { timeline_.Advance(wall_s); }
-  const RunModel& model() const override { return timeline_.model(); }
+  const review::RunModel& model() const override { return timeline_.model(); }
   int64_t now_utime() const override { return timeline_.now_utime(); }
   double fraction() const override {
     return timeline_.duration_s() > 0 ? timeline_.position_s() / timeline_.duration_s() : 0.0;
@@ -83,33 +83,17 @@ class LogSource : public Source {
   }
 
  private:
-  LogTimeline timeline_;
+  review::LogTimeline timeline_;
 };
-
-// A finished run read whole: the run model of a log fed to its end
-// (streamed, so only the model stays in memory; the timeline that fed it
-// is kept alive by the pointer) and what went wrong reading it.
-struct ReviewRun {
-  std::shared_ptr<const RunModel> model;
-  std::string error;  // the log is cut off or corrupt here (what was read before it is shown)
-  bool empty = true;  // not one whole event
-};
-
-// Throws telemetry::LogError when the log cannot be opened.
-inline ReviewRun LoadReviewRun(const std::filesystem::path& log) {
-  auto timeline = std::make_shared<LogTimeline>(LogTimeline::Load(log));
-  timeline->Seek(timeline->duration_s());
-  return {std::shared_ptr<const RunModel>(timeline, &timeline->model()), timeline->error(), timeline->empty()};
-}
 
 // A finished run, whole (a log's, LoadReviewRun, or an exported map's
 // plants, read in app/). Nothing plays; the station's timeline is the bed.
 class ReviewSource : public Source {
  public:
-  ReviewSource(std::shared_ptr<const RunModel> model, std::string what, std::string error = "")
+  ReviewSource(std::shared_ptr<const review::RunModel> model, std::string what, std::string error = "")
       : what_(std::move(what)), model_(std::move(model)), error_(std::move(error)) {}
   void Tick(double) override {}
-  const RunModel& model() const override { return *model_; }
+  const review::RunModel& model() const override { return *model_; }
   int64_t now_utime() const override { return model_->last_message_utime(); }
   bool review() const override { return true; }
   std::string LogError() const override { return error_; }
@@ -121,7 +105,7 @@ class ReviewSource : public Source {
 
  private:
   std::string what_;
-  std::shared_ptr<const RunModel> model_;
+  std::shared_ptr<const review::RunModel> model_;
   std::string error_;
 };
 
@@ -176,7 +160,7 @@ class LiveSource : public Source {
     thread_.join();
   }
   void Tick(double) override {}
-  const RunModel& model() const override { return model_; }
+  const review::RunModel& model() const override { return model_; }
   int64_t now_utime() const override { return telemetry::WallUtime(); }
   std::string Status() const override { return "live " + transport_.url(); }
   std::string SendCommand(int8_t command, int8_t mode) override {
@@ -197,7 +181,7 @@ class LiveSource : public Source {
   std::optional<telemetry::CommandKey> command_key_;
   telemetry::LcmTransport transport_;
   telemetry::Subscriber subscriber_;
-  RunModel model_;
+  review::RunModel model_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

@@ -5,11 +5,11 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "review/test_util.h"
 #include "telemetry/command_auth.h"
 #include "telemetry/log.h"
 #include "ui/golden.h"
 #include "ui/palette.h"
-#include "ui/scene_test_util.h"
 #include "ui/station.h"
 #include "ui/station_sources.h"
 
@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 TEST(Station, ComposedWindowGolden) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  const LogTimeline run = testing::RunUpTo({}, 12.0);
+  const review::LogTimeline run = review::testing::RunUpTo({}, 12.0);
   StationOptions o;
   o.width_px = 640, o.height_px = 360;
   Canvas canvas(o.width_px, o.height_px);
@@ -39,18 +39,18 @@ TEST(Station, ComposedWindowGolden) {
 // the HUD changes (to red).
 TEST(Station, PartialRedrawMatchesFullRedraw) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 6.0;
   StationOptions o;
   o.width_px = 640, o.height_px = 360;
-  LogTimeline partial_run = testing::RunUpTo(run, 5.0), full_run = testing::RunUpTo(run, 5.0);
+  review::LogTimeline partial_run = review::testing::RunUpTo(run, 5.0), full_run = review::testing::RunUpTo(run, 5.0);
   Canvas partial(o.width_px, o.height_px), full(o.width_px, o.height_px);
   full.SetPartialRedraw(false);
   StationScene partial_scene(partial, o), full_scene(full, o);
   cv::Mat last;
   for (int frame = 0; frame < 16; ++frame) {
     const bool lost = frame == 15;  // 5 s after the last message: the heartbeat is lost
-    for (LogTimeline* t : {&partial_run, &full_run}) t->Advance(1.0 / 60.0);
+    for (review::LogTimeline* t : {&partial_run, &full_run}) t->Advance(1.0 / 60.0);
     const int64_t now = partial_run.now_utime() + (lost ? 5'000'000 : 0);
     const double fraction = partial_run.position_s() / partial_run.duration_s();
     partial_scene.Update(partial_run.model(), now, fraction);
@@ -80,15 +80,15 @@ bool Says(const StationResult& r, const std::string& what) {
   return false;
 }
 
-fs::path LogWith(const std::string& name, const SyntheticRunOptions& o) {
+fs::path LogWith(const std::string& name, const review::SyntheticRunOptions& o) {
   const fs::path p = fs::path(testing::OutputDir()) / (name + ".lcmlog");
-  WriteSyntheticLog(p, o);
+  review::WriteSyntheticLog(p, o);
   return p;
 }
 
 TEST(Station, KeepsRunningOnAGoodLog) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 3.0;
   const StationResult r = RunOn(LogWith("station_good", o), 3.0);
   // It ran for its three seconds and drew, and found nothing wrong. The
@@ -105,7 +105,7 @@ TEST(Station, KeepsRunningOnAGoodLog) {
 
 TEST(Station, ScreenshotIsTheWindowAsItClosed) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 3.0;
   StationOptions o;
   o.log = LogWith("station_screenshot", run);
@@ -134,9 +134,9 @@ TEST(Station, ScreenshotIsTheWindowAsItClosed) {
 // run_finished event the HUD turns slate, not the lost link's red.
 TEST(Station, HudIsSlateOnceTheRunFinished) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions run;
+  review::SyntheticRunOptions run;
   run.length_m = 3.0;
-  LogTimeline timeline = testing::RunUpTo(run, 6.0);
+  review::LogTimeline timeline = review::testing::RunUpTo(run, 6.0);
   timeline.Seek(timeline.duration_s());
   StationOptions o;
   o.width_px = 640, o.height_px = 360;
@@ -153,12 +153,12 @@ TEST(Station, HudIsSlateOnceTheRunFinished) {
 
 TEST(Station, SaysWhatIsWrongWithBadLogs) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions nan;
+  review::SyntheticRunOptions nan;
   nan.length_m = 2.0;
   nan.nan_grid_at_s = 0.5;
   EXPECT_TRUE(Says(RunOn(LogWith("station_nan", nan)), "PLANTSCALE_GRID"));
 
-  SyntheticRunOptions restart;
+  review::SyntheticRunOptions restart;
   restart.length_m = 4.0;
   restart.restart_at_s = 2.0;
   EXPECT_TRUE(Says(RunOn(LogWith("station_restart", restart)), "restarted"));
@@ -208,10 +208,10 @@ TEST(StationSources, LiveSourceSendsCommandsALogSourceDoesNot) {
   EXPECT_EQ(got->origin.rfind("station@", 0), 0u) << got->origin;
   EXPECT_EQ(got->mac_size, 0);
 
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 2.0;
   const std::filesystem::path log = std::filesystem::temp_directory_path() / ("plantscale_cmd_" + std::to_string(::getpid()) + ".lcmlog");
-  WriteSyntheticLog(log, o);
+  review::WriteSyntheticLog(log, o);
   LogSource replay(log, 1.0);
   EXPECT_NE(replay.SendCommand(plantscale_command_t::COMMAND_PAUSE, 0).find("need a live station"), std::string::npos);
   std::filesystem::remove(log);

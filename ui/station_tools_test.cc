@@ -12,11 +12,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "review/synthetic_run.h"
 #include "ui/golden.h"
 #include "ui/map_annotations.h"
 #include "ui/palette.h"
 #include "ui/station_controller.h"
-#include "ui/synthetic_run.h"
 
 namespace plantscale::ui {
 namespace {
@@ -37,9 +37,9 @@ int PixelsOf(const cv::Mat& image, Rgb colour, int r0 = 0, int r1 = -1) {
   return n;
 }
 
-fs::path Log(const std::string& name, const SyntheticRunOptions& o) {
+fs::path Log(const std::string& name, const review::SyntheticRunOptions& o) {
   const fs::path p = fs::path(testing::OutputDir()) / (name + ".lcmlog");
-  WriteSyntheticLog(p, o);
+  review::WriteSyntheticLog(p, o);
   return p;
 }
 
@@ -72,7 +72,7 @@ class StationTools : public ::testing::Test {
     const Eigen::Vector2d d = scene_->map().DisplayAtField(field);
     controller_->Click(static_cast<int>(std::lround(d.x())), static_cast<int>(std::lround(d.y())));
   }
-  const PlantRecord& PlantInView() {
+  const review::PlantRecord& PlantInView() {
     const double y = source_->model().pose()->y_m;
     for (const auto& [id, r] : source_->model().plants()) {
       // The middle row: clear of the legend along the map's top.
@@ -111,7 +111,7 @@ TEST_F(StationTools, EllipsesShowGoWithLAndGrowWithX) {
 TEST_F(StationTools, PickIsRingedMeasureIsDrawnSeekClearsBoth) {
   const int legend = MapPixels(Draw(), palette::kPick);  // the legend's swatch only
   EXPECT_LE(legend, 121);
-  const PlantRecord& plant = PlantInView();
+  const review::PlantRecord& plant = PlantInView();
   ClickAt(plant.plant.position_m);
   ASSERT_EQ(controller_->picked(), plant.plant.id) << controller_->tool_text();
   cv::Mat image = Draw();
@@ -199,12 +199,12 @@ TEST_F(StationTools, ZoomAndPan) {
 // Without a pose covariance the vehicle's ellipse is the tracker's offset
 // (across) and forward (along) covariance turned into the field frame.
 TEST(VehicleEllipse, TrackerCovarianceTurnedByTheHeading) {
-  RunModel model;
+  review::RunModel model;
   telemetry::Pose pose{0.3, 5.0, 0.5 * M_PI, Eigen::Matrix3d::Zero()};
   EXPECT_FALSE(VehicleCovariance(model, pose).has_value());
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 2.0;
-  LogTimeline run(SyntheticRun(o), "");
+  review::LogTimeline run(review::SyntheticRun(o), "");
   run.Seek(3.0);
   ASSERT_TRUE(run.model().grid().has_value());
   const Eigen::Matrix2d c = run.model().grid()->covariance.topLeftCorner<2, 2>();
@@ -231,9 +231,9 @@ TEST(MapAnnotations, ScaleLengthsAreRound) {
 // bar goes to that metre, a plant's record by a click.
 TEST(StationReview, WholeRunThenAnyMetre) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 30.0;
-  const ReviewRun run = LoadReviewRun(Log("review", o));
+  const review::ReviewRun run = review::LoadReviewRun(Log("review", o));
   ASSERT_FALSE(run.empty);
   EXPECT_TRUE(run.error.empty());
   StationOptions options;
@@ -267,7 +267,7 @@ TEST(StationReview, WholeRunThenAnyMetre) {
   const FieldWindow at = scene.map().view();
   EXPECT_NEAR(0.5 * (at.y0_m + at.y1_m), 0.5 * (whole.y0_m + whole.y1_m), 0.2);
   EXPECT_LT(at.y1_m - at.y0_m, 21.0);
-  const PlantRecord& plant = std::next(run.model->plants().begin(), static_cast<long>(run.model->plants().size() / 2))->second;
+  const review::PlantRecord& plant = std::next(run.model->plants().begin(), static_cast<long>(run.model->plants().size() / 2))->second;
   scene.map().SetWindow(FieldWindow{plant.plant.position_m.y() - 3, plant.plant.position_m.y() + 3, 0.0});
   controller.Frame(0.0);
   const Eigen::Vector2d px = scene.map().DisplayAtField(plant.plant.position_m);
@@ -278,7 +278,7 @@ TEST(StationReview, WholeRunThenAnyMetre) {
 
 // The whole run's bed map alone (plants, grid, ellipses and vehicle
 // hidden), as the view of the whole run draws it.
-cv::Mat RenderWholeRunMap(LogTimeline& run, Canvas& canvas, MapView& view) {
+cv::Mat RenderWholeRunMap(review::LogTimeline& run, Canvas& canvas, MapView& view) {
   view.AddTo(canvas.AddRenderer(0, 0, 1, 1, palette::kBackground));
   for (MapLayerId id : {MapLayerId::kPlants, MapLayerId::kGrid, MapLayerId::kEllipses, MapLayerId::kVehicle}) {
     view.SetVisible(id, false);
@@ -292,9 +292,9 @@ cv::Mat RenderWholeRunMap(LogTimeline& run, Canvas& canvas, MapView& view) {
 // its weeds still show.
 TEST(MapLayerLevels, FarViewDrawsBlocks) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 200.0;
-  LogTimeline run(SyntheticRun(o), "");
+  review::LogTimeline run(review::SyntheticRun(o), "");
   run.Seek(run.duration_s());
   Canvas canvas(800, 200);
   MapView view;
@@ -322,10 +322,10 @@ TEST(MapLayerLevels, FarViewDrawsBlocks) {
 // handful of images (VTK's cost is per image), weeds and soil still seen.
 TEST(MapLayerLevels, KilometreViewDrawsCoarseBlocks) {
   PLANTSCALE_REQUIRE_DISPLAY();
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 700.0;
   o.speed_m_s = 4.0, o.frame_rate_hz = 4.0;  // fewer messages, the same bed
-  LogTimeline run(SyntheticRun(o), "");
+  review::LogTimeline run(review::SyntheticRun(o), "");
   run.Seek(run.duration_s());
   Canvas canvas(800, 200);
   MapView view;
@@ -347,10 +347,10 @@ TEST(MapLayerLevels, KilometreViewDrawsCoarseBlocks) {
 TEST(MapViewFollow, DrawsTheMapThatTrailsTheVehicle) {
   PLANTSCALE_REQUIRE_DISPLAY();
   for (const double lag : {1.0, 2.0, 3.1}) {
-    SyntheticRunOptions o;
+    review::SyntheticRunOptions o;
     o.length_m = 30.0;
     o.map_lag_m = lag;
-    LogTimeline run(SyntheticRun(o), "");
+    review::LogTimeline run(review::SyntheticRun(o), "");
     run.Seek(50.0);  // 25 m at 0.5 m/s
     Canvas canvas(640, 200);
     MapView view;
@@ -374,11 +374,11 @@ TEST(MapViewFollow, DrawsTheMapThatTrailsTheVehicle) {
 }
 
 TEST(LogTimelineStream, FileGivesTheModelOfMemory) {
-  SyntheticRunOptions o;
+  review::SyntheticRunOptions o;
   o.length_m = 8.0;
   const fs::path log = Log("stream", o);
-  LogTimeline file = LogTimeline::Load(log);
-  LogTimeline memory(SyntheticRun(o), "");
+  review::LogTimeline file = review::LogTimeline::Load(log);
+  review::LogTimeline memory(review::SyntheticRun(o), "");
   EXPECT_DOUBLE_EQ(file.duration_s(), memory.duration_s());
   for (const double t : {6.0, 2.0, 14.0}) {  // on, back, on
     file.Seek(t), memory.Seek(t);

@@ -1,10 +1,10 @@
-#include "ui/report_html.h"
+#include "review/report_html.h"
 
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-namespace plantscale::ui {
+namespace plantscale::review {
 namespace {
 
 std::string Fixed(double v, int decimals) {
@@ -315,4 +315,4 @@ std::string ReportJson(const std::string& log_name, const RunSummary& s, const A
   return j.dump(2) + "\n";
 }
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -17,7 +17,7 @@
 #include "engine/common/options.h"
 #include "telemetry/subscriber.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 
 struct RunModelOptions {
   double link_lost_after_s = 2.0;  // heartbeat age that counts as a lost link (2 Hz heartbeat)
@@ -199,4 +199,4 @@ class RunModel {
 // radius that holds `confidence` of a 2-D Gaussian, k² = −2 ln(1 − p).
 double EllipseScale2d(double confidence);
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -1,8 +1,8 @@
-#include "ui/station_timeline.h"
+#include "review/log_timeline.h"
 
 #include <algorithm>
 
-namespace plantscale::ui {
+namespace plantscale::review {
 
 LogTimeline::LogTimeline(std::vector<telemetry::LogEvent> events, std::string error)
     : events_(std::move(events)), count_(events_.size()), error_(std::move(error)) {
@@ -67,4 +67,10 @@ void LogTimeline::Seek(double position_s) {
   FeedUpTo(position_s);
 }
 
-}  // namespace plantscale::ui
+ReviewRun LoadReviewRun(const std::filesystem::path& log) {
+  auto timeline = std::make_shared<LogTimeline>(LogTimeline::Load(log));
+  timeline->Seek(timeline->duration_s());
+  return {std::shared_ptr<const RunModel>(timeline, &timeline->model()), timeline->error(), timeline->empty()};
+}
+
+}  // namespace plantscale::review

@@ -1,4 +1,4 @@
-#include "ui/synthetic_run.h"
+#include "review/synthetic_run.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +15,7 @@
 #include "telemetry/convert.h"
 #include "telemetry/subscriber.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 namespace {
 
 namespace tm = plantscale::telemetry;
@@ -329,4 +329,4 @@ void WriteSyntheticLog(const std::filesystem::path& path, const SyntheticRunOpti
   }
 }
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -5,14 +5,14 @@
 
 #include <cmath>
 
+#include "review/run_model.h"
+#include "review/synthetic_run.h"
+#include "review/test_util.h"
 #include "telemetry/channels.h"
 #include "telemetry/codec.h"
 #include "telemetry/convert.h"
-#include "ui/run_model.h"
-#include "ui/scene_test_util.h"
-#include "ui/synthetic_run.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 namespace {
 
 namespace tm = plantscale::telemetry;
@@ -208,4 +208,4 @@ TEST(RunModel, PlantRegistryKeepsEveryPlantOnce) {
 }
 
 }  // namespace
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -46,12 +46,13 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/common/options.h"
-#include "ui/run_model.h"
+#include "review/run_model.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 
 struct AgronomyOptions {
   double rate_l_ha = 200.0;            // product applied on the treated area, litres per hectare
@@ -158,8 +159,16 @@ AgronomySummary Agronomy(const RunModel& model, const RunSummary& run, const Agr
 void AddPlantFigures(AgronomySummary& a, const std::map<int64_t, PlantRecord>& plants,
                      const AgronomyOptions& options = {});
 
+// Where the stand of a run lies, for the truth to be counted over.
+struct StandWindow {
+  double y0_m = 0.0, y1_m = 0.0;  // along the rows, field frame
+  int first_row = 0, last_row = 0;
+  double row_spacing_m = 0.0;
+  std::vector<std::pair<double, double>> crops_m;  // the crop records (x, y), to register a truth against
+};
+
 // Simulator truth over the same stand (filled by the app, which can rebuild
-// the simulated field from the log's run_config event).
+// the simulated field from the log's run_config event: app/report_truth.h).
 struct AgronomyTruth {
   std::string source;  // e.g. "simulator: preset field, seed 1"
   int crop = 0;
@@ -176,4 +185,4 @@ struct AgronomyTruth {
 // CSV: one line per row and one for the whole run (row = "all").
 std::string AgronomyCsv(const AgronomySummary& a);
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

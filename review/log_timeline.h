@@ -1,6 +1,7 @@
 #pragma once
 // A log played into a subscriber and run model at a chosen speed, with pause
-// and seek. A log file is read as it plays, not held in memory (a 5 km log is
+// and seek (the station's timeline), and a finished run read whole
+// (LoadReviewRun: the station's --review of a log). A log file is read as it plays, not held in memory (a 5 km log is
 // hundreds of MB); Load reads it through once for its time span. Seeking back
 // replays from the start (well under a second for a 100 m run, some seconds
 // for kilometres).
@@ -11,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "review/run_model.h"
 #include "telemetry/log.h"
-#include "ui/run_model.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 
 class LogTimeline {
  public:
@@ -59,4 +60,16 @@ class LogTimeline {
   bool paused_ = false;
 };
 
-}  // namespace plantscale::ui
+// A finished run read whole: the run model of a log fed to its end
+// (streamed, so only the model stays in memory; the timeline that fed it
+// is kept alive by the pointer) and what went wrong reading it.
+struct ReviewRun {
+  std::shared_ptr<const RunModel> model;
+  std::string error;  // the log is cut off or corrupt here (what was read before it is shown)
+  bool empty = true;  // not one whole event
+};
+
+// Throws telemetry::LogError when the log cannot be opened.
+ReviewRun LoadReviewRun(const std::filesystem::path& log);
+
+}  // namespace plantscale::review

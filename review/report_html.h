@@ -7,10 +7,10 @@
 #include <utility>
 #include <vector>
 
-#include "ui/agronomy.h"
-#include "ui/run_model.h"
+#include "review/agronomy.h"
+#include "review/run_model.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 
 struct ReportPictures {
   std::string overview, trace, histogram;  // empty: not drawn
@@ -36,4 +36,4 @@ std::string ReportJson(const std::string& log_name, const RunSummary& summary, c
 // `text` with &, <, > and " escaped.
 std::string HtmlEscape(const std::string& text);
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -1,4 +1,4 @@
-#include "ui/agronomy.h"
+#include "review/agronomy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-namespace plantscale::ui {
+namespace plantscale::review {
 namespace {
 
 namespace tm = plantscale::telemetry;
@@ -430,4 +430,4 @@ std::string AgronomyCsv(const AgronomySummary& a) {
   return out.str();
 }
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -1,4 +1,4 @@
-#include "ui/run_model.h"
+#include "review/run_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include "telemetry/channels.h"
 #include "telemetry/convert.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 namespace {
 
 namespace tm = plantscale::telemetry;
@@ -323,4 +323,4 @@ RunSummary RunModel::Summary() const {
   return s;
 }
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review

@@ -15,7 +15,7 @@
 
 #include "telemetry/log.h"
 
-namespace plantscale::ui {
+namespace plantscale::review {
 
 struct SyntheticRunOptions {
   double length_m = 10.0;
@@ -46,4 +46,4 @@ std::vector<telemetry::LogEvent> SyntheticRun(const SyntheticRunOptions& options
 // Throws telemetry::LogError.
 void WriteSyntheticLog(const std::filesystem::path& path, const SyntheticRunOptions& options);
 
-}  // namespace plantscale::ui
+}  // namespace plantscale::review
