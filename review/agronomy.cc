@@ -8,6 +8,8 @@
 #include <set>
 #include <sstream>
 
+#include <plantscale_lcmtypes/plantscale_plant_t.hpp>
+
 namespace plantscale::review {
 namespace {
 
@@ -330,6 +332,7 @@ void CountWeeds(const std::vector<const PlantRecord*>& weeds, const RowsOfCrops&
       continue;
     }
     ++a.weeds;
+    a.weeds_by_model += w->plant.why == plantscale_plant_t::WHY_LEARNED;
     seen += !UnderACanopy(p, context, o.unseen_canopy_fraction);
     weed_radii.push_back(DiscRadius(*w));
     AddWeedToCells(*w, row_index, o, a);

@@ -121,6 +121,7 @@ struct AgronomySummary {
   SizeStats crop_size;
   int weeds = 0;
   double weeds_per_m2 = 0.0;
+  int weeds_by_model = 0;            // of `weeds`: records the grower's learned model classified (WHY_LEARNED)
   int far_views_of_crops = 0;        // crop-sized weed records beside their crop (above), not in `weeds`
   int crops_recorded_as_weeds = 0;   // weed records filling a gap's place (above), in neither
   std::set<int64_t> weed_records_taken_as_crops;  // ids of both (the bed picture draws them as crops' rings)

@@ -109,6 +109,19 @@ grep -q "segmenter_model_not_loaded" "$work/bad_report/index.html" ||
   fail "the run's report has no segmenter_model_not_loaded event"
 grep -q "corrupt/m.onnx: not loaded" "$work/bad_report/index.html" ||
   fail "the event does not name the model"
+# The shipped model on the vehicle: the report counts the weeds it classified
+# (agronomy.weeds_by_model) and says what it does to the weed count; the run
+# whose model did not load has none.
+"$bin" simulate --preset field --seed 3 --length-m 6 --publish --fast --lcm-url memq:// --quiet \
+  --log "$work/model.lcmlog" --segmenter-model field-grey >"$work/model_sim.out" 2>&1 ||
+  fail "simulate --publish with the shipped model: $(tail -3 "$work/model_sim.out")"
+"$bin" report "$work/model.lcmlog" --out "$work/model_report" >/dev/null 2>&1 || fail "report of the model's run failed"
+by_model() { python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["agronomy"]["weeds_by_model"])' "$1"; }
+n=$(by_model "$work/model_report/summary.json")
+[[ "$n" -gt 0 ]] || fail "the model's run: agronomy.weeds_by_model is $n"
+grep -q "learned model classified $n of the weeds" "$work/model_report/index.html" ||
+  fail "the model's run: the report does not say the model classified $n weeds"
+[[ "$(by_model "$work/bad_report/summary.json")" -eq 0 ]] || fail "a run without a model has weeds_by_model"
 expect 2 '--segmenter-model: no-such-model: no model' -- \
   "$bin" evaluate treatment --preset field --seeds 1 --length-m 2 --segmenter-model no-such-model
 expect 2 'corrupt/m.onnx: segmenter model: not loaded' -- \
