@@ -22,7 +22,7 @@ struct TrainSegmenterRequest {
   std::filesystem::path images;  // photographs (PNG/JPEG), colour or grey
   std::filesystem::path labels;  // NAME.png per photograph NAME.*: 0 soil, 1 crop, 2 weed
   std::filesystem::path out;     // MODEL.onnx (MODEL.json beside it)
-  int epochs = 60;
+  int epochs = 150;
   int64_t seed = 1;
   int input_width_px = 512;  // photographs are resized to this (multiples of 16)
   int input_height_px = 384;
