@@ -133,15 +133,15 @@ void LearnedSegmenter::FromLogits(const cv::Mat& logits, cv::Size size, ClassMap
   // cost 70× the time of 640×480 for 4× the pixels, in fresh pages rather than
   // arithmetic; for the same reason the planes and the maps are written into
   // buffers kept from the previous frame, unless someone else still holds the
-  // maps.
+  // maps (or they are a view into a larger image).
   for (cv::Mat* m : {&maps.classes, &maps.confidence}) {
-    if (m->u != nullptr && m->u->refcount > 1) m->release();
+    if ((m->u != nullptr && m->u->refcount > 1) || !m->isContinuous()) m->release();
   }
   maps.classes.create(size, CV_8UC1);
   maps.confidence.create(size, CV_32FC1);
   const int total = size.width * size.height;
   constexpr int kRun = 8192;  // pixels per run: the buffers stay in L1/L2
-  cv::Mat shifted(kPixelClassCount, kRun, CV_32FC1), e, sum(1, kRun, CV_32FC1), confidence;
+  cv::Mat shifted(kPixelClassCount, kRun, CV_32FC1), e, sum(1, kRun, CV_32FC1);
   float* best = sum.ptr<float>(0);  // holds the largest logit, then Σ exp
   const float* plane[kPixelClassCount];
   for (int c = 0; c < kPixelClassCount; ++c) plane[c] = planes[c].ptr<float>(0);
