@@ -99,13 +99,13 @@ void AgronomyTables(std::ostringstream& out, const AgronomySummary& a, const std
     Row(out, "weeds per m² of the ground seen",
         Fixed(a.weeds_per_m2_seen, 2) + " over the " + Fixed(a.surveyed_area_m2 - a.unseen_canopy_m2, 1) +
             " m² that the crops' canopy leaves in view: the estimate of the band's density (under a canopy "
-            "weeds are unseen, not absent). " +
+            "weeds are unseen, not absent). A lower bound: " +
             (a.weeds_by_model > 0
-                 ? "A lower bound: the grower's learned model classified " + std::to_string(a.weeds_by_model) +
+                 ? "the grower's learned model classified " + std::to_string(a.weeds_by_model) +
                        " of the weeds and splits a weed touching a crop's leaves from it where it sees the weed, "
-                       "but not the smallest; and weeds 1–2 cm across are recorded only when seen in enough frames"
-                 : std::string("A lower bound: a weed touching a crop's leaves is seen as part of that crop, and "
-                               "weeds 1–2 cm across are recorded only when seen in enough frames")));
+                       "but not the smallest;"
+                 : std::string("a weed touching a crop's leaves is seen as part of that crop,")) +
+            " and weeds 1–2 cm across are recorded only when seen in enough frames");
   }
   Row(out, "area treated", a.area_treated_m2 ? Fixed(*a.area_treated_m2, 2) + " m²" : std::string("n/a (no map tiles)"));
   Row(out, "product used", a.product_l ? Fixed(*a.product_l, 3) + " L at " + Fixed(a.rate_l_ha, 0) + " L/ha"

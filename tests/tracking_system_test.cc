@@ -173,9 +173,7 @@ TEST(TrackingSystem, FieldWithCalibrationError) {
 // 0.50): the tracker says so within 10 m of its start, naming the spacing
 // it measured within 10 mm of the truth there; the same field with the
 // right profile says nothing. Short runs (12 m): the check fires on the
-// first metres or not at all. Seed 1 (not yet run; measured on the
-// synthetic bed in tracker_test.cc):
-// docs/results/2026-12-07-row-spacing.md.
+// first metres or not at all. Seed 1: docs/results/2026-12-07-row-spacing.md.
 TrackingEvaluation RowSpacingRun(double true_m, double profile_m, uint64_t seed, int seeds) {
   TrackingEvalOptions o;
   o.sim = LoadSimulatorPreset("field", DefaultConfigDir());

@@ -305,11 +305,9 @@ void GridTracker::NoteLinesInView(const std::vector<geometry::GridPlant>& in_vie
   first += loss_.lines_passed();
   last += loss_.lines_passed();
   if (lines_in_view_ >= 0) {
-    const int changed = std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_);
-    filter_.AddSpacingNoise(changed);
-    if (options_.estimate_spacing) {
-      spacing_check_.AddNoise(options_.spacing_step_sd_m * options_.spacing_step_sd_m * changed);
-    }
+    // The spacing check's prior widens by the walk the filter adds.
+    spacing_check_.AddNoise(
+        filter_.AddSpacingNoise(std::abs(first - first_line_in_view_) + std::abs(last - lines_in_view_)));
   }
   first_line_in_view_ = first;
   lines_in_view_ = last;

@@ -139,11 +139,12 @@ void GridFilter::AddFrameNoise() {
   p_(GridState::kBearing, GridState::kBearing) += std::pow(options_.frame_bearing_sd_rad, 2);
 }
 
-void GridFilter::AddSpacingNoise(int lines_changed) {
-  if (!options_.estimate_spacing || lines_changed <= 0) return;
+double GridFilter::AddSpacingNoise(int lines_changed) {
+  if (!options_.estimate_spacing || lines_changed <= 0) return 0.0;
   const double q = options_.spacing_step_sd_m * options_.spacing_step_sd_m * lines_changed;
   p_(GridState::kRowSpacing, GridState::kRowSpacing) += q;
   p_(GridState::kPlantSpacing, GridState::kPlantSpacing) += q;
+  return q;
 }
 
 void GridFilter::ShiftLines(int k, const GridState& shifted) {

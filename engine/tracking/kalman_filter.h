@@ -69,8 +69,9 @@ class GridFilter {
   // Thesis eq. 4.2: constant process noise per frame.
   void AddFrameNoise();
   // Process noise on r̄ and l̄ for `lines_changed` plant lines entering or
-  // leaving the view (§4.1.2).
-  void AddSpacingNoise(int lines_changed);
+  // leaving the view (§4.1.2); the variance added to each (0 when the
+  // spacings are fixed).
+  double AddSpacingNoise(int lines_changed);
   // The reference moved by k plant lines (grid_model.h's ShiftReference on
   // the state gave `shifted`): eq. 4.8 when l̄ is estimated, 4.7 when not.
   void ShiftLines(int k, const geometry::GridState& shifted);
