@@ -45,6 +45,23 @@ PlantLineReference PlantLines(const sim::Field& field) {
   return r;
 }
 
+TrackingRun::CalibrationEstimate CalibrationOf(const tracking::GridTracker& tracker) {
+  TrackingRun::CalibrationEstimate c;
+  if (!tracker.options().CalibrationStates()) return c;
+  const tracking::TrackerOptions& o = tracker.options();
+  const Eigen::Vector4d prior(o.calibration_pitch_sd_rad, o.calibration_roll_sd_rad,
+                              o.calibration_height_sd_m, o.calibration_focal_sd);
+  const Eigen::Vector4d value = tracker.calibration_estimate();
+  const Eigen::Vector4d sd = tracker.calibration_covariance().diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (int i = 0; i < 4; ++i) {
+    if (prior(i) > 0.0) {  // a state with no prior is not carried
+      c.value(i) = value(i);
+      c.sd(i) = sd(i);
+    }
+  }
+  return c;
+}
+
 // One tracker under test on one run, with its error sums.
 struct Scorer {
   geometry::CameraModel camera;  // the engine's (the vehicle's calibration), not the simulator's
@@ -77,6 +94,7 @@ struct Scorer {
   int init_trials = 0, init_successes = 0;
   int fault_frames = 0, fault_tracking = 0, fault_losses = 0;
   std::vector<RowSpacingEvent> row_spacing_events;
+  TrackingRun::CalibrationEstimate calibration_at_20m;
   double fault_lat2 = 0.0, fault_fwd2 = 0.0;
 
   Scorer(const geometry::CameraOptions& camera_options,
@@ -137,6 +155,9 @@ struct Scorer {
     }
     ScoreFault(frame, was_tracking, est);
     const double past = frame.truth.distance_m - init_distance_m;
+    if (ever_tracked && past >= 20.0 && std::isnan(calibration_at_20m.value(0))) {
+      calibration_at_20m = CalibrationOf(tracker);
+    }
     if (tracker.mode() != tracking::TrackerMode::kTracking) {
       if (ever_tracked && past >= options.settle_m) ScoreLost(est, truth);
       return;
@@ -263,6 +284,8 @@ void Accumulate(const Scorer& s, double driven_m, double estimated_m, TrackingMe
   run.lateral_rmse_m = run_lateral_rmse_or_nan(s);
   run.nees_in_bounds_fraction = s.scored > 0 ? static_cast<double>(s.nees_in) / s.scored : 0.0;
   run.row_spacing_events = s.row_spacing_events;
+  run.calibration_at_20m = s.calibration_at_20m;
+  if (s.ever_tracked) run.calibration_at_end = CalibrationOf(s.tracker);
   m.row_spacing_events += s.row_spacing_events.empty() ? 0 : 1;
   m.runs.push_back(run);
   m.runs_not_started += s.ever_tracked ? 0 : 1;

@@ -94,6 +94,14 @@ struct TrackingRun {
   double lateral_rmse_m = 0.0;  // NaN when no frame was scored
   double nees_in_bounds_fraction = 0.0;
   std::vector<RowSpacingEvent> row_spacing_events;  // ours's, at most one a run
+  // The tracker's calibration states (tilt, roll, height, focal), when it
+  // carries them: the estimate and its sd 20 m after the first start and at
+  // the end of the run. NaN when not carried or not reached.
+  struct CalibrationEstimate {
+    Eigen::Vector4d value = Eigen::Vector4d::Constant(std::nan(""));
+    Eigen::Vector4d sd = Eigen::Vector4d::Constant(std::nan(""));
+  };
+  CalibrationEstimate calibration_at_20m, calibration_at_end;
 };
 
 struct TrackingMetrics {

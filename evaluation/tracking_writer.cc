@@ -26,6 +26,14 @@ nlohmann::json RowSpacingEventsJson(const std::vector<RowSpacingEvent>& events) 
   return out;
 }
 
+nlohmann::json CalibrationEstimateJson(const TrackingRun::CalibrationEstimate& c) {
+  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  return {{"tilt_deg", Finite(c.value(0) * kDeg)},  {"roll_deg", Finite(c.value(1) * kDeg)},
+          {"height_m", Finite(c.value(2))},          {"focal", Finite(c.value(3))},
+          {"tilt_sd_deg", Finite(c.sd(0) * kDeg)},   {"roll_sd_deg", Finite(c.sd(1) * kDeg)},
+          {"height_sd_m", Finite(c.sd(2))},          {"focal_sd", Finite(c.sd(3))}};
+}
+
 nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
   nlohmann::json out = nlohmann::json::array();
   for (const TrackingRun& r : runs) {
@@ -37,7 +45,9 @@ nlohmann::json RunsJson(const std::vector<TrackingRun>& runs) {
                    {"losses", r.losses},
                    {"lateral_rmse_m", Finite(r.lateral_rmse_m)},
                    {"nees_in_bounds_fraction", r.nees_in_bounds_fraction},
-                   {"row_spacing_events", RowSpacingEventsJson(r.row_spacing_events)}});
+                   {"row_spacing_events", RowSpacingEventsJson(r.row_spacing_events)},
+                   {"calibration_estimate_at_20m", CalibrationEstimateJson(r.calibration_at_20m)},
+                   {"calibration_estimate_at_end", CalibrationEstimateJson(r.calibration_at_end)}});
   }
   return out;
 }

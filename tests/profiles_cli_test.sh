@@ -22,6 +22,10 @@ expect 0 '"crop": "cauliflower-6-week"' -- "$plantscale" evaluate tracking "${sh
   --crop "$crop" --vehicle "$vehicle" --calibration-error height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01 --json
 expect 0 '"tilt_deg": 0.5' -- "$plantscale" evaluate tracking "${short[@]}" \
   --crop "$crop" --vehicle "$vehicle" --calibration-error height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01 --json
+# The roll's calibration state, estimated, is reported with an sd below its
+# 0.3° prior (the other states are not carried: null).
+expect 0 '"roll_sd_deg": 0\.[0-2][0-9]*,' -- "$plantscale" evaluate tracking "${short[@]}" \
+  --crop "$crop" --vehicle "$vehicle" --calibration-error height_m=0.01,tilt_deg=0.5,roll_deg=0.3,focal=0.01 --json
 expect 0 '"vehicle": "silsoe-testbed"' -- "$plantscale" evaluate tracking "${short[@]}" --json
 expect 0 '"vehicle": "silsoe"' -- "$plantscale" evaluate treatment --preset treatment --seeds 1 --length-m 3 \
   --crop cauliflower-9-week --vehicle silsoe --json
