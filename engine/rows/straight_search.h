@@ -6,7 +6,8 @@
 // point (4) and the central row, top and confidence (5). The image's bands,
 // their running sums and the s histogram are shared by every step; the
 // buffers are kept from image to image. Internal to engine/rows: RowDetector
-// owns one.
+// owns one. Steps 1–3 are in straight_search.cc, 4–5 in
+// straight_search_fit.cc.
 
 #include <complex>
 #include <opencv2/core.hpp>
