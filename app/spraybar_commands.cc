@@ -38,7 +38,7 @@ int RunSprayBar(const SprayBarArgs& a) {
   if (!(a.tick_hz >= 5 && a.tick_hz <= 1000)) {
     throw ConfigError("command line", "--tick-hz", "must be in [5, 1000]");
   }
-  can::SprayBarOptions options;
+  can::BarLinkOptions options;
   options.num_nozzles = a.nozzles;
   ThrowIfInvalid("spraybar --nozzles", options.Validate());
   PublishArgs endpoint_args;

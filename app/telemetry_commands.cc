@@ -69,7 +69,7 @@ void AddCanOption(CLI::App* cmd, PublishArgs& a) {
 }
 
 SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
-                              const telemetry::can::SprayBarOptions& options) {
+                              const telemetry::can::BarLinkOptions& options) {
   namespace can = telemetry::can;
   SprayBarEndpoint e;
   if (args.can.empty()) return e;
@@ -96,8 +96,8 @@ SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
 namespace {
 
 // The CAN bar has as many nozzles as the treatment scheduler's bar.
-tm::can::SprayBarOptions BarOptionsOfTreatment(int nozzles) {
-  tm::can::SprayBarOptions o;
+tm::can::BarLinkOptions BarOptionsOfTreatment(int nozzles) {
+  tm::can::BarLinkOptions o;
   o.num_nozzles = nozzles;
   return o;
 }

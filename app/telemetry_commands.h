@@ -46,7 +46,7 @@ inline constexpr char kSimulatedBar[] = "simulated";
 // `allow_simulated`.
 // A simulated bar has options.num_nozzles nozzles.
 SprayBarEndpoint OpenSprayBar(const PublishArgs& args, bool allow_simulated,
-                              const telemetry::can::SprayBarOptions& options = {});
+                              const telemetry::can::BarLinkOptions& options = {});
 using vehicle::VehicleHooks;
 // Runs the simulator through the vehicle runner and publishes; prints a
 // summary with the traffic per channel. Returns the exit code. `run` (what

@@ -169,7 +169,7 @@ BENCHMARK(BM_CanCommandEncodeDecode);
 
 void BM_SprayBarTickOverSocketpair(benchmark::State& state) {
   auto [vehicle_end, bar_end] = can::CanFramePipe();
-  can::SprayBar bar(std::move(vehicle_end), can::SprayBarOptions{}, "socketpair");
+  can::SprayBar bar(std::move(vehicle_end), can::BarLinkOptions{}, "socketpair");
   can::SimulatedBar sim(std::move(bar_end), can::SimulatedBarOptions{});
   const auto sink = bar.Sink();
   int64_t utime = 1'000'000'000;

@@ -272,7 +272,7 @@ FaultRunResult RunWithFault(const FaultRunOptions& options) {
   sim::Simulator simulator(so);
 
   // The spray bar over a socketpair, as `simulate --publish --can simulated`.
-  can::SprayBarOptions bar_options;
+  can::BarLinkOptions bar_options;
   bar_options.num_nozzles = treatment::TreatmentOptions{}.scheduler.bar.nozzles;
   auto [vehicle_end, bar_end] = can::CanFramePipe();
   CanSocketSwap can_swap(vehicle_end.get());

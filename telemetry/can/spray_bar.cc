@@ -108,7 +108,7 @@ UniqueFd OpenSocketCan(const std::string& interface, const ProtocolIds& ids) {
   return fd;
 }
 
-OptionErrors SprayBarOptions::Validate() const {
+OptionErrors BarLinkOptions::Validate() const {
   OptionErrors errors = Prefixed("ids", ids.Validate());
   RequireInRange(errors, "num_nozzles", num_nozzles, 1, kMaxNozzles);
   RequirePositive(errors, "heartbeat_timeout_s", heartbeat_timeout_s);
@@ -118,7 +118,7 @@ OptionErrors SprayBarOptions::Validate() const {
   return errors;
 }
 
-SprayBar::SprayBar(UniqueFd fd, const SprayBarOptions& options, std::string endpoint)
+SprayBar::SprayBar(UniqueFd fd, const BarLinkOptions& options, std::string endpoint)
     : fd_(std::move(fd)), options_(options), endpoint_(std::move(endpoint)) {
   ThrowIfInvalid("spray bar options", options_.Validate());
   PLANTSCALE_CHECK(fd_.get() >= 0, "spray bar needs an open file descriptor");
@@ -131,7 +131,7 @@ SprayBar::SprayBar(UniqueFd fd, const SprayBarOptions& options, std::string endp
   trouble_ = status_.reasons.front();
 }
 
-SprayBar SprayBar::Open(const std::string& interface, const SprayBarOptions& options) {
+SprayBar SprayBar::Open(const std::string& interface, const BarLinkOptions& options) {
   ThrowIfInvalid("spray bar options", options.Validate());
   return SprayBar(OpenSocketCan(interface, options.ids), options, interface);
 }

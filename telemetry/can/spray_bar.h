@@ -59,7 +59,12 @@ std::pair<UniqueFd, UniqueFd> CanFramePipe();
 // kernel (EAFNOSUPPORT), not a CAN interface.
 UniqueFd OpenSocketCan(const std::string& interface, const ProtocolIds& ids);
 
-struct SprayBarOptions {
+// The CAN link to the bar: how many nozzles it drives and its timing. Where
+// the nozzles stand is the vehicle's bar geometry
+// (treatment::SprayBarOptions, the vehicle profile's `nozzles`), whose count
+// the process copies here (app/telemetry_commands.cc); 8 is the `spraybar`
+// command's bench bar.
+struct BarLinkOptions {
   int num_nozzles = 8;  // 1 .. kMaxNozzles (64); more than 32: two command frames per tick
   ProtocolIds ids;
   double heartbeat_timeout_s = 0.25;  // bar silent longer: fail-safe (bar sends every 50 ms)
@@ -92,9 +97,9 @@ struct SprayBarStatus {
 class SprayBar {
  public:
   // `endpoint` names the fd in messages ("can0", "socketpair").
-  SprayBar(UniqueFd fd, const SprayBarOptions& options, std::string endpoint);
+  SprayBar(UniqueFd fd, const BarLinkOptions& options, std::string endpoint);
   // The product path: OpenSocketCan(interface) then the constructor above.
-  static SprayBar Open(const std::string& interface, const SprayBarOptions& options);
+  static SprayBar Open(const std::string& interface, const BarLinkOptions& options);
 
   SprayBar(SprayBar&&) = default;
 
@@ -113,7 +118,7 @@ class SprayBar {
 
   const SprayBarStatus& status() const { return status_; }
   const std::string& endpoint() const { return endpoint_; }
-  const SprayBarOptions& options() const { return options_; }
+  const BarLinkOptions& options() const { return options_; }
   // For the heartbeat (PLANTSCALE_HEALTH faults): fail-safe reasons and
   // faulty nozzles, one line each, prefixed "spray bar <endpoint>: ".
   std::vector<std::string> HealthFaults() const;
@@ -137,7 +142,7 @@ class SprayBar {
   uint64_t FaultyMask() const;
 
   UniqueFd fd_;
-  SprayBarOptions options_;
+  BarLinkOptions options_;
   std::string endpoint_;
   SprayBarStatus status_;
   std::deque<Outstanding> outstanding_;

@@ -128,7 +128,7 @@ TEST_F(SprayBarTest, SilentBarTimesOutAndNozzlesAreCommandedClosed) {
 TEST_F(SprayBarTest, HeartbeatTimeoutAloneClosesAtOnceThenRecovers) {
   ASSERT_GT(TicksUntilReady(0), 0);
   // Open with a long hold so that the closing is the vehicle's, not the bar's.
-  SprayBarOptions o;
+  BarLinkOptions o;
   o.hold_s = 5.0;
   auto [vehicle, bar] = CanFramePipe();
   vehicle_ = std::make_unique<SprayBar>(std::move(vehicle), o, "socketpair");
@@ -261,7 +261,7 @@ TEST_F(SprayBarTest, AcknowledgementOfTheWrongSectionFailsSafe) {
 
 TEST(SprayBar64Test, SixtyFourNozzlesTakeTwoFramesPerTickWithFaultsInBothSections) {
   auto [vehicle_end, bar_end] = CanFramePipe();
-  SprayBarOptions o;
+  BarLinkOptions o;
   o.num_nozzles = 64;
   SprayBar bar(std::move(vehicle_end), o, "socketpair");
   SimulatedBarOptions so;
@@ -373,7 +373,7 @@ TEST_F(SprayBarTest, SinkDrivesTheBarLikeTheScheduler) {
 
 TEST(SprayBarOpenTest, InterfaceThatDoesNotExistIsAClearError) {
   try {
-    SprayBar::Open("nosuchcan0", SprayBarOptions{});
+    SprayBar::Open("nosuchcan0", BarLinkOptions{});
     FAIL() << "opened a CAN interface that does not exist";
   } catch (const CanError& e) {
     EXPECT_THAT(std::string(e.what()),
@@ -421,10 +421,10 @@ TEST(SprayBarOpenTest, BadInterfaceNamesAndOptions) {
         }
       },
       CanError);
-  SprayBarOptions o;
+  BarLinkOptions o;
   o.num_nozzles = 65;
   EXPECT_THROW(SprayBar::Open("can0", o), InvalidOptionsError);
-  o = SprayBarOptions{};
+  o = BarLinkOptions{};
   o.ids.base_id = 0x214;
   EXPECT_THROW(SprayBar::Open("can0", o), InvalidOptionsError);
 }

@@ -20,7 +20,7 @@ class BarPairTest : public ::testing::Test {
  protected:
   BarPairTest() {
     auto [vehicle, bar] = CanFramePipe();
-    vehicle_ = std::make_unique<SprayBar>(std::move(vehicle), SprayBarOptions{}, "socketpair");
+    vehicle_ = std::make_unique<SprayBar>(std::move(vehicle), BarLinkOptions{}, "socketpair");
     sim_ = std::make_unique<SimulatedBar>(std::move(bar), SimulatedBarOptions{});
   }
   // One scheduler tick: command, the bar answers, the vehicle reads.

@@ -62,7 +62,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 3) return 0;
   can::ProtocolIds ids;
   ids.base_id = static_cast<uint32_t>(((data[0] | (data[1] << 8)) % 256) * 8);
-  can::SprayBarOptions options;
+  can::BarLinkOptions options;
   options.ids = ids;
   options.num_nozzles = 1 + data[2] % can::kMaxNozzles;
   auto [vehicle_fd, bar_fd] = can::CanFramePipe();
