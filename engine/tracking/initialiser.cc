@@ -26,6 +26,10 @@ OptionErrors InitialiserOptions::Validate() const {
   RequireInRange(e, "min_phase_coherence", min_phase_coherence, 0.0, 1.0);
   if (min_features < 2) e.push_back({"min_features", "must be >= 2"});
   if (confirm_frames < 1) e.push_back({"confirm_frames", "must be >= 1"});
+  RequireInRange(e, "band_min_elongation", band_min_elongation, 1.0, 1e3);
+  RequirePositive(e, "band_min_length_m", band_min_length_m);
+  RequireInRange(e, "closed_canopy_fraction", closed_canopy_fraction, 0.0, 1.0);
+  RequireInRange(e, "band_bearing_window_rad", band_bearing_window_rad, 0.0, 0.5, false);
   RequirePositive(e, "confirm_offset_m", confirm_offset_m);
   RequirePositive(e, "confirm_bearing_rad", confirm_bearing_rad);
   RequirePositive(e, "confirm_forward_m", confirm_forward_m);
@@ -37,9 +41,23 @@ OptionErrors InitialiserOptions::Validate() const {
 
 namespace {
 
-bool Usable(const Feature& f, const InitialiserOptions& o) {
-  return !f.clipped && std::isfinite(f.ground_m.x()) && std::isfinite(f.ground_m.y()) &&
-         f.ground_m.y() > 0.0 && f.ground_m.y() <= o.max_range_m && f.area_m2 > 0.0;
+bool InRange(const Feature& f, const InitialiserOptions& o) {
+  return std::isfinite(f.ground_m.x()) && std::isfinite(f.ground_m.y()) && f.ground_m.y() > 0.0 &&
+         f.ground_m.y() <= o.max_range_m && f.area_m2 > 0.0;
+}
+
+bool Usable(const Feature& f, const InitialiserOptions& o) { return !f.clipped && InRange(f, o); }
+
+// Plants touching along a row, one blob (cut by the border or not).
+bool Band(const Feature& f, const InitialiserOptions& o) {
+  return InRange(f, o) && f.elongation >= o.band_min_elongation &&
+         f.axis_m.norm() >= o.band_min_length_m && std::abs(f.axis_m.y()) > 0.0;
+}
+
+// A band's bearing: its axis's angle from the forward axis, in (−π/2, π/2).
+double BandBearing(const Feature& f) {
+  const Eigen::Vector2d a = f.axis_m.y() < 0.0 ? Eigen::Vector2d(-f.axis_m) : f.axis_m;
+  return std::atan2(a.x(), a.y());
 }
 
 double Weight(const Feature& f, const InitialiserOptions& o) {
@@ -61,15 +79,58 @@ struct OnRow {
   int n = 0;
   double along_m = 0.0;
 };
+// Which features a step takes: those seen whole (the thesis's), or on a
+// closed canopy the bands too (the rows) or the plants seen apart only
+// (the phase: a band has none).
+enum class Take { kWhole, kWholeAndBands, kApart };
+
+bool Taken(const Feature& f, const InitialiserOptions& o, Take take) {
+  switch (take) {
+    case Take::kWhole: return Usable(f, o);
+    case Take::kWholeAndBands: return Usable(f, o) || Band(f, o);
+    case Take::kApart: return Usable(f, o) && !Band(f, o);
+  }
+  return false;
+}
+
 std::optional<OnRow> FeatureOnRow(const Feature& f, double offset_m, double bearing_rad, double r,
-                                  int rows_each_side, const InitialiserOptions& o) {
-  if (!Usable(f, o)) return std::nullopt;
+                                  int rows_each_side, const InitialiserOptions& o,
+                                  Take take = Take::kWhole) {
+  if (!Taken(f, o, take)) return std::nullopt;
   const Eigen::Vector2d g = GridCoordinates(f.ground_m, offset_m, bearing_rad);
   const double n = std::round(g.x() / r);
   if (std::abs(n) > rows_each_side || std::abs(g.x() - n * r) > o.row_halfwidth_fraction * r) {
     return std::nullopt;
   }
   return OnRow{static_cast<int>(n), g.y()};
+}
+
+}  // namespace
+
+namespace {
+
+// The bands' share of the plant matter in range, and their area-weighted
+// bearing (a doubled-angle mean: an axis has no sign).
+struct Bands {
+  bool closed = false;
+  double bearing_rad = 0.0;
+};
+Bands BandsOf(std::span<const Feature> features, const InitialiserOptions& o) {
+  double band_area = 0.0, apart_area = 0.0, c = 0.0, s = 0.0;
+  for (const Feature& f : features) {
+    if (Band(f, o)) {
+      band_area += f.area_m2;
+      const double psi = BandBearing(f);
+      c += f.area_m2 * std::cos(2.0 * psi);
+      s += f.area_m2 * std::sin(2.0 * psi);
+    } else if (Usable(f, o)) {
+      apart_area += f.area_m2;
+    }
+  }
+  Bands b;
+  b.closed = band_area > 0.0 && band_area > o.closed_canopy_fraction * (band_area + apart_area);
+  if (b.closed) b.bearing_rad = 0.5 * std::atan2(s, c);
+  return b;
 }
 
 }  // namespace
@@ -82,16 +143,19 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
   const int half_offset = n_offset / 2;
   const int half_bearing = n_bearing / 2;
   constexpr int kSpread = 3;  // triangular vote over ± this many offset bins
+  const Bands bands = BandsOf(features, o);
+  const Take take = bands.closed ? Take::kWholeAndBands : Take::kWhole;
   std::vector<double> acc(static_cast<size_t>(n_bearing) * n_offset, 0.0);
   double total = 0.0;
   int usable = 0;
   for (const Feature& f : features) {
-    if (!Usable(f, o)) continue;
+    if (!Taken(f, o, take)) continue;
     ++usable;
     const double w = Weight(f, o);
     total += w;
     for (int b = 0; b < n_bearing; ++b) {
       const double psi = (b - half_bearing) * o.bearing_step_rad;
+      if (bands.closed && std::abs(psi - bands.bearing_rad) > o.band_bearing_window_rad) continue;
       const double base = f.ground_m.x() - f.ground_m.y() * std::tan(psi);
       const double row_step = r / std::cos(psi);
       // The row comb shared with the image-plane detector (engine/rows).
@@ -104,18 +168,20 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
   const auto best = std::max_element(acc.begin(), acc.end());
   const size_t index = static_cast<size_t>(best - acc.begin());
   RowFit fit;
+  fit.closed_canopy = bands.closed;
   fit.bearing_rad = (static_cast<int>(index / n_offset) - half_bearing) * o.bearing_step_rad;
   fit.offset_m = (static_cast<int>(index % n_offset) - half_offset) * o.offset_step_m;
 
   // Weighted least squares on the features near the winning rows:
-  //   x − n r̄ / cos Ψ = t_x + y tan Ψ.
+  //   x − n r̄ / cos Ψ = t_x + y tan Ψ;
+  // on a closed canopy Ψ is the bands' on those rows, and t_x alone is fitted.
   for (int iteration = 0; iteration < 3; ++iteration) {
     Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
     Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    double on_rows = 0.0;
+    double on_rows = 0.0, c2 = 0.0, s2 = 0.0;
     int count = 0;
     for (const Feature& f : features) {
-      const auto on = FeatureOnRow(f, fit.offset_m, fit.bearing_rad, r, rows_each_side, o);
+      const auto on = FeatureOnRow(f, fit.offset_m, fit.bearing_rad, r, rows_each_side, o, take);
       if (!on) continue;
       const double w = Weight(f, o);
       const double lhs = f.ground_m.x() - on->n * r / std::cos(fit.bearing_rad);
@@ -124,9 +190,19 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
       b += w * lhs * row;
       on_rows += w;
       ++count;
+      if (bands.closed && Band(f, o)) {
+        c2 += f.area_m2 * std::cos(2.0 * BandBearing(f));
+        s2 += f.area_m2 * std::sin(2.0 * BandBearing(f));
+      }
     }
     fit.support = on_rows / total;
     fit.features_on_rows = count;
+    if (bands.closed) {
+      if (count < 1 || !(on_rows > 0.0)) break;
+      if (c2 != 0.0 || s2 != 0.0) fit.bearing_rad = 0.5 * std::atan2(s2, c2);
+      fit.offset_m = (b(0) - std::tan(fit.bearing_rad) * a(0, 1)) / a(0, 0);
+      continue;
+    }
     if (count < 2 || std::abs(a.determinant()) < 1e-12) break;
     const Eigen::Vector2d solution = a.ldlt().solve(b);
     fit.offset_m = solution(0);
@@ -142,7 +218,8 @@ std::optional<LinePhase> PlantLinePhaseOnGround(std::span<const Feature> feature
   std::complex<double> sum(0.0, 0.0);
   double total = 0.0;
   for (const Feature& f : features) {
-    const auto on = FeatureOnRow(f, rows.offset_m, rows.bearing_rad, r, rows_each_side, o);
+    const auto on = FeatureOnRow(f, rows.offset_m, rows.bearing_rad, r, rows_each_side, o,
+                                 rows.closed_canopy ? Take::kApart : Take::kWhole);
     if (!on) continue;
     const double w = Weight(f, o);
     sum += w * std::polar(1.0, -2.0 * std::numbers::pi * on->along_m / l);

@@ -32,6 +32,21 @@ struct InitialiserOptions {
   double min_row_support = 0.45;        // fraction of the vote weight on the rows
   double min_phase_coherence = 0.35;    // |Σ w e^{-iθ}| / Σ w along the rows
   int min_features = 4;
+  // A closed canopy: plants touching along a row are segmented as one long
+  // blob (a band: elongation ≥ band_min_elongation, its 2σ axis at least
+  // band_min_length_m on the ground), often cut by the image's border. The
+  // Hough of centroids leaves cut blobs out and reads a band as one point,
+  // so on a closed canopy the few plants seen apart decide the bearing
+  // alone, and a wrong one holds (the `treatment` preset: starts 4–14° off).
+  // When bands hold more than closed_canopy_fraction of the plant matter in
+  // range, the rows' bearing is the bands' own (their axes, area-weighted),
+  // the Hough searches only band_bearing_window_rad about it with the
+  // bands' centroids voting too, and the offset is fitted at that bearing.
+  // The phase along the rows still comes from the plants seen apart.
+  double band_min_elongation = 3.0;
+  double band_min_length_m = 0.3;
+  double closed_canopy_fraction = 0.5;
+  double band_bearing_window_rad = 0.035;  // ±2°
   int confirm_frames = 3;               // consecutive agreeing frames to accept
   double confirm_offset_m = 0.03;
   double confirm_bearing_rad = 0.026;   // 1.5°
@@ -49,6 +64,7 @@ struct RowFit {
   double bearing_rad = 0.0;  // Ψ
   double support = 0.0;    // fraction of the vote weight within the rows
   int features_on_rows = 0;
+  bool closed_canopy = false;  // the bearing is the bands' (InitialiserOptions)
 };
 
 // Hough + least squares: the rows n = −k..k of spacing r̄ through the features.
