@@ -175,66 +175,54 @@ void ForwardTerm(int) {
   if (g_optimiser_pid > 0) ::kill(static_cast<pid_t>(g_optimiser_pid), SIGTERM);
 }
 
-// Runs the optimiser, drawing its progress; Ctrl-C reaches it (it keeps the
-// best model so far) while this process waits for it, and SIGTERM is passed
-// on to it (ForwardTerm).
-OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::path& err_file, bool progress,
-                             std::ostream& log) {
-  // glibc returns freed blocks over 128 kB to the kernel at once; PyTorch
-  // frees and takes back its activations every step, and each fresh page is a
-  // fault (costly in a virtual machine: half the optimiser's time went to the
-  // kernel). Kept by the allocator instead, an epoch took 13 s instead of 65 s
-  // (field-grey's 111 frames, 2 cores); the figures are the same. A caller's
-  // own MALLOC_* settings win.
-  std::vector<std::string> env_strings;
-  for (char** e = environ; *e != nullptr; ++e) env_strings.emplace_back(*e);
+// glibc returns freed blocks over 128 kB to the kernel at once; PyTorch
+// frees and takes back its activations every step, and each fresh page is a
+// fault (costly in a virtual machine: half the optimiser's time went to the
+// kernel). Kept by the allocator instead, an epoch took 13 s instead of 65 s
+// (field-grey's 111 frames, 2 cores); the figures are the same. A caller's
+// own MALLOC_* settings win.
+std::vector<std::string> OptimiserEnvironment() {
+  std::vector<std::string> env;
+  for (char** e = environ; *e != nullptr; ++e) env.emplace_back(*e);
   for (const char* setting : {"MALLOC_MMAP_THRESHOLD_=4294967296", "MALLOC_TRIM_THRESHOLD_=17179869184",
                               "MALLOC_TOP_PAD_=268435456"}) {
     const std::string name = std::string(setting).substr(0, std::string(setting).find('=') + 1);
-    if (std::none_of(env_strings.begin(), env_strings.end(),
-                     [&](const std::string& v) { return v.rfind(name, 0) == 0; })) {
-      env_strings.emplace_back(setting);
+    if (std::none_of(env.begin(), env.end(), [&](const std::string& v) { return v.rfind(name, 0) == 0; })) {
+      env.emplace_back(setting);
     }
   }
+  return env;
+}
+
+// The optimiser as a child writing its events to `out_fd` and its stderr to
+// err_file; it stops when this process dies. Returns its pid.
+pid_t SpawnOptimiser(const std::vector<std::string>& argv, std::vector<std::string> env,
+                     const fs::path& err_file, int out_fd, int close_fd) {
   std::vector<char*> envp;
-  for (std::string& v : env_strings) envp.push_back(v.data());
+  for (std::string& v : env) envp.push_back(v.data());
   envp.push_back(nullptr);
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  int fds[2];
-  if (::pipe(fds) != 0) throw std::runtime_error("cannot make a pipe for the optimiser");
-  struct sigaction ignore {}, old_int{};
-  ignore.sa_handler = SIG_IGN;
-  ::sigaction(SIGINT, &ignore, &old_int);
   const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::sigaction(SIGINT, &old_int, nullptr);
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw std::runtime_error("cannot start the optimiser (fork failed)");
-  }
-  if (pid == 0) {
-    ::signal(SIGINT, SIG_DFL);
-    ::signal(SIGTERM, SIG_DFL);
-    ::prctl(PR_SET_PDEATHSIG, SIGTERM);  // this process killed: the optimiser stops too
-    ::dup2(fds[1], STDOUT_FILENO);
-    const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    if (err >= 0) ::dup2(err, STDERR_FILENO);
-    ::close(fds[0]);
-    ::close(fds[1]);
-    ::execve(args[0], args.data(), envp.data());
-    ::_exit(127);
-  }
-  g_optimiser_pid = pid;
-  struct sigaction forward {}, old_term{};
-  forward.sa_handler = ForwardTerm;
-  forward.sa_flags = SA_RESTART;
-  ::sigaction(SIGTERM, &forward, &old_term);
-  ::close(fds[1]);
-  OptimiserResult r;
+  if (pid != 0) return pid;
+  ::signal(SIGINT, SIG_DFL);
+  ::signal(SIGTERM, SIG_DFL);
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);  // this process killed: the optimiser stops too
+  ::dup2(out_fd, STDOUT_FILENO);
+  const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  if (err >= 0) ::dup2(err, STDERR_FILENO);
+  ::close(close_fd);
+  ::close(out_fd);
+  ::execve(args[0], args.data(), envp.data());
+  ::_exit(127);
+}
+
+// The optimiser's JSON events, one a line, until it closes its end: the
+// start and done events kept, each epoch drawn when `progress`.
+void ReadOptimiserEvents(int fd, bool progress, OptimiserResult& r, std::ostream& log) {
   const bool tty = ::isatty(STDERR_FILENO) != 0;
-  FILE* in = ::fdopen(fds[0], "r");
+  FILE* in = ::fdopen(fd, "r");
   char* buf = nullptr;
   size_t cap = 0;
   bool drawn = false;
@@ -251,19 +239,52 @@ OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::pat
   }
   std::free(buf);
   if (in != nullptr) std::fclose(in);
+  if (drawn && tty) log << '\n';
+}
+
+// The last lines of the optimiser's stderr, for the error message.
+std::string TailOf(const fs::path& file, size_t count) {
+  std::ifstream err(file);
+  std::string line, tail;
+  std::vector<std::string> lines;
+  while (std::getline(err, line)) lines.push_back(line);
+  for (size_t i = lines.size() > count ? lines.size() - count : 0; i < lines.size(); ++i) tail += lines[i] + "\n";
+  return tail;
+}
+
+// Runs the optimiser, drawing its progress; Ctrl-C reaches it (it keeps the
+// best model so far) while this process waits for it, and SIGTERM is passed
+// on to it (ForwardTerm).
+OptimiserResult RunOptimiser(const std::vector<std::string>& argv, const fs::path& err_file, bool progress,
+                             std::ostream& log) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error("cannot make a pipe for the optimiser");
+  struct sigaction ignore {}, old_int{};
+  ignore.sa_handler = SIG_IGN;
+  ::sigaction(SIGINT, &ignore, &old_int);
+  const pid_t pid = SpawnOptimiser(argv, OptimiserEnvironment(), err_file, fds[1], fds[0]);
+  if (pid < 0) {
+    ::sigaction(SIGINT, &old_int, nullptr);
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw std::runtime_error("cannot start the optimiser (fork failed)");
+  }
+  g_optimiser_pid = pid;
+  struct sigaction forward {}, old_term{};
+  forward.sa_handler = ForwardTerm;
+  forward.sa_flags = SA_RESTART;
+  ::sigaction(SIGTERM, &forward, &old_term);
+  ::close(fds[1]);
+  OptimiserResult r;
+  ReadOptimiserEvents(fds[0], progress, r, log);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   ::sigaction(SIGINT, &old_int, nullptr);
   ::sigaction(SIGTERM, &old_term, nullptr);
   g_optimiser_pid = 0;
-  if (drawn && tty) log << '\n';
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::ifstream err(err_file);
-  std::string line;
-  std::vector<std::string> lines;
-  while (std::getline(err, line)) lines.push_back(line);
-  for (size_t i = lines.size() > 8 ? lines.size() - 8 : 0; i < lines.size(); ++i) r.stderr_tail += lines[i] + "\n";
+  r.stderr_tail = TailOf(err_file, 8);
   return r;
 }
 

@@ -35,10 +35,7 @@ double Mean(const std::vector<double>& v) {
 // The size rule's class image for every θ of the ladder at once: the
 // components of the plant mask with their areas.
 void SizeRule(const cv::Mat& image, const cv::Mat& label, std::vector<std::vector<int64_t>>& counts) {
-  SegmentPhotosRequest r;
-  cv::Mat input;
-  vision::Segmenter segmenter(PhotoSegmenterOptions(r, image, input));
-  const cv::Mat mask = segmenter.Process(input).mask;
+  const cv::Mat mask = PlantMaskOfPhoto(image);
   cv::Mat components, stats, centroids;
   const int n = cv::connectedComponentsWithStats(mask, components, stats, centroids, 8, CV_32S);
   const double total = static_cast<double>(image.total());

@@ -21,9 +21,7 @@ rows::RowDetection DetectRowsInPhoto(const cv::Mat& image, rows::RowDetector& de
     const cv::Mat crop = model->Classify(image).classes == static_cast<int>(vision::PixelClass::kCrop);
     return detector.Detect(crop);
   }
-  cv::Mat input;
-  vision::Segmenter segmenter(PhotoSegmenterOptions(SegmentPhotosRequest{}, image, input));
-  return detector.Detect(segmenter.Process(input).mask);
+  return detector.Detect(PlantMaskOfPhoto(image));
 }
 
 OptionErrors RowsEvalOptions::Validate() const {

@@ -40,9 +40,7 @@ cv::Mat LineMask(const fs::path& file, cv::Size size, int reach_px) {
 }
 
 cv::Mat WeakLabel(const cv::Mat& image, const cv::Mat& lines) {
-  cv::Mat input;
-  vision::Segmenter segmenter(app::PhotoSegmenterOptions(app::SegmentPhotosRequest{}, image, input));
-  const cv::Mat plant = segmenter.Process(input).mask;
+  const cv::Mat plant = app::PlantMaskOfPhoto(image);
   cv::Mat parts;
   const int n = cv::connectedComponents(plant, parts, 8, CV_32S);
   std::vector<uint8_t> on_line(static_cast<size_t>(n), 0);

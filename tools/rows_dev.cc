@@ -148,9 +148,7 @@ int main(int argc, char** argv) {
     try {
       const cv::Mat image = app::ReadImage(file);
       const auto t0 = std::chrono::steady_clock::now();
-      cv::Mat input;
-      vision::Segmenter segmenter(app::PhotoSegmenterOptions(app::SegmentPhotosRequest{}, image, input));
-      const cv::Mat mask = segmenter.Process(input).mask;
+      const cv::Mat mask = app::PlantMaskOfPhoto(image);
       const rows::RowDetection det = detector.Detect(mask);
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ++n;

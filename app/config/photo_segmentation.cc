@@ -162,6 +162,12 @@ void SegmentOne(const SegmentPhotosRequest& r, const fs::path& file) {
 
 }  // namespace
 
+cv::Mat PlantMaskOfPhoto(const cv::Mat& image, const SegmentPhotosRequest& request) {
+  cv::Mat input;
+  vision::Segmenter segmenter(PhotoSegmenterOptions(request, image, input));
+  return segmenter.Process(input).mask;  // shares the buffer the segmenter leaves
+}
+
 std::vector<fs::path> CollectImages(const std::vector<fs::path>& inputs,
                                     std::vector<std::string>& errors) {
   std::vector<fs::path> files;

@@ -71,6 +71,11 @@ bool IsGreyInColour(const cv::Mat& bgr);
 vision::SegmenterOptions PhotoSegmenterOptions(const SegmentPhotosRequest& request,
                                                const cv::Mat& image, cv::Mat& input);
 
+// The plant mask `plantscale segment` writes for this photograph (255:
+// plant), with the request's method (the default: excess green on colour,
+// the grey method on NIR). Throws DataError as PhotoSegmenterOptions.
+cv::Mat PlantMaskOfPhoto(const cv::Mat& image, const SegmentPhotosRequest& request = {});
+
 // Throws DataError when request.model cannot be loaded (before any image).
 SegmentPhotosResult SegmentPhotos(const SegmentPhotosRequest& request, std::ostream& log);
 
