@@ -26,6 +26,7 @@ using telemetry::FilterMode;
 struct Collected {
   std::optional<std::string> run_config;
   int station_commands = 0;  // applied "command" events (pause, start, mode)
+  std::vector<LogEvaluation::Said> row_spacing_events;
   std::vector<telemetry::GridEstimate> grid;
   std::map<int, geometry::GridState> truth;  // by frame index
   std::vector<treatment::FieldPose> poses;   // true vehicle pose per frame
@@ -46,6 +47,7 @@ void Take(const telemetry::LogEvent& e, Collected& c, LogMessages& n) {
     const auto m = DecodeOrThrow<plantscale_event_t>(e);
     if (m.kind == "run_config" && !c.run_config) c.run_config = m.text;
     c.station_commands += m.kind == "command";
+    if (m.kind == "row_spacing_mismatch") c.row_spacing_events.push_back({m.utime, m.text});
   } else if (e.channel == ch::kGrid) {
     c.grid.push_back(telemetry::FromLcm(DecodeOrThrow<plantscale_grid_state_t>(e)));
     ++n.grid;
@@ -305,6 +307,8 @@ LogEvaluation EvaluateLog(const LogEvalOptions& options) {
   result.messages.shots = static_cast<int>(c.shots.size());
   result.treatment = ScoreTreatment(c, simulator, result);
   result.tracking = ScoreTracking(c, simulator.options().vehicle, options, result);
+  result.row_spacing_events = c.row_spacing_events;
+  result.tracking.row_spacing_events = c.row_spacing_events.empty() ? 0 : 1;  // runs with one
   return result;
 }
 

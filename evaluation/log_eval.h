@@ -62,6 +62,13 @@ struct LogEvaluation {
   TrackingMetrics tracking;
   LogMessages messages;
   std::vector<std::string> problems;  // a log cut off, undecodable messages
+  // The vehicle's row_spacing_mismatch events (the bed's row spacing against
+  // the crop profile's, at most one a run): when and what it said.
+  struct Said {
+    int64_t utime = 0;
+    std::string text;
+  };
+  std::vector<Said> row_spacing_events;
 };
 
 // The keys of evaluate treatment's metrics a log cannot give (MetricsJson

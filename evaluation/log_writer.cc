@@ -12,6 +12,10 @@ nlohmann::json ToJson(const LogEvaluation& e) {
   nlohmann::json treatment = MetricsJson(e.treatment);
   for (const std::string& key : TreatmentKeysNotInLogs()) treatment[key] = nullptr;
   const LogMessages& n = e.messages;
+  nlohmann::json spacing = nlohmann::json::array();
+  for (const LogEvaluation::Said& said : e.row_spacing_events) {
+    spacing.push_back({{"utime", said.utime}, {"text", said.text}});
+  }
   return {{"log", e.log},
           {"preset", e.run.preset},
           {"seed", e.run.seed},
@@ -29,6 +33,7 @@ nlohmann::json ToJson(const LogEvaluation& e) {
             {"shots", n.shots},
             {"grid_without_truth", n.grid_without_truth},
             {"undecodable", n.undecodable}}},
+          {"row_spacing_events", spacing},
           {"problems", e.problems}};
 }
 
@@ -60,6 +65,7 @@ void WriteTable(const LogEvaluation& e, std::ostream& out) {
   out << "  frames scored " << k.frames << " of " << k.frames_tracking << " tracked, losses "
       << k.losses << ", initialised on the right grid: " << (k.init_success_rate > 0 ? "yes" : "no")
       << '\n';
+  for (const LogEvaluation::Said& said : e.row_spacing_events) out << "  the vehicle said: " << said.text << '\n';
 }
 
 }  // namespace plantscale::app

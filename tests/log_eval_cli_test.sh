@@ -23,6 +23,15 @@ for key in '"log"' '"preset": "field"' '"seed": 11' '"distance_m"' '"treatment"'
   grep -q -- "$key" "$work/log.json" || fail "log.json lacks $key"
 done
 expect 0 "placement RMS along +[0-9.]+ mm" -- "$plantscale" evaluate log "$log"
+grep -q -- '"row_spacing_events": \[\]' "$work/log.json" || fail "the right profile's log has row spacing events"
+# A crop profile 55 mm narrower than the bed: the vehicle said so within 12 m,
+# and the log's evaluation repeats it.
+sed 's/^row_spacing_m: .*/row_spacing_m: 0.42/' "$(dirname "$0")/../config/crops/cauliflower-6-week.yaml" \
+  >"$work/narrow.yaml"
+"$plantscale" simulate --preset field --length-m 12 --seed 11 --crop "$work/narrow.yaml" --publish --fast \
+  --lcm-url memq:// --log "$work/narrow.lcmlog" >/dev/null || fail "simulate with a narrow crop profile"
+expect 0 "the vehicle said: row spacing measured 0\.4[6-9][0-9] m .* the crop profile says 0\.420 m" -- \
+  "$plantscale" evaluate log "$work/narrow.lcmlog"
 expect 0 "lateral RMSE +[0-9.]+ mm" -- "$plantscale" evaluate log "$log" --config-dir "$(dirname "$0")/../config"
 
 expect 1 "absent.lcmlog: cannot open" -- "$plantscale" evaluate log "$work/absent.lcmlog"
