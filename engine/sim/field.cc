@@ -24,18 +24,6 @@ std::pair<size_t, size_t> Between(const std::vector<T>& items, double y0, double
 
 }  // namespace
 
-const char* ToString(PlantClass c) {
-  switch (c) {
-    case PlantClass::kSoil:
-      return "soil";
-    case PlantClass::kCrop:
-      return "crop";
-    case PlantClass::kWeed:
-      return "weed";
-  }
-  return "unknown";
-}
-
 OptionErrors FieldOptions::Validate() const {
   OptionErrors e;
   if (rows < 1 || rows > 15 || rows % 2 == 0) e.push_back({"rows", "must be odd, 1..15"});

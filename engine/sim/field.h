@@ -12,12 +12,14 @@
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/common/plant_class.h"
 
 namespace plantscale::sim {
 
-// Values double as the label image's pixel values.
-enum class PlantClass : uint8_t { kSoil = 0, kCrop = 1, kWeed = 2 };
-const char* ToString(PlantClass c);
+// What a plant is; the values double as the label image's pixel values
+// (engine/common/plant_class.h).
+using PlantClass = SoilCropWeed;
+using plantscale::ToString;
 
 struct Plant {
   int id = 0;

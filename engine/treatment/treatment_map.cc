@@ -35,15 +35,6 @@ void SpanAt(const Quad& q, int k, double at, double& lo, double& hi) {
 
 }  // namespace
 
-const char* ToString(CellClass c) {
-  switch (c) {
-    case CellClass::kSoil: return "soil";
-    case CellClass::kCrop: return "crop";
-    case CellClass::kWeed: return "weed";
-  }
-  return "?";
-}
-
 OptionErrors TreatmentMapOptions::Validate() const {
   OptionErrors e;
   RequireInRange(e, "cell_m", cell_m, 0.001, 0.5);

@@ -17,12 +17,14 @@
 #include <vector>
 
 #include "engine/common/options.h"
+#include "engine/common/plant_class.h"
 #include "engine/treatment/bed_frame.h"
 
 namespace plantscale::treatment {
 
-enum class CellClass : uint8_t { kSoil = 0, kCrop = 1, kWeed = 2 };
-const char* ToString(CellClass c);
+// A cell of the map: soil, crop or weed (engine/common/plant_class.h).
+using CellClass = SoilCropWeed;
+using plantscale::ToString;
 
 struct TreatmentMapOptions {
   double cell_m = 0.01333;   // thesis: 256 × 3000 cells of 13.33 mm

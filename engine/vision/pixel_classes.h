@@ -6,10 +6,13 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 
+#include "engine/common/plant_class.h"
+
 namespace plantscale::vision {
 
-// Pixel classes, as in every label image: 0 soil, 1 crop, 2 weed.
-enum class PixelClass : uint8_t { kSoil = 0, kCrop = 1, kWeed = 2 };
+// Pixel classes, as in every label image: 0 soil, 1 crop, 2 weed
+// (engine/common/plant_class.h).
+using PixelClass = SoilCropWeed;
 inline constexpr int kPixelClassCount = 3;
 
 struct ClassMaps {
