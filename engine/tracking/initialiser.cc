@@ -105,10 +105,6 @@ std::optional<OnRow> FeatureOnRow(const Feature& f, double offset_m, double bear
   return OnRow{static_cast<int>(n), g.y()};
 }
 
-}  // namespace
-
-namespace {
-
 // The bands' share of the plant matter in range, and their area-weighted
 // bearing (a doubled-angle mean: an axis has no sign).
 struct Bands {
@@ -166,6 +162,8 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
   }
   if (usable < o.min_features || total <= 0.0) return std::nullopt;
   const auto best = std::max_element(acc.begin(), acc.end());
+  // The bands' bearing outside the searched range: no bin was voted.
+  if (bands.closed && !(*best > 0.0)) return std::nullopt;
   const size_t index = static_cast<size_t>(best - acc.begin());
   RowFit fit;
   fit.closed_canopy = bands.closed;
