@@ -10,6 +10,7 @@
 #include <boost/beast/websocket.hpp>
 #include <boost/beast/websocket/ssl.hpp>
 #include <chrono>
+#include <ctime>
 #include <deque>
 #include <fstream>
 #include <map>
@@ -108,6 +109,7 @@ struct Gateway::Impl {
   asio::steady_timer flush_timer{ioc};
   std::thread thread;
   std::string session_id = std::to_string(WallUtime());
+  std::string certificate_warning;  // expired or not yet valid (constructor)
 
   // Network thread only.
   std::set<std::shared_ptr<Session>> sessions;  // from TCP accept to close
@@ -625,6 +627,24 @@ Gateway::Gateway(const GatewayOptions& options, Users users, Transport& transpor
       throw GatewayError("key " + options.key_file.string() + " does not belong to certificate " +
                          options.cert_file.string());
     }
+    // Served anyway (the clock may be what is wrong), but every client
+    // will refuse it: said at start, not found out from each refusal.
+    if (X509* cert = SSL_CTX_get0_certificate(d.tls->native_handle())) {
+      const auto when = [](const ASN1_TIME* t) {
+        std::tm tm{};
+        char text[32] = "?";
+        if (ASN1_TIME_to_tm(t, &tm) == 1) std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S UTC", &tm);
+        return std::string(text);
+      };
+      if (X509_cmp_current_time(X509_get0_notAfter(cert)) < 0) {
+        d.certificate_warning = "certificate " + options.cert_file.string() + " expired " +
+                                when(X509_get0_notAfter(cert)) + ": every client will refuse it";
+      } else if (X509_cmp_current_time(X509_get0_notBefore(cert)) > 0) {
+        d.certificate_warning = "certificate " + options.cert_file.string() + " is not valid before " +
+                                when(X509_get0_notBefore(cert)) +
+                                ": every client will refuse it until then (is this computer's clock right?)";
+      }
+    }
   }
   const tcp::endpoint endpoint(asio::ip::make_address(options.host),
                                static_cast<uint16_t>(options.port));
@@ -664,6 +684,8 @@ void Gateway::Stop() {
   d.thread.join();
   d.sessions.clear();
 }
+
+const std::string& Gateway::certificate_warning() const { return impl_->certificate_warning; }
 
 uint16_t Gateway::port() const {
   beast::error_code ec;
