@@ -167,7 +167,8 @@ std::string GatewayStatsText(const gw::GatewayStats& s) {
       << " rejected), " << s.commands_forwarded << " commands forwarded, " << s.commands_refused
       << " refused, " << s.protocol_errors << " protocol errors, dropped "
       << s.dropped_thumbnails << " thumbnails and " << s.dropped_detail << " detail messages, "
-      << s.slow_clients_closed << " slow clients closed";
+      << s.slow_clients_closed << " slow clients closed, " << s.shed
+      << " connections shed at accept (too many pending handshakes)";
   return out.str();
 }
 
