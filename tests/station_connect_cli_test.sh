@@ -133,7 +133,7 @@ for f in wrong untrusted expired elsewhere gateway_expired gateway_elsewhere vie
 grep -q "^plantscale: error: station: wss://127.0.0.1:18780: the gateway refused the token (HTTP 401: unknown token" \
   "$work/wrong.txt" || fail "a wrong token: no clear refusal"
 [[ "$(cat "$work/untrusted.status")" == 2 ]] || fail "an untrusted certificate: exit $(cat "$work/untrusted.status")"
-grep -q "the gateway's certificate is not trusted: .*(checked against --ca" "$work/untrusted.txt" \
+grep -q "the gateway's certificate is not trusted: self-signed certificate (the gateway's certificate (CN=127.0.0.1); checked against --ca .*other_cert.pem)" "$work/untrusted.txt" \
   || fail "an untrusted certificate: no clear refusal"
 
 # An expired certificate and one for another name: exit 2, one line saying
