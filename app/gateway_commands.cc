@@ -95,7 +95,11 @@ gw::Users ServeUsers(const GatewayServeArgs& a) {
 std::unique_ptr<gw::Gateway> MakeGateway(const gw::GatewayOptions& o, const gw::Users& users,
                                          tm::Transport& transport) {
   try {
-    return std::make_unique<gw::Gateway>(o, users, transport);
+    auto gateway = std::make_unique<gw::Gateway>(o, users, transport);
+    if (!gateway->certificate_warning().empty()) {
+      std::cerr << "plantscale: warning: --cert: " << gateway->certificate_warning() << '\n';
+    }
+    return gateway;
   } catch (const gw::GatewayError& e) {
     // A certificate or key that cannot be used is bad input; an address
     // that cannot be bound is not.
@@ -163,7 +167,8 @@ std::string GatewayStatsText(const gw::GatewayStats& s) {
       << " rejected), " << s.commands_forwarded << " commands forwarded, " << s.commands_refused
       << " refused, " << s.protocol_errors << " protocol errors, dropped "
       << s.dropped_thumbnails << " thumbnails and " << s.dropped_detail << " detail messages, "
-      << s.slow_clients_closed << " slow clients closed";
+      << s.slow_clients_closed << " slow clients closed, " << s.shed
+      << " connections shed at accept (too many pending handshakes)";
   return out.str();
 }
 

@@ -34,3 +34,36 @@ finish() {
   echo "$1: ok"
   exit 0
 }
+
+# make_bad_certificates DIR: two certificates a client must refuse, with
+# their keys, made with the openssl command line:
+#   DIR/expired_cert.pem   valid 2020-01-01 to 2020-01-02 only (IP:127.0.0.1);
+#   DIR/elsewhere_cert.pem for DNS:vehicle.farm.example only, not 127.0.0.1.
+# (openssl req takes no start date in the past: `openssl ca -selfsign` does.)
+make_bad_certificates() {
+  local dir="$1"
+  mkdir -p "$dir/ca" && : >"$dir/ca/index.txt" && echo 01 >"$dir/ca/serial"
+  cat >"$dir/ca.cnf" <<CNF
+[ca]
+default_ca = d
+[d]
+database = $dir/ca/index.txt
+new_certs_dir = $dir/ca
+serial = $dir/ca/serial
+default_md = sha256
+policy = p
+[p]
+commonName = supplied
+[ext]
+subjectAltName = IP:127.0.0.1
+basicConstraints = critical,CA:TRUE
+CNF
+  openssl req -new -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -subj /CN=127.0.0.1 \
+    -keyout "$dir/expired_key.pem" -out "$dir/expired.csr" >/dev/null 2>&1 \
+    && openssl ca -batch -config "$dir/ca.cnf" -selfsign -keyfile "$dir/expired_key.pem" -in "$dir/expired.csr" \
+      -startdate 20200101000000Z -enddate 20200102000000Z -extensions ext -out "$dir/expired_cert.pem" \
+      >"$dir/ca.txt" 2>&1 || { cat "$dir/ca.txt"; fail "openssl ca: the expired certificate"; }
+  openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 2 -subj /CN=vehicle \
+    -addext "subjectAltName=DNS:vehicle.farm.example" -keyout "$dir/elsewhere_key.pem" \
+    -out "$dir/elsewhere_cert.pem" >/dev/null 2>&1 || fail "openssl req: the wrong-name certificate"
+}

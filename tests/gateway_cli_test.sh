@@ -7,7 +7,9 @@
 #     with openssl req) serves a `simulate --publish` run to npm's
 #     @foxglove/ws-protocol client (tests/gateway/client_test.mjs): a wrong
 #     token is refused with 401, a client trusting another certificate
-#     fails the TLS handshake; a viewer and an operator subscribe to every
+#     fails the TLS handshake, and so does one connecting to a gateway
+#     whose certificate has expired (CERT_HAS_EXPIRED) or is for another
+#     name (ERR_TLS_CERT_ALTNAME_INVALID); a viewer and an operator subscribe to every
 #     channel and get each topic, every message valid against its JSON
 #     Schema; the viewer's command is refused, the operator's reaches the
 #     vehicle (its `command` event comes back through the gateway).
@@ -52,6 +54,7 @@ openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 
   >"$work/openssl.txt" 2>&1 || { cat "$work/openssl.txt"; fail "openssl req"; }
 openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 2 -subj /CN=other \
   -keyout "$work/other_key.pem" -out "$work/other_cert.pem" >/dev/null 2>&1
+make_bad_certificates "$work"
 
 # Bad input: exit 2, one line naming the file or option and the reason.
 gw=("$plantscale" gateway --lcm-url memq://)
@@ -82,6 +85,20 @@ status=0
 "${client[@]}" refused "$wss" "0123wrong" "$work/cert.pem" >"$work/refused.json" 2>&1 || { echo "FAIL: wrong token"; status=1; }
 "${client[@]}" untrusted "$wss" "$viewer_token" "$work/other_cert.pem" >"$work/untrusted.json" 2>&1 \
   || { echo "FAIL: a client that does not trust the certificate connected"; status=1; }
+# Gateways with an expired certificate and one for another name: the
+# client refuses each with the certificate's own error code.
+for bad in expired:18769:CERT_HAS_EXPIRED elsewhere:18770:ERR_TLS_CERT_ALTNAME_INVALID; do
+  IFS=: read -r name port code <<<"$bad"
+  "$plantscale" gateway --lcm-url "$url" --listen 127.0.0.1:$port --cert "$work/${name}_cert.pem" \
+    --key "$work/${name}_key.pem" --users "$work/users.yaml" >"$work/gateway_$name.txt" 2>&1 &
+  pid=$!
+  for _ in $(seq 100); do grep -q "^gateway: wss://" "$work/gateway_$name.txt" && break; sleep 0.1; done
+  EXPECT_CODE=$code "${client[@]}" untrusted "wss://127.0.0.1:$port/" "$viewer_token" "$work/${name}_cert.pem" \
+    >"$work/$name.json" 2>&1 || { echo "FAIL: the $name certificate was not refused with $code"; status=1; }
+  kill -TERM $pid; wait $pid
+  grep -q "^gateway: stopped; 0 connections" "$work/gateway_$name.txt" \
+    || { echo "FAIL: the $name certificate's gateway let a client through"; status=1; }
+done
 topics="PLANTSCALE_GRID,PLANTSCALE_GRID/scene,PLANTSCALE_PLANTS,PLANTSCALE_MAP_TILES,PLANTSCALE_THUMBNAIL"
 topics+=",PLANTSCALE_EVENTS,PLANTSCALE_HEALTH,PLANTSCALE_NOZZLES,PLANTSCALE_ODOMETRY,PLANTSCALE_SIM_TRUTH"
 topics+=",PLANTSCALE_SIM_TRUTH_POSE,PLANTSCALE_GATEWAY_EVENTS"
@@ -113,7 +130,7 @@ exit $status
 INNER
 inner=$?
 [[ $inner -eq 77 ]] && { echo "skip: no multicast route in the namespace"; finish gateway; }
-for f in refused untrusted viewer operator; do echo "$f: $(cat "$work/$f.json" 2>/dev/null)" | cut -c1-600; done
+for f in refused untrusted expired elsewhere viewer operator; do echo "$f: $(cat "$work/$f.json" 2>/dev/null)" | cut -c1-600; done
 cat "$work/gateway.txt"
 ((inner == 0)) || fail "the namespace run (gateway, clients, simulate) failed"
 grep -q '"httpStatus":401' "$work/refused.json" || fail "a wrong token was not refused with 401"

@@ -8,6 +8,10 @@
 #     serves a real-time `simulate --publish` run signed with a command key:
 #       * a wrong token is refused at the upgrade: exit 2, one line;
 #       * a CA that did not sign the gateway's certificate: exit 2, one line;
+#       * gateways serving an expired certificate and one for another name
+#         (the expired one warned at its start): exit 2, one line saying
+#         "has expired: not valid after DATE" and "is not for address
+#         127.0.0.1: it names DNS:...";
 #       * a viewer's station gets the run and its command is refused;
 #       * an operator's station, through a TCP relay that is stopped for 10 s
 #         (SIGSTOP: a silent cut), sends a signed command that the vehicle
@@ -42,6 +46,7 @@ openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 
   >"$work/openssl.txt" 2>&1 || { cat "$work/openssl.txt"; fail "openssl req"; }
 openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 2 -subj /CN=other \
   -keyout "$work/other_key.pem" -out "$work/other_cert.pem" >/dev/null 2>&1
+make_bad_certificates "$work"
 
 # Bad input: exit 2 and one line, before any window or connection.
 st=("$plantscale" station --offscreen --seconds 1)
@@ -79,6 +84,22 @@ echo $? >"$work/wrong.status"
 "$plantscale" station --offscreen --ca "$work/other_cert.pem" --connect wss://127.0.0.1:18780 \
   --token-file "$work/vera.token" --seconds 5 >"$work/untrusted.txt" 2>&1
 echo $? >"$work/untrusted.status"
+# Certificates the station must refuse: expired, and for another name.
+for bad in expired:18782 elsewhere:18783; do
+  "$plantscale" gateway --lcm-url "$url" --listen 127.0.0.1:${bad#*:} --cert "$work/${bad%:*}_cert.pem" \
+    --key "$work/${bad%:*}_key.pem" --users "$work/users.yaml" >"$work/gateway_${bad%:*}.txt" 2>&1 &
+  echo $! >"$work/gateway_${bad%:*}.pid"
+done
+for _ in $(seq 100); do
+  grep -q "^gateway: wss://" "$work/gateway_expired.txt" && grep -q "^gateway: wss://" "$work/gateway_elsewhere.txt" && break
+  sleep 0.1
+done
+for bad in expired:18782 elsewhere:18783; do
+  "$plantscale" station --offscreen --ca "$work/${bad%:*}_cert.pem" --connect wss://127.0.0.1:${bad#*:} \
+    --token-file "$work/vera.token" --seconds 5 >"$work/${bad%:*}.txt" 2>&1
+  echo $? >"$work/${bad%:*}.status"
+  kill -TERM "$(cat "$work/gateway_${bad%:*}.pid")"; wait "$(cat "$work/gateway_${bad%:*}.pid")"
+done
 "${st[@]}" --connect wss://127.0.0.1:18780 --token-file "$work/vera.token" --seconds 10 --press C@4 \
   --screenshot "$work/viewer.png" >"$work/viewer.txt" 2>&1 &
 viewer=$!
@@ -104,7 +125,7 @@ exit $status
 INNER
 inner=$?
 [[ $inner -eq 77 ]] && { echo "skip: no multicast route in the namespace"; finish station_connect; }
-for f in wrong untrusted viewer operator gateway; do echo "--- $f"; cat "$work/$f.txt"; done
+for f in wrong untrusted expired elsewhere gateway_expired gateway_elsewhere viewer operator gateway; do echo "--- $f"; cat "$work/$f.txt"; done
 ((inner == 0)) || fail "the namespace run (gateway, relay, stations, simulate) failed"
 
 # A wrong token and an untrusted certificate: exit 2, one line saying so.
@@ -112,8 +133,23 @@ for f in wrong untrusted viewer operator gateway; do echo "--- $f"; cat "$work/$
 grep -q "^plantscale: error: station: wss://127.0.0.1:18780: the gateway refused the token (HTTP 401: unknown token" \
   "$work/wrong.txt" || fail "a wrong token: no clear refusal"
 [[ "$(cat "$work/untrusted.status")" == 2 ]] || fail "an untrusted certificate: exit $(cat "$work/untrusted.status")"
-grep -q "the gateway's certificate is not trusted: .*(checked against --ca" "$work/untrusted.txt" \
+grep -q "the gateway's certificate is not trusted: self-signed certificate (the gateway's certificate (CN=127.0.0.1); checked against --ca .*other_cert.pem)" "$work/untrusted.txt" \
   || fail "an untrusted certificate: no clear refusal"
+
+# An expired certificate and one for another name: exit 2, one line saying
+# which and why; the expired one said so at the gateway's start, and neither
+# gateway let a client through.
+[[ "$(cat "$work/expired.status")" == 2 ]] || fail "an expired certificate: exit $(cat "$work/expired.status"), expected 2"
+grep -q "^plantscale: error: station: wss://127.0.0.1:18782: the gateway's certificate (CN=127.0.0.1) has expired: not valid after 2020-01-02 00:00:00 UTC" \
+  "$work/expired.txt" || fail "an expired certificate: no clear refusal"
+grep -q "^plantscale: warning: --cert: certificate .*expired_cert.pem expired 2020-01-02 00:00:00 UTC: every client will refuse it" \
+  "$work/gateway_expired.txt" || fail "the gateway did not warn at start that its certificate expired"
+[[ "$(cat "$work/elsewhere.status")" == 2 ]] || fail "a certificate for another name: exit $(cat "$work/elsewhere.status"), expected 2"
+grep -q "^plantscale: error: station: wss://127.0.0.1:18783: the gateway's certificate (CN=vehicle) is not for address 127.0.0.1: it names DNS:vehicle.farm.example" \
+  "$work/elsewhere.txt" || fail "a certificate for another name: no clear refusal"
+for bad in expired elsewhere; do
+  grep -q "^gateway: stopped; 0 connections" "$work/gateway_$bad.txt" || fail "the $bad certificate's gateway let a client through"
+done
 
 # The viewer: the run arrived (grid states at >= 2 Hz over its ~8 s), its command refused.
 grep -q "station: gateway: .* connected to wss://127.0.0.1:18780 as vera (viewer)" "$work/viewer.txt" \

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <deque>
@@ -23,7 +24,6 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <plantscale_lcmtypes/plantscale_command_t.hpp>
-#include <sstream>
 #include <thread>
 #include <type_traits>
 
@@ -47,12 +47,83 @@ namespace {
 
 constexpr uint32_t kCommandChannelId = 1;  // the client channel the station advertises
 
-// "3.0 s".
-std::string Seconds(double s) {
-  std::ostringstream out;
-  out.precision(1);
-  out << std::fixed << s << " s";
-  return out.str();
+// "2026-12-06 20:10:00 UTC".
+std::string Asn1TimeText(const ASN1_TIME* t) {
+  std::tm tm{};
+  if (t == nullptr || ASN1_TIME_to_tm(t, &tm) != 1) return "?";
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S UTC", &tm);
+  return text;
+}
+
+// The names a certificate is for: "DNS:vehicle.farm.lan, IP:10.0.0.7", or
+// its subject's CN when it has no subjectAltName (which a client checking
+// a name does not accept).
+std::string CertificateNames(X509* cert) {
+  std::string names;
+  auto* sans = static_cast<GENERAL_NAMES*>(X509_get_ext_d2i(cert, NID_subject_alt_name, nullptr, nullptr));
+  for (int i = 0; sans != nullptr && i < sk_GENERAL_NAME_num(sans); ++i) {
+    const GENERAL_NAME* n = sk_GENERAL_NAME_value(sans, i);
+    std::string one;
+    if (n->type == GEN_DNS) {
+      one = "DNS:" + std::string(reinterpret_cast<const char*>(ASN1_STRING_get0_data(n->d.dNSName)),
+                                 static_cast<size_t>(ASN1_STRING_length(n->d.dNSName)));
+    } else if (n->type == GEN_IPADD) {
+      const unsigned char* a = ASN1_STRING_get0_data(n->d.iPAddress);
+      const int len = ASN1_STRING_length(n->d.iPAddress);
+      boost::system::error_code ec;
+      if (len == 4) {
+        one = "IP:" + asio::ip::address_v4({a[0], a[1], a[2], a[3]}).to_string(ec);
+      } else if (len == 16) {
+        asio::ip::address_v6::bytes_type b;
+        std::copy(a, a + 16, b.begin());
+        one = "IP:" + asio::ip::address_v6(b).to_string(ec);
+      }
+    }
+    if (!one.empty()) names += (names.empty() ? "" : ", ") + one;
+  }
+  GENERAL_NAMES_free(sans);
+  if (!names.empty()) return names;
+  char cn[256] = "";
+  X509_NAME_get_text_by_NID(X509_get_subject_name(cert), NID_commonName, cn, sizeof cn);
+  return std::string("no subjectAltName, only CN=") + cn;
+}
+
+// The first certificate check that failed in a TLS handshake: what the
+// verify callback saw, for a message that says which certificate and why.
+struct VerifyFailure {
+  int error = X509_V_OK;
+  int depth = 0;
+  std::string subject;     // one line, e.g. "CN=127.0.0.1"
+  std::string not_before;  // UTC
+  std::string not_after;
+  std::string names;  // subjectAltName
+};
+
+// Why the gateway's certificate was refused, in words: expired, not yet
+// valid, not for this host or address, or not trusted (signed by a CA not
+// given). `ca_file` empty: the system's roots.
+std::string CertificateRefusal(const VerifyFailure& f, const std::string& host, const std::string& ca_file) {
+  const std::string which = f.depth == 0 ? "the gateway's certificate (" + f.subject + ")"
+                                         : "the certificate at depth " + std::to_string(f.depth) +
+                                               " of the gateway's chain (" + f.subject + ")";
+  switch (f.error) {
+    case X509_V_ERR_CERT_HAS_EXPIRED:
+      return which + " has expired: not valid after " + f.not_after +
+             " (renew it: docs/remote.md, \"A certificate\"; or check this computer's clock)";
+    case X509_V_ERR_CERT_NOT_YET_VALID:
+      return which + " is not yet valid: not before " + f.not_before + " (check this computer's and the vehicle's clocks)";
+    case X509_V_ERR_HOSTNAME_MISMATCH:
+      return which + " is not for host '" + host + "': it names " + f.names +
+             " (connect with a name it names, or give the gateway a certificate for this one)";
+    case X509_V_ERR_IP_ADDRESS_MISMATCH:
+      return which + " is not for address " + host + ": it names " + f.names +
+             " (connect with a name or address it names, or give the gateway a certificate for this one)";
+    default:
+      return std::string("the gateway's certificate is not trusted: ") + X509_verify_cert_error_string(f.error) +
+             " (" + which + "; " +
+             (ca_file.empty() ? "give its certificate or CA with --ca)" : "checked against --ca " + ca_file + ")");
+  }
 }
 
 }  // namespace
@@ -163,6 +234,22 @@ class ConnectionT : public Connection {
       } else {   // an address: the certificate must list it (subjectAltName IP)
         X509_VERIFY_PARAM_set1_ip_asc(SSL_get0_param(ssl), host.c_str());
       }
+      ws_.next_layer().set_verify_callback([this](bool preverified, ssl::verify_context& ctx) {
+        X509_STORE_CTX* store = ctx.native_handle();
+        if (!preverified && failure_.error == X509_V_OK) {
+          failure_.error = X509_STORE_CTX_get_error(store);
+          failure_.depth = X509_STORE_CTX_get_error_depth(store);
+          if (X509* cert = X509_STORE_CTX_get_current_cert(store)) {
+            char subject[512] = "";
+            X509_NAME_oneline(X509_get_subject_name(cert), subject, sizeof subject);
+            failure_.subject = subject[0] == '/' ? subject + 1 : subject;
+            failure_.not_before = Asn1TimeText(X509_get0_notBefore(cert));
+            failure_.not_after = Asn1TimeText(X509_get0_notAfter(cert));
+            failure_.names = CertificateNames(cert);
+          }
+        }
+        return preverified;
+      });
       beast::get_lowest_layer(ws_).expires_after(Timeout());
       ws_.next_layer().async_handshake(ssl::stream_base::client,
                                        [self = Self()](beast::error_code e) { self->OnTls(e); });
@@ -176,10 +263,8 @@ class ConnectionT : public Connection {
       if (!ec) return Upgrade();
       const long verify = SSL_get_verify_result(ws_.next_layer().native_handle());
       if (verify != X509_V_OK) {
-        return Fail(std::string("the gateway's certificate is not trusted: ") + X509_verify_cert_error_string(verify) +
-                        (client_.options.ca_file.empty() ? " (give its certificate or CA with --ca)"
-                                                         : " (checked against --ca " + client_.options.ca_file.string() + ")"),
-                    true);
+        if (failure_.error == X509_V_OK) failure_.error = static_cast<int>(verify);
+        return Fail(CertificateRefusal(failure_, client_.options.url.host, client_.options.ca_file.string()), true);
       }
       Fail(ec == beast::error::timeout ? "TLS handshake timed out" : "TLS handshake failed: " + ec.message());
     }
@@ -233,7 +318,7 @@ class ConnectionT : public Connection {
     ws_.async_read(buffer_, [self = Self()](beast::error_code ec, size_t) {
       if (ec) {
         const std::string why = ec == beast::error::timeout ? "no data or ping reply for " +
-                                                                  Seconds(self->client_.options.idle_timeout_s)
+                                                                  SecondsText(self->client_.options.idle_timeout_s)
                                                             : ec.message();
         return self->Fail("link lost: " + why);
       }
@@ -352,6 +437,7 @@ class ConnectionT : public Connection {
   tcp::resolver resolver_;
   websocket::stream<Next> ws_;
   websocket::response_type response_;
+  VerifyFailure failure_;  // the TLS handshake's first failed certificate check
   beast::flat_buffer buffer_;
   std::map<uint32_t, std::string> channels_;  // subscription id (= channel id) → LCM channel
   std::deque<std::pair<std::string, bool>> out_;

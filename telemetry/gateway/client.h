@@ -112,6 +112,9 @@ struct GatewayLinkStatus {
   int64_t commands_sent = 0;
 };
 
+// "3.0 s": seconds with one decimal, for the link's messages.
+std::string SecondsText(double s);
+
 // "connected to wss://… as alice (operator)", "reconnecting to wss://… in
 // 1.0 s: connection refused", …: one line for the station's HUD.
 std::string LinkText(const GatewayLinkStatus& status);

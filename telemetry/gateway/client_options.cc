@@ -31,14 +31,14 @@ uint16_t ParsePort(const std::string& url, const std::string& text) {
   return static_cast<uint16_t>(port);
 }
 
-std::string Seconds(double s) {
+}  // namespace
+
+std::string SecondsText(double s) {
   std::ostringstream out;
   out.precision(1);
   out << std::fixed << s << " s";
   return out.str();
 }
-
-}  // namespace
 
 GatewayUrl ParseGatewayUrl(const std::string& url) {
   GatewayUrl u;
@@ -148,7 +148,7 @@ std::string LinkText(const GatewayLinkStatus& s) {
       return (s.connections > 0 ? "reconnecting to " : "connecting to ") + s.url +
              (s.last_error.empty() ? "" : " (last: " + s.last_error + ")");
     case LinkState::kWaiting:
-      return "GATEWAY LINK DOWN: " + s.last_error + "; retrying " + s.url + " in " + Seconds(s.retry_in_s);
+      return "GATEWAY LINK DOWN: " + s.last_error + "; retrying " + s.url + " in " + SecondsText(s.retry_in_s);
     case LinkState::kRefused:
       return "REFUSED by " + s.url + ": " + s.last_error;
   }

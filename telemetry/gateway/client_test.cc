@@ -2,14 +2,19 @@
 // policy, and the client against a real gateway (plain ws:// on 127.0.0.1,
 // LCM over memq://): the LCM bytes arrive as published, map tiles are sent
 // again on reconnecting, a wrong token is refused, an operator's signed
-// command reaches LCM and verifies, a viewer's is refused. TLS with a real
-// certificate is tested in tests/station_connect_cli_test.sh.
+// command reaches LCM and verifies, a viewer's is refused; over wss://
+// with certificates made here (test_certificates.h): a valid one connects,
+// an expired, a not-yet-valid, a wrong-name and an untrusted one are each
+// refused at once with the reason, and a gateway given a key that is not its
+// certificate's does not start. The station's command line over TLS is
+// tested in tests/station_connect_cli_test.sh.
 #include "telemetry/gateway/client.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
 #include <atomic>
+#include <ctime>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +28,7 @@
 #include "telemetry/convert.h"
 #include "telemetry/gateway/lcm_topics.h"
 #include "telemetry/gateway/server.h"
+#include "telemetry/gateway/test_certificates.h"
 
 namespace plantscale::telemetry::gateway {
 namespace {
@@ -120,10 +126,15 @@ TEST(ReconnectPolicy, DoublesFromAQuarterSecondToTwoSeconds) {
 }
 
 // A vehicle's LCM (memq://) behind a gateway on ws://127.0.0.1.
+// With `tls`, over wss:// with that certificate.
 struct Vehicle {
-  explicit Vehicle(Users users, int port = 0) {
+  explicit Vehicle(Users users, int port = 0, const TestCertificate* tls = nullptr) {
     GatewayOptions o;
-    o.insecure_loopback = true;
+    o.insecure_loopback = tls == nullptr;
+    if (tls) {
+      o.cert_file = tls->cert;
+      o.key_file = tls->key;
+    }
     o.port = port;
     gateway = std::make_unique<Gateway>(o, std::move(users), transport);
     transport.Subscribe(channels::kCommand, [this](const ReceivedMessage& m) {
@@ -302,6 +313,142 @@ TEST_F(GatewayClientLive, AnOperatorsSignedCommandReachesLcmAndVerifiesAViewersI
   ASSERT_TRUE(back);
   CommandReplayState state;
   EXPECT_TRUE(Verify(*back, key, WallUtime(), state).accepted());
+}
+
+// The gateway over wss:// with a certificate each test chooses, and a
+// client that trusts exactly that certificate (--ca) unless told otherwise.
+class GatewayClientTls : public ::testing::Test {
+ protected:
+  static constexpr long kDay = 24 * 3600;
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("plantscale_tls_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    token_ = NewToken();
+  }
+  void TearDown() override {
+    vehicle_.reset();
+    fs::remove_all(dir_);
+  }
+  TestCertificate Make(const std::string& name, const std::string& alt_names, long not_before_s,
+                       long not_after_s) {
+    return MakeTestCertificate(dir_, name, name, alt_names, not_before_s, not_after_s);
+  }
+  void Serve(const TestCertificate& cert) {
+    Users u;
+    u.users = {MakeUser("vera", Role::kViewer, token_)};
+    vehicle_ = std::make_unique<Vehicle>(std::move(u), 0, &cert);
+  }
+  GatewayClientOptions Options(const std::string& host, const fs::path& ca) const {
+    GatewayClientOptions o;
+    o.url = ParseGatewayUrl("wss://" + host + ":" + std::to_string(vehicle_->gateway->port()) + "/");
+    o.token = token_;
+    o.ca_file = ca;
+    o.reconnect.first_delay_s = 0.05;
+    o.reconnect.max_delay_s = 0.2;
+    return o;
+  }
+  // Connects and returns the refusal's text, or "connected".
+  std::string Attempt(const std::string& host, const fs::path& ca) {
+    Received got;
+    auto client = std::make_unique<GatewayClient>(Options(host, ca), got.Callback());
+    std::string what = "connected";
+    try {
+      client->WaitFirstAttempt(5.0);
+      if (client->status().state != LinkState::kConnected) what = "not connected: " + LinkText(client->status());
+    } catch (const GatewayClientError& e) {
+      what = e.what();
+      // Refused for good: no retry however long one waits.
+      std::this_thread::sleep_for(300ms);
+      EXPECT_EQ(client->status().state, LinkState::kRefused);
+      EXPECT_EQ(client->status().failures, 0);
+    }
+    return what;
+  }
+  fs::path dir_;
+  std::string token_;
+  std::unique_ptr<Vehicle> vehicle_;
+};
+
+TEST_F(GatewayClientTls, AValidCertificateConnectsByAddressAndByName) {
+  const TestCertificate good = Make("good", "IP:127.0.0.1,DNS:localhost", -3600, kDay);
+  Serve(good);
+  EXPECT_EQ(Attempt("127.0.0.1", good.cert), "connected");
+  EXPECT_EQ(Attempt("localhost", good.cert), "connected");
+  EXPECT_EQ(vehicle_->gateway->stats().connections, 2);
+}
+
+TEST_F(GatewayClientTls, AnExpiredCertificateIsRefusedSayingWhenItExpired) {
+  const TestCertificate old = Make("expired", "IP:127.0.0.1,DNS:localhost", -2 * kDay, -kDay);
+  Serve(old);
+  const std::string why = Attempt("127.0.0.1", old.cert);
+  EXPECT_NE(why.find("the gateway's certificate (CN=expired) has expired: not valid after "), std::string::npos)
+      << why;
+  // The date it expired, to the second (a day ago, in UTC).
+  const std::time_t then = std::time(nullptr) - kDay;
+  std::tm tm{};
+  gmtime_r(&then, &tm);
+  char day[16];
+  std::strftime(day, sizeof day, "%Y-%m-%d", &tm);
+  EXPECT_NE(why.find(std::string("not valid after ") + day), std::string::npos) << why;
+  EXPECT_EQ(vehicle_->gateway->stats().connections, 0);
+}
+
+TEST_F(GatewayClientTls, ACertificateNotYetValidIsRefusedSayingFromWhen) {
+  const TestCertificate early = Make("early", "IP:127.0.0.1", kDay, 2 * kDay);
+  Serve(early);
+  const std::string why = Attempt("127.0.0.1", early.cert);
+  EXPECT_NE(why.find("(CN=early) is not yet valid: not before "), std::string::npos) << why;
+  EXPECT_NE(why.find("clocks"), std::string::npos) << why;
+}
+
+TEST_F(GatewayClientTls, ACertificateForAnotherNameIsRefusedNamingTheHostAndWhatItIsFor) {
+  const TestCertificate other = Make("vehicle", "DNS:vehicle.farm.example", -3600, kDay);
+  Serve(other);
+  const std::string by_name = Attempt("localhost", other.cert);
+  EXPECT_NE(by_name.find("(CN=vehicle) is not for host 'localhost': it names DNS:vehicle.farm.example"),
+            std::string::npos)
+      << by_name;
+  const std::string by_address = Attempt("127.0.0.1", other.cert);
+  EXPECT_NE(by_address.find("is not for address 127.0.0.1: it names DNS:vehicle.farm.example"), std::string::npos)
+      << by_address;
+  // A certificate naming its host only in the CN is not for that host either.
+  const TestCertificate cn_only = MakeTestCertificate(dir_, "cn_only", "127.0.0.1", "", -3600, kDay);
+  vehicle_.reset();
+  Serve(cn_only);
+  const std::string cn = Attempt("127.0.0.1", cn_only.cert);
+  EXPECT_NE(cn.find("is not for address 127.0.0.1: it names no subjectAltName, only CN=127.0.0.1"), std::string::npos)
+      << cn;
+}
+
+TEST_F(GatewayClientTls, ACertificateTheCaDidNotSignIsNotTrusted) {
+  const TestCertificate good = Make("good", "IP:127.0.0.1", -3600, kDay);
+  const TestCertificate foreign = Make("foreign", "IP:127.0.0.1", -3600, kDay);
+  Serve(good);
+  const std::string why = Attempt("127.0.0.1", foreign.cert);
+  EXPECT_NE(why.find("the gateway's certificate is not trusted: "), std::string::npos) << why;
+  EXPECT_NE(why.find("(the gateway's certificate (CN=good); checked against --ca " + foreign.cert.string() + ")"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(vehicle_->gateway->stats().connections, 0);
+}
+
+TEST_F(GatewayClientTls, AGatewayGivenAnotherCertificatesKeyDoesNotStartNamingBothFiles) {
+  const TestCertificate a = Make("a", "IP:127.0.0.1", -3600, kDay);
+  const TestCertificate b = Make("b", "IP:127.0.0.1", -3600, kDay);
+  GatewayOptions o;
+  o.port = 0;
+  o.cert_file = a.cert;
+  o.key_file = b.key;
+  LcmTransport t("memq://");
+  try {
+    Gateway g(o, Users{}, t);
+    FAIL() << "started with the key of another certificate";
+  } catch (const GatewayError& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("key " + b.key.string() + " does not belong to certificate " + a.cert.string()),
+              std::string::npos)
+        << why;
+  }
 }
 
 TEST(LcmTopics, EveryChannelTheStationDecodesWithItsFingerprint) {

@@ -9,7 +9,9 @@
 #include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <boost/beast/websocket/ssl.hpp>
+#include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <deque>
 #include <fstream>
 #include <map>
@@ -34,6 +36,13 @@ namespace beast = boost::beast;
 namespace http = boost::beast::http;
 namespace websocket = boost::beast::websocket;
 using tcp = boost::asio::ip::tcp;
+
+namespace {
+// Pending connections (TLS handshake or upgrade) one address may hold: a
+// quarter of max_pending, so that a flood from one host cannot keep others
+// out (results/2026-12-07-gateway-abuse.md).
+int MaxPendingPerAddress(const GatewayOptions& o) { return std::max(1, o.max_pending / 4); }
+}  // namespace
 
 OptionErrors GatewayOptions::Validate() const {
   OptionErrors e;
@@ -108,9 +117,11 @@ struct Gateway::Impl {
   asio::steady_timer flush_timer{ioc};
   std::thread thread;
   std::string session_id = std::to_string(WallUtime());
+  std::string certificate_warning;  // expired or not yet valid (constructor)
 
   // Network thread only.
   std::set<std::shared_ptr<Session>> sessions;  // from TCP accept to close
+  std::map<asio::ip::address, int> pending_by_address;  // of those, before the upgrade
   int open_clients = 0;                         // of those, past the WebSocket upgrade
   std::vector<CachedMessage> latest;            // per topic
   std::map<std::pair<int, std::string>, CachedMessage> tiles;  // newest revision per topic and tile
@@ -175,8 +186,14 @@ namespace {
 template <typename Stream>
 class SessionT : public Session {
  public:
-  SessionT(Gateway::Impl& hub, Stream&& stream, std::string remote)
-      : hub_(hub), ws_(std::move(stream)), remote_(std::move(remote)), queue_(hub.options.queue) {}
+  SessionT(Gateway::Impl& hub, Stream&& stream, std::string remote, asio::ip::address address)
+      : hub_(hub),
+        ws_(std::move(stream)),
+        remote_(std::move(remote)),
+        address_(address),
+        queue_(hub.options.queue) {
+    ++hub_.pending_by_address[address_];
+  }
 
   void Begin() override {
     beast::get_lowest_layer(ws_).expires_after(
@@ -225,10 +242,19 @@ class SessionT : public Session {
            remote_;
   }
 
+  // Past the upgrade or closed: no longer one of its address's pending.
+  void LeavePending() {
+    if (!pending_) return;
+    pending_ = false;
+    const auto it = hub_.pending_by_address.find(address_);
+    if (it != hub_.pending_by_address.end() && --it->second <= 0) hub_.pending_by_address.erase(it);
+  }
+
   void End() {
     open_ = false;
     if (ended_) return;
     ended_ = true;
+    LeavePending();
     if (accepted_) --hub_.open_clients;
     hub_.sessions.erase(shared_from_this());
     std::lock_guard lock(hub_.mutex);
@@ -315,6 +341,7 @@ class SessionT : public Session {
     if (ec) return End();
     open_ = true;
     accepted_ = true;
+    LeavePending();
     ++hub_.open_clients;
     {
       std::lock_guard lock(hub_.mutex);
@@ -486,6 +513,8 @@ class SessionT : public Session {
   Gateway::Impl& hub_;
   websocket::stream<Stream> ws_;
   std::string remote_;
+  asio::ip::address address_;
+  bool pending_ = true;  // counted in hub_.pending_by_address
   ClientQueue queue_;
   std::deque<OutMessage> backlog_;
   beast::flat_buffer buffer_;
@@ -516,23 +545,28 @@ void Gateway::Impl::Accept() {
       return Accept();
     }
     beast::error_code ignored;
+    const auto endpoint = socket.remote_endpoint(ignored);
     // A flood of connections that never finish their handshake: shed at
-    // once, counted, no event (the flood would be the log's).
-    if (static_cast<int>(sessions.size()) - open_clients >= options.max_pending) {
+    // once, counted, no event (the flood would be the log's). One address
+    // may hold at most a quarter of the pending slots, so that a flood from
+    // one host does not keep everyone else out.
+    const auto from = pending_by_address.find(endpoint.address());
+    if (static_cast<int>(sessions.size()) - open_clients >= options.max_pending ||
+        (from != pending_by_address.end() && from->second >= MaxPendingPerAddress(options))) {
       Count(&GatewayStats::shed);  // before the close the client sees
       socket.close(ignored);
       return Accept();
     }
-    const auto endpoint = socket.remote_endpoint(ignored);
     const std::string remote =
         endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
     std::shared_ptr<Session> session;
     if (tls) {
       session = std::make_shared<SessionT<beast::ssl_stream<beast::tcp_stream>>>(
-          *this, beast::ssl_stream<beast::tcp_stream>(std::move(socket), *tls), remote);
+          *this, beast::ssl_stream<beast::tcp_stream>(std::move(socket), *tls), remote,
+          endpoint.address());
     } else {
       session = std::make_shared<SessionT<beast::tcp_stream>>(
-          *this, beast::tcp_stream(std::move(socket)), remote);
+          *this, beast::tcp_stream(std::move(socket)), remote, endpoint.address());
     }
     sessions.insert(session);
     session->Begin();
@@ -625,6 +659,24 @@ Gateway::Gateway(const GatewayOptions& options, Users users, Transport& transpor
       throw GatewayError("key " + options.key_file.string() + " does not belong to certificate " +
                          options.cert_file.string());
     }
+    // Served anyway (the clock may be what is wrong), but every client
+    // will refuse it: said at start, not found out from each refusal.
+    if (X509* cert = SSL_CTX_get0_certificate(d.tls->native_handle())) {
+      const auto when = [](const ASN1_TIME* t) {
+        std::tm tm{};
+        char text[32] = "?";
+        if (ASN1_TIME_to_tm(t, &tm) == 1) std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S UTC", &tm);
+        return std::string(text);
+      };
+      if (X509_cmp_current_time(X509_get0_notAfter(cert)) < 0) {
+        d.certificate_warning = "certificate " + options.cert_file.string() + " expired " +
+                                when(X509_get0_notAfter(cert)) + ": every client will refuse it";
+      } else if (X509_cmp_current_time(X509_get0_notBefore(cert)) > 0) {
+        d.certificate_warning = "certificate " + options.cert_file.string() + " is not valid before " +
+                                when(X509_get0_notBefore(cert)) +
+                                ": every client will refuse it until then (is this computer's clock right?)";
+      }
+    }
   }
   const tcp::endpoint endpoint(asio::ip::make_address(options.host),
                                static_cast<uint16_t>(options.port));
@@ -664,6 +716,8 @@ void Gateway::Stop() {
   d.thread.join();
   d.sessions.clear();
 }
+
+const std::string& Gateway::certificate_warning() const { return impl_->certificate_warning; }
 
 uint16_t Gateway::port() const {
   beast::error_code ec;

@@ -103,6 +103,9 @@ class Gateway {
   void Start();  // the network thread
   void Stop();   // closes every connection and joins the thread
   uint16_t port() const;
+  // Empty, or why every client will refuse the certificate (it expired, or
+  // is not valid yet): the gateway starts anyway, the caller says so.
+  const std::string& certificate_warning() const;
   GatewayStats stats() const;
   // Publishes the commands and events waiting to go out on the transport.
   // Call from the thread that calls transport.Handle.

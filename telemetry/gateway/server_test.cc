@@ -1,6 +1,8 @@
 // The gateway's server over plain ws:// on 127.0.0.1 (--insecure-loopback)
 // with a real WebSocket client (Beast) and LCM over memq://. TLS is tested
-// with a real Foxglove client in tests/gateway_cli_test.sh.
+// with a real Foxglove client in tests/gateway_cli_test.sh. Also: the
+// Foxglove layout docs/remote.md offers (docs/foxglove-layout.json) names
+// only topics the gateway advertises, with their schemas' fields.
 #include "telemetry/gateway/server.h"
 
 #include <gtest/gtest.h>
@@ -11,7 +13,10 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 #include <chrono>
+#include <fstream>
+#include <map>
 #include <mutex>
+#include <set>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <plantscale_lcmtypes/plantscale_thumbnail_t.hpp>
 #include <thread>
@@ -223,12 +228,20 @@ TEST_F(GatewayServer, RefusalEventsAreRateLimited) {
   EXPECT_EQ(events_.size(), 2u);
 }
 
+// A TCP connection from 127.0.0.N (all of 127/8 is loopback) that sends nothing.
+asio::ip::tcp::socket IdleFrom(asio::io_context& ioc, const std::string& address, uint16_t port) {
+  asio::ip::tcp::socket s(ioc);
+  s.open(asio::ip::tcp::v4());
+  s.bind({asio::ip::make_address(address), 0});
+  s.connect({asio::ip::make_address("127.0.0.1"), port});
+  return s;
+}
+
 TEST_F(GatewayServer, ConnectionsThatNeverUpgradeAreShedBeyondMaxPending) {
   asio::io_context ioc;
   std::vector<asio::ip::tcp::socket> idle;
-  for (int i = 0; i < 4; ++i) {
-    idle.emplace_back(ioc);
-    idle.back().connect({asio::ip::make_address("127.0.0.1"), gateway_->port()});
+  for (int i = 0; i < 4; ++i) {  // max_pending 4, from four addresses
+    idle.push_back(IdleFrom(ioc, "127.0.0." + std::to_string(2 + i), gateway_->port()));
   }
   std::this_thread::sleep_for(200ms);
   EXPECT_EQ(Upgrade(gateway_->port(), "/?token=" + viewer_token_).first, 0);  // closed unanswered
@@ -236,6 +249,63 @@ TEST_F(GatewayServer, ConnectionsThatNeverUpgradeAreShedBeyondMaxPending) {
   idle.clear();
   std::this_thread::sleep_for(200ms);
   EXPECT_EQ(Upgrade(gateway_->port(), "/?token=" + viewer_token_).first, 101);
+}
+
+TEST(GatewayHandshake, AConnectionThatStallsInItsUpgradeIsClosedAfterTheHandshakeTimeout) {
+  LcmTransport transport("memq://");
+  GatewayOptions o;
+  o.insecure_loopback = true;
+  o.port = 0;
+  o.handshake_timeout_s = 1;
+  o.max_pending = 1;
+  const std::string token = NewToken();
+  Users users;
+  users.users = {MakeUser("vera", Role::kViewer, token)};
+  Gateway gateway(o, std::move(users), transport);
+  gateway.Start();
+  // Half an upgrade request, then nothing (a slow-loris client): it holds
+  // the one pending slot, so a second connection is shed at once ...
+  asio::io_context ioc;
+  asio::ip::tcp::socket slow(ioc);
+  slow.connect({asio::ip::make_address("127.0.0.1"), gateway.port()});
+  asio::write(slow, asio::buffer(std::string("GET /?token=") + token + " HTTP/1.1\r\nHost: x\r\n"));
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(Upgrade(gateway.port(), "/?token=" + token).first, 0);
+  EXPECT_EQ(gateway.stats().shed, 1);
+  // ... until the timeout closes it: within the timeout plus a margin.
+  const auto start = std::chrono::steady_clock::now();
+  char byte = 0;
+  beast::error_code ec;
+  slow.read_some(asio::buffer(&byte, 1), ec);
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(ec, asio::error::eof) << ec.message();
+  EXPECT_GT(waited, 0.5);  // 1 s from the connection, 0.2 s of which already gone
+  EXPECT_LT(waited, 1.5);
+  // The slot is free again: a real client gets in.
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(Upgrade(gateway.port(), "/?token=" + token).first, 101);
+  gateway.Stop();
+}
+
+TEST_F(GatewayServer, OneAddressHoldsAtMostAQuarterOfThePendingSlots) {
+  // max_pending 4: one pending connection per address. A second from the
+  // flooding address is shed; a client from another address gets in.
+  asio::io_context ioc;
+  asio::ip::tcp::socket first = IdleFrom(ioc, "127.0.0.2", gateway_->port());
+  std::this_thread::sleep_for(100ms);
+  asio::ip::tcp::socket second = IdleFrom(ioc, "127.0.0.2", gateway_->port());
+  char byte = 0;
+  beast::error_code ec;
+  second.read_some(asio::buffer(&byte, 1), ec);  // closed at once, unanswered
+  EXPECT_EQ(ec, asio::error::eof) << ec.message();
+  EXPECT_EQ(gateway_->stats().shed, 1);
+  EXPECT_EQ(Upgrade(gateway_->port(), "/?token=" + viewer_token_).first, 101);  // from 127.0.0.1
+  // Once the first is gone, its address may connect again.
+  first.close();
+  std::this_thread::sleep_for(200ms);
+  asio::ip::tcp::socket third = IdleFrom(ioc, "127.0.0.2", gateway_->port());
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(gateway_->stats().shed, 1);
 }
 
 TEST_F(GatewayServer, AnUpgradeWithoutTheSubprotocolIsRefused) {
@@ -467,6 +537,101 @@ TEST_F(GatewayServer, AnOperatorMayPublishOnlyTheCommandChannel) {
   EXPECT_NE(c->ReadJson().value("message", "").find("only PLANTSCALE_COMMAND"), std::string::npos);
   c->Binary(PublishFrame(1, "{}"));
   EXPECT_NE(c->ReadJson().value("message", "").find("was not advertised"), std::string::npos);
+}
+
+// The panels of a Foxglove layout's tree ("Type!id" leaves).
+void LayoutLeaves(const json& node, std::set<std::string>& out) {
+  if (node.is_string()) {
+    out.insert(node.get<std::string>());
+  } else if (node.is_object()) {
+    if (node.contains("first")) LayoutLeaves(node["first"], out);
+    if (node.contains("second")) LayoutLeaves(node["second"], out);
+  }
+}
+
+TEST_F(GatewayServer, TheFoxgloveLayoutNamesOnlyAdvertisedTopicsAndFieldsOfTheirSchemas) {
+  const std::string file = std::string(PLANTSCALE_SOURCE_DIR) + "/docs/foxglove-layout.json";
+  std::ifstream in(file);
+  ASSERT_TRUE(in) << file;
+  const json layout = json::parse(in, nullptr, false);
+  ASSERT_TRUE(layout.is_object()) << file << ": not JSON";
+  ASSERT_TRUE(layout.contains("configById") && layout.contains("layout")) << file;
+
+  // What the gateway advertises: topic -> (schema name, schema).
+  Client c;
+  ASSERT_EQ(c.Connect(gateway_->port(), "/?token=" + viewer_token_), 101);
+  ASSERT_EQ(c.ReadJson().value("op", ""), "serverInfo");
+  const json advertise = c.ReadJson();
+  ASSERT_EQ(advertise.value("op", ""), "advertise");
+  std::map<std::string, std::pair<std::string, json>> advertised;
+  for (const json& ch : advertise["channels"]) {
+    advertised[ch["topic"].get<std::string>()] = {ch["schemaName"].get<std::string>(),
+                                                  json::parse(ch["schema"].get<std::string>())};
+  }
+
+  // Every panel in the tree has its configuration, and no configuration is
+  // left out of the tree.
+  std::set<std::string> leaves;
+  LayoutLeaves(layout["layout"], leaves);
+  for (const std::string& id : leaves) EXPECT_TRUE(layout["configById"].contains(id)) << id;
+  EXPECT_EQ(leaves.size(), layout["configById"].size());
+
+  std::set<std::string> shown;  // "Type topic[.field]"
+  const auto topic_of = [&](const std::string& where, const std::string& topic,
+                            const std::set<std::string>& schemas) -> const json* {
+    const auto it = advertised.find(topic);
+    if (it == advertised.end()) {
+      ADD_FAILURE() << where << ": topic " << topic << " is not advertised by the gateway";
+      return nullptr;
+    }
+    EXPECT_TRUE(schemas.count(it->second.first))
+        << where << ": " << topic << " is " << it->second.first << ", which this panel cannot show";
+    return &it->second.second;
+  };
+  for (const auto& [id, config] : layout["configById"].items()) {
+    const std::string type = id.substr(0, id.find('!'));
+    if (type == "3D") {
+      ASSERT_TRUE(config.contains("topics")) << id;
+      for (const auto& [topic, settings] : config["topics"].items()) {
+        topic_of(id, topic, {"foxglove.SceneUpdate", "foxglove.Grid"});
+        shown.insert("3D " + topic);
+      }
+    } else if (type == "Image") {
+      const std::string topic = config["imageMode"]["imageTopic"].get<std::string>();
+      topic_of(id, topic, {"foxglove.CompressedImage"});
+      shown.insert("Image " + topic);
+    } else if (type == "Plot") {
+      for (const json& path : config["paths"]) {
+        const std::string value = path["value"].get<std::string>();
+        const size_t dot = value.find('.');
+        ASSERT_NE(dot, std::string::npos) << id << ": " << value << " is not TOPIC.FIELD";
+        const std::string topic = value.substr(0, dot), field = value.substr(dot + 1);
+        const json* schema = topic_of(id, topic, {"plantscale.GridState", "plantscale.Health",
+                                                  "plantscale.Nozzles", "plantscale.Odometry",
+                                                  "plantscale.Pose"});
+        if (!schema) continue;
+        ASSERT_TRUE((*schema)["properties"].contains(field))
+            << id << ": " << topic << " has no field " << field;
+        const std::string kind = (*schema)["properties"][field].value("type", "");
+        EXPECT_TRUE(kind == "number" || kind == "integer")
+            << id << ": " << value << " is of type '" << kind << "', not a number to plot";
+        shown.insert("Plot " + value);
+      }
+    } else if (type == "RosOut") {
+      const std::string topic = config["topicToRender"].get<std::string>();
+      topic_of(id, topic, {"foxglove.Log"});
+      shown.insert("Log " + topic);
+    } else {
+      ADD_FAILURE() << id << ": a panel type this test does not check";
+    }
+  }
+  // What issue 58 asks the layout to show.
+  for (const char* want :
+       {"3D PLANTSCALE_PLANTS", "3D PLANTSCALE_MAP_TILES", "3D PLANTSCALE_GRID/scene",
+        "Image PLANTSCALE_THUMBNAIL", "Plot PLANTSCALE_GRID.offset_m",
+        "Plot PLANTSCALE_GRID.bearing_deg", "Log PLANTSCALE_EVENTS"}) {
+    EXPECT_TRUE(shown.count(want)) << "the layout does not show " << want;
+  }
 }
 
 TEST(GatewayOptionsTest, PlainWebSocketOnlyOnLoopbackAndTlsNeedsItsFiles) {

@@ -5,7 +5,9 @@
 //     expects the upgrade refused with HTTP 401 and no serverInfo.
 //   node client_test.mjs untrusted URL TOKEN CA
 //     with a CA that did not sign the gateway's certificate: expects the
-//     TLS handshake to fail (the client refuses the server).
+//     TLS handshake to fail (the client refuses the server). With
+//     EXPECT_CODE set (e.g. CERT_HAS_EXPIRED, ERR_TLS_CERT_ALTNAME_INVALID),
+//     it must fail with that code: an expired or wrong-name certificate.
 //   node client_test.mjs watch URL TOKEN CA READY_FILE TOPICS [command]
 //     subscribes to every advertised channel, touches READY_FILE, checks
 //     every message against its channel's JSON Schema (Ajv) and waits until
@@ -39,7 +41,9 @@ if (mode === "untrusted") {
   ws.on("unexpected-response", () => finish(false, "reached HTTP through a certificate it does not trust"));
   ws.on("error", (e) => {
     result.errors.push(String(e.code ?? e.message));
-    finish(/CERT|SIGNATURE|SELF_SIGNED|UNABLE_TO/.test(String(e.code)), undefined);
+    const expected = process.env.EXPECT_CODE;
+    const ok = expected ? String(e.code) === expected : /CERT|SIGNATURE|SELF_SIGNED|UNABLE_TO/.test(String(e.code));
+    finish(ok, ok ? undefined : `failed with ${e.code}, expected ${expected ?? "a certificate error"}`);
   });
 } else if (mode === "refused") {
   ws.on("unexpected-response", (_req, res) => {
