@@ -1,5 +1,7 @@
 #include "telemetry/gateway/server.h"
 
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <openssl/ssl.h>
 
 #include <boost/asio.hpp>
@@ -58,6 +60,7 @@ OptionErrors GatewayOptions::Validate() const {
   if (refusal_burst < 1) e.push_back({"refusal_burst", "must be >= 1"});
   if (refusal_interval_us < 1) e.push_back({"refusal_interval_us", "must be >= 1"});
   if (grid_scene_interval_us < 0) e.push_back({"grid_scene_interval_us", "must be >= 0"});
+  if (max_unsent_bytes < 1024) e.push_back({"max_unsent_bytes", "must be >= 1024"});
   if (!(stop_drain_s >= 0.0 && stop_drain_s <= 60.0)) {
     e.push_back({"stop_drain_s", "must be 0-60 s"});
   }
@@ -608,6 +611,14 @@ void Gateway::Impl::Accept() {
     // of waiting a round trip for the last one's acknowledgement (on a
     // 300 ms link that was most of the station's lag; results/2026-12-07-gateway-link.md).
     socket.set_option(tcp::no_delay(true), ignored);
+    // At most this much written but not yet sent held in the kernel: the
+    // rest waits in the client's queue, where it is dropped by priority and
+    // the live messages go before a catch-up. Without it the socket buffer
+    // (megabytes, autotuned) filled with a reconnected client's map and the
+    // live grid states queued behind it for seconds on a slow link.
+    socket.set_option(asio::detail::socket_option::integer<IPPROTO_TCP, TCP_NOTSENT_LOWAT>(
+                          static_cast<int>(options.max_unsent_bytes)),
+                      ignored);
     const auto endpoint = socket.remote_endpoint(ignored);
     const std::string remote =
         endpoint.address().to_string() + ":" + std::to_string(endpoint.port());

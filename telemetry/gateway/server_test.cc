@@ -409,7 +409,7 @@ TEST_F(GatewayServer, ASubscriberIsSentEveryPlantsNewestObservation) {
                      .dump());
   std::set<std::string> entities;
   while (const auto m = foxglove->Read(500ms)) {
-    for (const json& e : json::parse(m->second.substr(13)).at("entities")) entities.insert(e.at("id"));
+    for (const json& e : json::parse(m->second.substr(13)).at("entities")) entities.insert(e.at("id").get<std::string>());
   }
   EXPECT_EQ(entities, (std::set<std::string>{"plant/1", "plant/2", "plant/3", "plant/4"}));
 }
