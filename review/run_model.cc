@@ -86,7 +86,12 @@ void RunModel::Observe(const std::string& channel, bool applied, const tm::Telem
     if (first_message_utime_ == 0) first_message_utime_ = last_message_utime_;
   }
   if (!applied) return;
-  if (channel == kGrid && s.grid) ObserveGrid(*s.grid, trace_), grid_ = s.grid;
+  if (channel == kGrid && s.grid) {
+    ObserveGrid(*s.grid, trace_), grid_ = s.grid;
+    if (stats != s.channels.end()) {
+      grid_lag_ms_.push_back(static_cast<float>(1e-3 * static_cast<double>(stats->second.last_recv_utime - s.grid->utime)));
+    }
+  }
   if (channel == kSimTruth && s.truth) ObserveGrid(*s.truth, truth_trace_), truth_ = s.truth;
   if (channel == kPose || channel == kSimTruthPose) ObservePose(s);
   if (channel == kPlants) ObservePlants(s);

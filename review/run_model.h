@@ -126,6 +126,13 @@ class RunModel {
   int64_t plant_messages() const { return plant_messages_; }  // changes when plants() may have
   const std::vector<TraceSample>& trace() const { return trace_; }
   const std::vector<TraceSample>& truth_trace() const { return truth_trace_; }
+  // Per grid message applied, its reception (the receiver's wall clock)
+  // minus its stamp (the vehicle's message clock), ms: how far a live
+  // station is behind the vehicle's camera (0 for a log, whose clock is
+  // the stamps'). Both clocks are one host's in the link tests.
+  const std::vector<float>& grid_lag_ms() const { return grid_lag_ms_; }
+  // The subscriber's counts per channel, as of the last message.
+  const std::map<std::string, telemetry::ChannelStats>& channels() const { return channels_; }
   const std::vector<std::pair<double, double>>& path() const { return path_; }  // field x, y
   const std::vector<telemetry::NozzleShot>& shots() const { return shots_; }
   const std::vector<plantscale_event_t>& events() const { return events_; }
@@ -169,6 +176,7 @@ class RunModel {
   std::optional<double> map_front_y_m_;
   std::optional<std::pair<int, int>> tile_hint_;  // the tile of the message being fed
   std::vector<TraceSample> trace_, truth_trace_;
+  std::vector<float> grid_lag_ms_;
   std::vector<std::pair<double, double>> path_;
   std::vector<telemetry::NozzleShot> shots_;
   std::vector<plantscale_event_t> events_;

@@ -71,6 +71,7 @@ class GatewaySource : public Source {
            what;
   }
   std::vector<std::string> LinkChanges() const override { return changes_; }
+  int64_t LinkBytes() const override { return client_->status().bytes; }
   telemetry::gateway::GatewayLinkStatus link() const { return client_->status(); }
 
  private:

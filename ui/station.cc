@@ -354,6 +354,10 @@ StationResult RunStation(const StationOptions& options) {
   result.tile_revisions = model.tile_revision_sum();
   result.plants = model.plants().size();
   for (const plantscale_event_t& e : model.events()) result.events.push_back(e.kind + ": " + e.text);
+  result.grid_lag_ms = model.grid_lag_ms();
+  const auto thumbnails = model.channels().find(tm::channels::kThumbnail);
+  if (thumbnails != model.channels().end()) result.thumbnails = thumbnails->second.received;
+  result.link_bytes = source->LinkBytes();
   return result;
 }
 

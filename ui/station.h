@@ -121,6 +121,10 @@ struct StationResult {
   int tile_revisions = 0;
   size_t plants = 0;
   std::vector<std::string> events;  // every event received, "KIND: TEXT"
+  // Live: per grid message, its reception minus its stamp (RunModel::grid_lag_ms).
+  std::vector<float> grid_lag_ms;
+  int64_t thumbnails = 0;  // thumbnail messages received
+  int64_t link_bytes = -1;  // over the gateway: LCM message bytes received (-1: not over it)
   // With tour_frames: the time of each toured frame (update and render), ms.
   std::vector<double> tour_frame_ms;
   double tour_cpu_ms = 0.0;  // process CPU time (all threads, llvmpipe's too) over the tour

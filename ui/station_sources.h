@@ -49,6 +49,8 @@ class Source {
   }
   // Over the gateway: each change of the link, "UNIX_SECONDS TEXT".
   virtual std::vector<std::string> LinkChanges() const { return {}; }
+  // Over the gateway: the LCM message bytes received so far; else -1.
+  virtual int64_t LinkBytes() const { return -1; }
   std::mutex mutex;  // held while the model is read or changed
 };
 

@@ -222,6 +222,10 @@ class ConnectionT : public Connection {
   }
 
   void OnConnect() {
+    // No Nagle: on a link of 300 ms round trip it held each small write
+    // (a handshake's, a pong, a command) for an acknowledgement.
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().set_option(tcp::no_delay(true), ignored);
     if constexpr (kTls) {
       const std::string& host = client_.options.url.host;
       SSL* ssl = ws_.next_layer().native_handle();

@@ -1,5 +1,7 @@
 #include "telemetry/gateway/server.h"
 
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <openssl/ssl.h>
 
 #include <boost/asio.hpp>
@@ -16,6 +18,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <plantscale_lcmtypes/plantscale_event_t.hpp>
 #include <set>
 #include <thread>
@@ -66,6 +69,10 @@ OptionErrors GatewayOptions::Validate() const {
   if (refusal_burst < 1) e.push_back({"refusal_burst", "must be >= 1"});
   if (refusal_interval_us < 1) e.push_back({"refusal_interval_us", "must be >= 1"});
   if (grid_scene_interval_us < 0) e.push_back({"grid_scene_interval_us", "must be >= 0"});
+  if (max_unsent_bytes < 1024) e.push_back({"max_unsent_bytes", "must be >= 1024"});
+  if (!(stop_drain_s >= 0.0 && stop_drain_s <= 60.0)) {
+    e.push_back({"stop_drain_s", "must be 0-60 s"});
+  }
   for (auto& x : Prefixed("queue", queue.Validate())) e.push_back(std::move(x));
   return e;
 }
@@ -82,6 +89,8 @@ class Session : public std::enable_shared_from_this<Session> {
   virtual void Deliver(int topic, int64_t utime,
                        const std::shared_ptr<const std::string>& json) = 0;
   virtual void Abort() = 0;
+  // The gateway is stopping: send what is queued, then close the WebSocket.
+  virtual void Drain() = 0;
 };
 
 struct CachedMessage {
@@ -115,6 +124,7 @@ struct Gateway::Impl {
   std::optional<ssl::context> tls;
   tcp::acceptor acceptor{ioc};
   asio::steady_timer flush_timer{ioc};
+  asio::steady_timer drain_timer{ioc};
   std::thread thread;
   std::string session_id = std::to_string(WallUtime());
   std::string certificate_warning;  // expired or not yet valid (constructor)
@@ -125,7 +135,11 @@ struct Gateway::Impl {
   int open_clients = 0;                         // of those, past the WebSocket upgrade
   std::vector<CachedMessage> latest;            // per topic
   std::map<std::pair<int, std::string>, CachedMessage> tiles;  // newest revision per topic and tile
-  size_t tile_bytes = 0;
+  // Every plant's newest observation, as a plant_list_t of that one plant
+  // (LCM bytes): sent to a client that subscribes to PLANTSCALE_PLANTS, so
+  // that plants seen while its link was down reach it too.
+  std::map<int64_t, CachedMessage> plants;
+  size_t tile_bytes = 0;  // tiles' and plants' cached bytes (max_cached_tile_bytes)
   RefusalLimiter refusals;
   RefusalLimiter command_audit;
 
@@ -176,9 +190,12 @@ struct Gateway::Impl {
     }
   }
   void ScheduleFlush();
+  // Stops the network thread once every session has closed or at `deadline`.
+  void StopWhenDrained(std::chrono::steady_clock::time_point deadline);
   void Accept();
   void OnLcm(const ReceivedMessage& m);
   void Dispatch(const std::vector<Converted>& converted);
+  void CachePlants(std::vector<std::pair<int64_t, CachedMessage>> updates);
 };
 
 namespace {
@@ -231,6 +248,15 @@ class SessionT : public Session {
     open_ = false;
     beast::error_code ignored;
     beast::get_lowest_layer(ws_).socket().close(ignored);
+  }
+
+  void Drain() override {
+    draining_ = true;
+    if (!open_) {  // still in its handshake: nothing of the run was sent yet
+      Abort();
+      return End();
+    }
+    Write();
   }
 
  private:
@@ -365,13 +391,17 @@ class SessionT : public Session {
   void SendStatus(int level, const std::string& text) { SendText(Status(level, text)); }
 
   void Write() {
-    if (writing_ || !open_) return;
-    if (queue_.empty() && !backlog_.empty()) {
-      queue_.Push(std::move(backlog_.front()));
+    if (writing_ || !open_ || closing_) return;
+    while (queue_.empty() && !backlog_.empty()) {
+      const Pending p = std::move(backlog_.front());
       backlog_.pop_front();
+      if (auto m = Resolve(p)) queue_.Push(std::move(*m));
     }
     auto next = queue_.Pop();
-    if (!next) return;
+    if (!next) {
+      if (draining_) CloseWhenSent();
+      return;
+    }
     writing_ = true;
     current_ = std::move(*next);
     ws_.binary(current_.binary);
@@ -384,6 +414,18 @@ class SessionT : public Session {
         return self->End();
       }
       self->Write();
+    });
+  }
+
+  // Everything queued was written: a WebSocket close, so that the client
+  // reads all of it (a bare socket close may reset the connection and lose
+  // what the kernel still held).
+  void CloseWhenSent() {
+    if (closing_) return;
+    closing_ = true;
+    ws_.async_close(websocket::close_code::going_away, [self = Self()](beast::error_code) {
+      self->Abort();
+      self->End();
     });
   }
 
@@ -435,27 +477,67 @@ class SessionT : public Session {
     }
   }
 
-  // The latest message of the topic now, and for map tiles every tile's
-  // newest revision, paced behind the live messages (backlog_).
+  // A catch-up message waiting behind the live ones (backlog_).
+  struct Pending {
+    int topic;
+    uint32_t subscription;
+    std::string tile;   // a map tile's cache key, or
+    int64_t plant = 0;  // a plant's id
+  };
+
+  OutMessage Cached(const CachedMessage& c, uint32_t subscription) const {
+    OutMessage m;
+    m.drop = DropClass::kEssential;
+    m.binary = true;
+    m.header = MessageDataHeader(subscription,
+                                 static_cast<uint64_t>(std::max<int64_t>(c.utime, 0)) * 1000);
+    m.payload = c.json;
+    return m;
+  }
+
+  // The latest message of the topic now; for map tiles every tile's newest
+  // revision and for plants every plant's newest observation, paced behind
+  // the live messages (backlog_) and looked up when sent, so that what goes
+  // is the newest then (a live message sent meanwhile is never undone).
   void SendCached(int topic, uint32_t subscription) {
-    const auto make = [&](const CachedMessage& c) {
-      OutMessage m;
-      m.drop = DropClass::kEssential;
-      m.binary = true;
-      m.header = MessageDataHeader(subscription,
-                                   static_cast<uint64_t>(std::max<int64_t>(c.utime, 0)) * 1000);
-      m.payload = c.json;
-      return m;
-    };
-    if (ChannelOf(topic) == channels::kMapTiles) {
+    const std::string& channel = ChannelOf(topic);
+    if (channel == channels::kMapTiles) {
       for (auto it = hub_.tiles.lower_bound({topic, std::string()});
            it != hub_.tiles.end() && it->first.first == topic; ++it) {
-        backlog_.push_back(make(it->second));
+        backlog_.push_back({topic, subscription, it->first.second, 0});
       }
     } else if (hub_.latest[static_cast<size_t>(topic)].json) {
-      queue_.Push(make(hub_.latest[static_cast<size_t>(topic)]));
+      queue_.Push(Cached(hub_.latest[static_cast<size_t>(topic)], subscription));
+    }
+    if (channel == channels::kPlants) {
+      for (const auto& [id, cached] : hub_.plants) backlog_.push_back({topic, subscription, {}, id});
     }
     Write();
+  }
+
+  // A pending catch-up message as it is now: nothing when the client has
+  // unsubscribed since or the entry is no longer cached.
+  std::optional<OutMessage> Resolve(const Pending& p) const {
+    const auto sub = topic_subscription_.find(p.topic);
+    if (sub == topic_subscription_.end() || sub->second != p.subscription) return std::nullopt;
+    if (!p.tile.empty()) {
+      const auto it = hub_.tiles.find({p.topic, p.tile});
+      if (it == hub_.tiles.end()) return std::nullopt;
+      return Cached(it->second, p.subscription);
+    }
+    const auto it = hub_.plants.find(p.plant);
+    if (it == hub_.plants.end()) return std::nullopt;
+    if (IsLcmTopic(p.topic)) return Cached(it->second, p.subscription);
+    // The JSON topic: the one plant's scene, converted now (only a client
+    // catching up pays for it).
+    std::string error;
+    for (Converted& c :
+         ConvertLcm(channels::kPlants, it->second.json->data(), it->second.json->size(), &error)) {
+      if (c.topic != p.topic) continue;
+      return Cached({c.utime, std::make_shared<const std::string>(std::move(c.json))},
+                    p.subscription);
+    }
+    return std::nullopt;
   }
 
   void Handle(const Unsubscribe& u) {
@@ -516,7 +598,7 @@ class SessionT : public Session {
   asio::ip::address address_;
   bool pending_ = true;  // counted in hub_.pending_by_address
   ClientQueue queue_;
-  std::deque<OutMessage> backlog_;
+  std::deque<Pending> backlog_;
   beast::flat_buffer buffer_;
   beast::flat_buffer read_buffer_;
   std::optional<http::request_parser<http::empty_body>> parser_;
@@ -528,6 +610,8 @@ class SessionT : public Session {
   bool accepted_ = false;
   bool ended_ = false;
   bool writing_ = false;
+  bool draining_ = false;  // the gateway is stopping (Drain)
+  bool closing_ = false;   // the WebSocket close is under way
   OutMessage current_;
   std::map<uint32_t, int> subscription_topic_;
   std::map<int, uint32_t> topic_subscription_;
@@ -557,6 +641,18 @@ void Gateway::Impl::Accept() {
       socket.close(ignored);
       return Accept();
     }
+    // No Nagle: small messages (a grid state, an event) go at once instead
+    // of waiting a round trip for the last one's acknowledgement (on a
+    // 300 ms link that was most of the station's lag; results/2026-12-07-gateway-link.md).
+    socket.set_option(tcp::no_delay(true), ignored);
+    // At most this much written but not yet sent held in the kernel: the
+    // rest waits in the client's queue, where it is dropped by priority and
+    // the live messages go before a catch-up. Without it the socket buffer
+    // (megabytes, autotuned) filled with a reconnected client's map and the
+    // live grid states queued behind it for seconds on a slow link.
+    socket.set_option(asio::detail::socket_option::integer<IPPROTO_TCP, TCP_NOTSENT_LOWAT>(
+                          static_cast<int>(options.max_unsent_bytes)),
+                      ignored);
     const std::string remote =
         endpoint.address().to_string() + ":" + std::to_string(endpoint.port());
     std::shared_ptr<Session> session;
@@ -572,6 +668,17 @@ void Gateway::Impl::Accept() {
     session->Begin();
     Accept();
   });
+}
+
+void Gateway::Impl::StopWhenDrained(std::chrono::steady_clock::time_point deadline) {
+  if (sessions.empty() || std::chrono::steady_clock::now() >= deadline) {
+    const std::vector<std::shared_ptr<Session>> all(sessions.begin(), sessions.end());
+    for (const auto& s : all) s->Abort();
+    ioc.stop();
+    return;
+  }
+  drain_timer.expires_after(std::chrono::milliseconds(20));
+  drain_timer.async_wait([this, deadline](beast::error_code) { StopWhenDrained(deadline); });
 }
 
 void Gateway::Impl::ScheduleFlush() {
@@ -609,7 +716,42 @@ void Gateway::Impl::OnLcm(const ReceivedMessage& m) {
     return false;
   });
   if (converted.empty()) return;
-  asio::post(ioc, [this, c = std::move(converted)] { Dispatch(c); });
+  std::vector<std::pair<int64_t, CachedMessage>> plant_updates;
+  if (m.channel == channels::kPlants) {
+    plantscale_plant_list_t list;
+    if (list.decode(m.data, 0, static_cast<int>(m.size)) >= 0) {
+      for (const plantscale_plant_t& p : list.plants) {
+        plantscale_plant_list_t one;
+        one.utime = list.utime;
+        one.seq = list.seq;
+        one.frame_index = list.frame_index;
+        one.num_plants = 1;
+        one.plants = {p};
+        const Bytes bytes = Encode(one);
+        plant_updates.emplace_back(
+            p.id, CachedMessage{list.utime, std::make_shared<const std::string>(bytes.begin(),
+                                                                                 bytes.end())});
+      }
+    }
+  }
+  asio::post(ioc, [this, c = std::move(converted), p = std::move(plant_updates)]() mutable {
+    Dispatch(c);
+    CachePlants(std::move(p));
+  });
+}
+
+void Gateway::Impl::CachePlants(std::vector<std::pair<int64_t, CachedMessage>> updates) {
+  for (auto& [id, cached] : updates) {
+    CachedMessage& slot = plants[id];
+    const size_t before = slot.json ? slot.json->size() : 0;
+    if (tile_bytes - before + cached.json->size() <= options.max_cached_tile_bytes) {
+      tile_bytes = tile_bytes - before + cached.json->size();
+      slot = std::move(cached);
+    } else {
+      if (!slot.json) plants.erase(id);
+      Count(&GatewayStats::tiles_not_cached);
+    }
+  }
 }
 
 void Gateway::Impl::Dispatch(const std::vector<Converted>& converted) {
@@ -710,8 +852,9 @@ void Gateway::Stop() {
     d.acceptor.close(ignored);
     d.flush_timer.cancel();
     const std::vector<std::shared_ptr<Session>> all(d.sessions.begin(), d.sessions.end());
-    for (const auto& s : all) s->Abort();
-    d.ioc.stop();
+    for (const auto& s : all) s->Drain();
+    d.StopWhenDrained(std::chrono::steady_clock::now() +
+                      std::chrono::milliseconds(static_cast<int64_t>(1e3 * d.options.stop_drain_s)));
   });
   d.thread.join();
   d.sessions.clear();
@@ -748,6 +891,15 @@ void RunTransportLoop(Transport& transport, Gateway& gateway, const std::atomic<
       throw;
     }
     gateway.FlushOutgoing();
+  }
+  // What the vehicle published last (its final map tiles) may still wait in
+  // the socket: handled, so that Stop's drain sends it too.
+  for (int i = 0; i < 1000; ++i) {
+    try {
+      if (!transport.Handle(0)) break;
+    } catch (const TransportError&) {
+      break;
+    }
   }
   gateway.FlushOutgoing();
 }

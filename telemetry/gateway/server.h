@@ -16,8 +16,11 @@
 //   - A client that asks (lcm=1 in the query: the station) is also served
 //     each LCM channel's bytes as they came (lcm_topics.h).
 //   - A client that subscribes is sent the latest message of the topic at
-//     once, and for map tiles every tile's newest revision (paced by its
-//     link), so a reconnecting client gets the whole map again.
+//     once, for map tiles every tile's newest revision and for plants every
+//     plant's newest observation (paced by its link), so a reconnecting
+//     client gets the whole map and every plant again.
+//   - Stop sends each client what is queued (up to stop_drain_s), then
+//     closes the WebSockets.
 //
 // Threads: one network thread (Start/Stop) owns every connection; the
 // transport's handler (whoever calls Transport::Handle, see RunTransportLoop)
@@ -66,6 +69,14 @@ struct GatewayOptions {
   // grid message): a 3-D view needs no more than 2.5 Hz, and at 12.5 Hz the
   // scene was a third of every client's bytes (results/2026-12-07-gateway.md).
   int64_t grid_scene_interval_us = 400'000;
+  // At Stop, each client's queued messages (the run's last map tiles, a
+  // reconnected client's catch-up) are sent for at most this long, then
+  // every connection closes: the end of a run reaches a client on a slow link.
+  double stop_drain_s = 5.0;
+  // Bytes written to a client's socket but not yet sent that the kernel may
+  // hold (TCP_NOTSENT_LOWAT): 16 kB is 0.13 s at 1 Mbit/s. What is beyond
+  // waits in the client's queue, dropped by priority (client_queue.h).
+  size_t max_unsent_bytes = 16 * 1024;
   int refusal_burst = 5;  // refusal events at once, then one per interval
   int64_t refusal_interval_us = 10'000'000;
 
@@ -101,7 +112,7 @@ class Gateway {
   Gateway& operator=(const Gateway&) = delete;
 
   void Start();  // the network thread
-  void Stop();   // closes every connection and joins the thread
+  void Stop();   // drains (stop_drain_s), closes every connection and joins the thread
   uint16_t port() const;
   // Empty, or why every client will refuse the certificate (it expired, or
   // is not valid yet): the gateway starts anyway, the caller says so.
