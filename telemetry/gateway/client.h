@@ -67,12 +67,17 @@ std::string ReadTokenFile(const std::filesystem::path& file);
 
 // The delay before reconnect attempt n (n = 1 after the first failure):
 // first_delay_s · factor^(n−1), at most max_delay_s. With the defaults,
-// 0.25, 0.5, 1, 2, 2, … s: a link that comes back is used again within
-// max_delay_s plus one connection attempt.
+// 0.25, 0.5, 1, 1, … s: a link that comes back is used again within
+// max_delay_s plus one connection attempt. During an outage each attempt's
+// SYN goes at 0 and 1 s (the kernel's retransmit) before connect_timeout_s
+// gives up, so a returning link waits at most 1 s + max_delay_s for the
+// next SYN: with a 2 s cap that was up to 3 s, and with a 1.2 s handshake
+// over a 300 ms round trip the reconnect came 4.1–4.7 s after the link
+// returned, close to issue 58's 5 s (results/2026-12-07-gateway-link.md).
 struct ReconnectPolicy {
   double first_delay_s = 0.25;
   double factor = 2.0;
-  double max_delay_s = 2.0;
+  double max_delay_s = 1.0;
 
   double DelayS(int attempt) const;
   OptionErrors Validate() const;
