@@ -67,3 +67,21 @@ CNF
     -addext "subjectAltName=DNS:vehicle.farm.example" -keyout "$dir/elsewhere_key.pem" \
     -out "$dir/elsewhere_cert.pem" >/dev/null 2>&1 || fail "openssl req: the wrong-name certificate"
 }
+
+# reconnected_within LOG BACK LIMIT: the station's first "connected to" line
+# in LOG after unix time BACK (the link's return) comes within LIMIT s.
+reconnected_within() {
+  local log="$1" back="$2" limit="$3" again delay
+  again=$(awk -v back="$back" '/station: gateway: .* connected to/ && $3 > back {print $3; exit}' "$log")
+  if [[ -z "$again" ]]; then
+    fail "the station ($log) did not reconnect after the link came back"
+    return 0
+  fi
+  delay=$(awk -v a="$again" -v b="$back" 'BEGIN {printf "%.2f", a - b}')
+  echo "reconnected ${delay} s after the link came back"
+  awk -v d="$delay" -v l="$limit" 'BEGIN {exit !(d >= 0 && d <= l)}' ||
+    fail "reconnected ${delay} s after the link came back (> ${limit} s)"
+}
+
+# station_tiles LOG: "N map tiles (R" from the station's model line.
+station_tiles() { grep -oE "station: model: .* map tiles \([0-9]+ revisions\)" "$1" | grep -oE "[0-9]+ map tiles \([0-9]+"; }

@@ -106,20 +106,13 @@ if [[ "$cut_at" != none ]]; then
   back=$(grep -oE '"end_unix": [0-9.]+' "$work/link.json" | head -1 | awk '{print $2}')
   [[ -n "$back" ]] || fail "linkem reports no cut"
   grep -q "station: gateway: .* GATEWAY LINK DOWN" "$work/station.txt" || fail "the station did not see the link go down"
-  again=$(awk -v back="${back:-0}" '/station: gateway: .* connected to/ && $3 > back {print $3; exit}' "$work/station.txt")
-  if [[ -z "$again" ]]; then
-    fail "the station did not reconnect after the link came back"
-  else
-    delay=$(awk -v a="$again" -v b="$back" 'BEGIN {printf "%.2f", a - b}')
-    echo "reconnected ${delay} s after the link came back"
-    awk -v d="$delay" 'BEGIN {exit !(d >= 0 && d <= 5.0)}' || fail "reconnected ${delay} s after the link came back (> 5 s)"
-  fi
+  reconnected_within "$work/station.txt" "${back:-0}" 5.0
 fi
 
 # The map caught up: every tile at its newest revision and every plant, as in the log.
 "$plantscale" station --review "$work/run.lcmlog" --offscreen --seconds 1 >"$work/review.txt" 2>&1 \
   || fail "station --review of the run's log"
-tiles() { grep -oE "station: model: .* map tiles \([0-9]+ revisions\)" "$1" | grep -oE "[0-9]+ map tiles \([0-9]+"; }
+tiles() { station_tiles "$1"; }
 plants() { grep -oE "station: model: .* [0-9]+ plants" "$1" | grep -oE "[0-9]+ plants"; }
 echo "map: over the link $(tiles "$work/station.txt"), $(plants "$work/station.txt"); in the log $(tiles "$work/review.txt"), $(plants "$work/review.txt")"
 [[ -n "$(tiles "$work/review.txt")" ]] || fail "the log's review printed no map"

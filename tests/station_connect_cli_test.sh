@@ -171,19 +171,12 @@ grep -q "forwarded command" "$work/gateway.txt" || grep -q "1 commands forwarded
 grep -q "station: gateway: .* GATEWAY LINK DOWN: link lost" "$work/operator.txt" \
   || fail "the operator's station did not see the link go down"
 back=$(cat "$work/back.time")
-again=$(awk -v back="$back" '/station: gateway: .* connected to/ && $3 > back {print $3; exit}' "$work/operator.txt")
-if [[ -z "$again" ]]; then
-  fail "the operator's station did not reconnect after the link came back"
-else
-  delay=$(awk -v a="$again" -v b="$back" 'BEGIN {printf "%.2f", a - b}')
-  echo "reconnected ${delay} s after the link came back"
-  awk -v d="$delay" 'BEGIN {exit !(d >= 0 && d <= 5.0)}' || fail "reconnected ${delay} s after the link came back (> 5 s)"
-fi
+reconnected_within "$work/operator.txt" "$back" 5.0
 
 # The map caught up: every tile at its newest revision, as in the log.
 "$plantscale" station --review "$work/run.lcmlog" --offscreen --seconds 1 >"$work/review.txt" 2>&1 \
   || fail "station --review of the run's log"
-tiles() { grep -oE "station: model: .* map tiles \([0-9]+ revisions\)" "$1" | grep -oE "[0-9]+ map tiles \([0-9]+"; }
+tiles() { station_tiles "$1"; }
 echo "map: over the gateway $(tiles "$work/operator.txt"), in the log $(tiles "$work/review.txt")"
 [[ -n "$(tiles "$work/review.txt")" ]] || fail "the log's review printed no map"
 [[ "$(tiles "$work/operator.txt")" == "$(tiles "$work/review.txt")" ]] \
