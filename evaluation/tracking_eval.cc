@@ -8,6 +8,7 @@
 #include "engine/common/stats.h"
 #include "engine/pipeline/pipeline.h"
 #include "engine/tracking/blob_features.h"
+#include "engine/tracking/state_layout.h"
 #include "evaluation/seeds.h"
 
 namespace plantscale::app {
@@ -48,9 +49,7 @@ PlantLineReference PlantLines(const sim::Field& field) {
 TrackingRun::CalibrationEstimate CalibrationOf(const tracking::GridTracker& tracker) {
   TrackingRun::CalibrationEstimate c;
   if (!tracker.options().CalibrationStates()) return c;
-  const tracking::TrackerOptions& o = tracker.options();
-  const Eigen::Vector4d prior(o.calibration_pitch_sd_rad, o.calibration_roll_sd_rad,
-                              o.calibration_height_sd_m, o.calibration_focal_sd);
+  const Eigen::Vector4d prior = tracking::CalibrationPrior(tracker.options());  // variances
   const Eigen::Vector4d value = tracker.calibration_estimate();
   const Eigen::Vector4d sd = tracker.calibration_covariance().diagonal().cwiseMax(0.0).cwiseSqrt();
   for (int i = 0; i < 4; ++i) {

@@ -105,27 +105,37 @@ std::optional<OnRow> FeatureOnRow(const Feature& f, double offset_m, double bear
   return OnRow{static_cast<int>(n), g.y()};
 }
 
-// The bands' share of the plant matter in range, and their area-weighted
-// bearing (a doubled-angle mean: an axis has no sign).
+// Bands' area-weighted bearing: a doubled-angle mean (an axis has no sign).
+struct AxisMean {
+  double c = 0.0, s = 0.0;
+  void Add(const Feature& f) {
+    const double psi2 = 2.0 * BandBearing(f);
+    c += f.area_m2 * std::cos(psi2);
+    s += f.area_m2 * std::sin(psi2);
+  }
+  bool empty() const { return c == 0.0 && s == 0.0; }
+  double bearing_rad() const { return 0.5 * std::atan2(s, c); }
+};
+
+// The bands' share of the plant matter in range, and their bearing.
 struct Bands {
   bool closed = false;
   double bearing_rad = 0.0;
 };
 Bands BandsOf(std::span<const Feature> features, const InitialiserOptions& o) {
-  double band_area = 0.0, apart_area = 0.0, c = 0.0, s = 0.0;
+  double band_area = 0.0, apart_area = 0.0;
+  AxisMean axes;
   for (const Feature& f : features) {
     if (Band(f, o)) {
       band_area += f.area_m2;
-      const double psi = BandBearing(f);
-      c += f.area_m2 * std::cos(2.0 * psi);
-      s += f.area_m2 * std::sin(2.0 * psi);
+      axes.Add(f);
     } else if (Usable(f, o)) {
       apart_area += f.area_m2;
     }
   }
   Bands b;
   b.closed = band_area > 0.0 && band_area > o.closed_canopy_fraction * (band_area + apart_area);
-  if (b.closed) b.bearing_rad = 0.5 * std::atan2(s, c);
+  if (b.closed) b.bearing_rad = axes.bearing_rad();
   return b;
 }
 
@@ -176,7 +186,8 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
   for (int iteration = 0; iteration < 3; ++iteration) {
     Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
     Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    double on_rows = 0.0, c2 = 0.0, s2 = 0.0;
+    double on_rows = 0.0;
+    AxisMean axes;  // of the bands on the rows
     int count = 0;
     for (const Feature& f : features) {
       const auto on = FeatureOnRow(f, fit.offset_m, fit.bearing_rad, r, rows_each_side, o, take);
@@ -188,16 +199,13 @@ std::optional<RowFit> FitRowsOnGround(std::span<const Feature> features, double 
       b += w * lhs * row;
       on_rows += w;
       ++count;
-      if (bands.closed && Band(f, o)) {
-        c2 += f.area_m2 * std::cos(2.0 * BandBearing(f));
-        s2 += f.area_m2 * std::sin(2.0 * BandBearing(f));
-      }
+      if (bands.closed && Band(f, o)) axes.Add(f);
     }
     fit.support = on_rows / total;
     fit.features_on_rows = count;
     if (bands.closed) {
       if (count < 1 || !(on_rows > 0.0)) break;
-      if (c2 != 0.0 || s2 != 0.0) fit.bearing_rad = 0.5 * std::atan2(s2, c2);
+      if (!axes.empty()) fit.bearing_rad = axes.bearing_rad();
       fit.offset_m = (b(0) - std::tan(fit.bearing_rad) * a(0, 1)) / a(0, 0);
       continue;
     }
